@@ -1,0 +1,22 @@
+# Expands `#include "file"` lines of a GLSL source (files looked up in INCLUDE_DIR, recursively)
+# and drops the GL_GOOGLE_include_directive extension line, so the result can be validated as
+# plain OpenGL GLSL. The renderer's loader does the same expansion at run time.
+#   cmake -DINPUT=in.frag -DOUTPUT=out.frag -DINCLUDE_DIR=dir -P ExpandShader.cmake
+file(READ ${INPUT} text)
+string(REGEX REPLACE "#extension[ \t]+GL_GOOGLE_include_directive[^\n]*" "" text "${text}")
+set(depth 0)
+while(text MATCHES "#[ \t]*include[ \t]+\"([^\"]+)\"")
+  set(directive "${CMAKE_MATCH_0}")
+  set(inc ${INCLUDE_DIR}/${CMAKE_MATCH_1})
+  if(NOT EXISTS ${inc})
+    message(FATAL_ERROR "${INPUT}: included file not found: ${CMAKE_MATCH_1}")
+  endif()
+  math(EXPR depth "${depth} + 1")
+  if(depth GREATER 64)
+    message(FATAL_ERROR "${INPUT}: too many or recursive #include directives")
+  endif()
+  file(READ ${inc} body)
+  string(REGEX REPLACE "#extension[ \t]+GL_GOOGLE_include_directive[^\n]*" "" body "${body}")
+  string(REPLACE "${directive}" "${body}" text "${text}")
+endwhile()
+file(WRITE ${OUTPUT} "${text}")

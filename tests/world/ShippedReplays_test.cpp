@@ -1,0 +1,84 @@
+// ShippedReplays_test.cpp — the replays in replays/ read cleanly and still agree with the world
+// they were recorded in (a change to the terrain or road code that moves the ground under a
+// shipped replay fails here; regenerate with replays/make-replays.sh).
+#include <cmath>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <glm/geometric.hpp>
+
+#include "world/Replay.h"
+#include "world/World.h"
+
+namespace amb {
+namespace {
+
+std::string replayPath(const char* name) {
+    return std::string(AMBIENCE_SOURCE_DIR) + "/replays/" + name + ".json";
+}
+
+struct Expect {
+    const char* name;
+    ReplayMode mode;
+    double speedLo_mps, speedHi_mps;  // every step's speed, except across cuts
+    double minDuration_s;
+    int cuts;
+};
+
+class ShippedReplay : public testing::TestWithParam<Expect> {};
+
+TEST_P(ShippedReplay, ReadsAndMatchesTheWorld) {
+    const Expect e = GetParam();
+    const Replay rp = readReplay(replayPath(e.name));
+    EXPECT_EQ(rp.mode, e.mode);
+    EXPECT_GE(rp.duration_s(), e.minDuration_s);
+    const World world(rp.world);
+    int cuts = 0;
+    for (std::size_t i = 0; i < rp.samples.size(); ++i) {
+        const CameraSample& s = rp.samples[i];
+        const double ground = world.height(s.position_m.x, s.position_m.z);
+        const double above = s.position_m.y - ground;
+        switch (e.mode) {
+            case ReplayMode::Drive:  // eye height 1.5 m over the road, the terrain flattened to it
+                ASSERT_NEAR(above, 1.5, 0.5) << e.name << " sample " << i;
+                break;
+            case ReplayMode::Fly:  // never below the clearance
+                ASSERT_GE(above, 20.0) << e.name << " sample " << i;
+                break;
+            case ReplayMode::Static:
+                ASSERT_NEAR(above, 4.0, 0.01) << e.name << " sample " << i;
+                break;
+        }
+        if (i == 0) continue;
+        if (s.cut) {
+            ++cuts;
+            continue;
+        }
+        const double v = glm::length(s.position_m - rp.samples[i - 1].position_m) / rp.step_s;
+        ASSERT_GE(v, e.speedLo_mps - 1e-6) << e.name << " sample " << i;
+        ASSERT_LE(v, e.speedHi_mps + 1e-6) << e.name << " sample " << i;
+    }
+    EXPECT_EQ(cuts, e.cuts);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Replays, ShippedReplay,
+    testing::Values(Expect{"highway-drive", ReplayMode::Drive, 30.0, 30.0, 60.0, 0},
+                    Expect{"mountain-drive", ReplayMode::Drive, 15.0, 20.0, 60.0, 0},
+                    Expect{"low-flight", ReplayMode::Fly, 80.0, 80.0, 60.0, 0},
+                    Expect{"stress-flight", ReplayMode::Fly, 250.0, 250.0, 60.0, 1},
+                    Expect{"day-timelapse", ReplayMode::Static, 0.0, 0.0, 144.0, 0}),
+    [](const testing::TestParamInfo<Expect>& info) {
+        std::string n = info.param.name;
+        for (char& c : n) if (c == '-') c = '_';
+        return n;
+    });
+
+TEST(ShippedReplays, TimeLapseCoversADayAtRate600) {
+    const Replay rp = readReplay(replayPath("day-timelapse"));
+    EXPECT_NEAR(rp.timeRate, 600.0, 1e-9);
+    EXPECT_GE(rp.duration_s() * rp.timeRate / 3600.0, 24.0 - 1e-9);
+}
+
+}  // namespace
+}  // namespace amb
