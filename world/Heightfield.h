@@ -1,6 +1,17 @@
 // Heightfield.h — the endless natural terrain h(x, z) before roads: fBm plus ridged noise with
 // domain warping, evaluated at any double-precision (x, z); normals; moisture.
+//
+// Precision: every noise octave is GLM's classic Perlin noise (glm/gtc/noise.hpp), which is
+// periodic with a period of exactly 289 lattice units. Each octave maps (x, z) to its lattice
+// coordinates in double (rotation, frequency, seed offset), reduces them exactly into [0, 289)
+// and only then evaluates the noise, in double. The reduction is exact (an integer multiple of
+// 289 is subtracted from a double of the same magnitude), so the terrain 10^6 m from the origin
+// is computed with the same relative precision as at the origin: no float ever sees a large
+// coordinate.
 #pragma once
+
+#include <array>
+#include <cstdint>
 
 #include <glm/vec3.hpp>
 
@@ -9,12 +20,43 @@
 namespace amb {
 
 class Heightfield {
-public:
+  public:
     explicit Heightfield(const WorldSettings& settings);
 
-    double height(double x_m, double z_m) const;          // metres above the datum
-    glm::dvec3 normal(double x_m, double z_m) const;      // unit, +Y up
-    double moisture(double x_m, double z_m) const;        // [0, 1]
+    double height(double x_m, double z_m) const;      // metres above the datum
+    glm::dvec3 normal(double x_m, double z_m) const;  // unit, +Y up
+    double moisture(double x_m, double z_m) const;    // [0, 1]
+
+    // Moisture for a point whose height is already known (saves one height evaluation).
+    double moistureAt(double x_m, double z_m, double height_m) const;
+    // Horizontal step of the central differences behind normal().
+    static constexpr double kNormalStep_m = 0.5;
+    // Perlin evaluations behind one height() call: 7 in lowlands, 11 where mountains rise.
+    static constexpr int kMaxOctavesPerHeight = 11;
+
+    // One octave's mapping from world (x, z) to noise lattice coordinates: rotation by the
+    // octave's angle, scaling by its frequency, a seed-dependent offset.
+    struct Octave {
+        double cosA = 1.0, sinA = 0.0;  // rotation
+        double frequency_per_m = 1.0;   // lattice units per metre
+        double offsetU = 0.0, offsetV = 0.0;
+    };
+
+    // One octave of GLM Perlin noise in about [-1, 1] at (x, z), evaluated precisely at any
+    // magnitude of (x, z) (see the header comment). Also used by other world fields.
+    static double octaveNoise(const Octave& octave, double x_m, double z_m);
+    // An octave for other fields (vegetation clumps, ...): rotation and offset from (seed, salt).
+    static Octave makeOctave(std::uint64_t seed, std::uint64_t salt, double wavelength_m);
+
+  private:
+    double warpedHeight(double x_m, double z_m) const;
+
+    double waterLevel_m_;
+    std::array<Octave, 1> warpU_, warpV_;  // domain warp, one octave per component
+    std::array<Octave, 2> continent_;      // large-scale land/lowland/mountain mask
+    std::array<Octave, 4> ridged_;         // ridged multifractal mountains
+    std::array<Octave, 3> hills_;          // fBm hills and detail
+    std::array<Octave, 2> moisture_;       // moisture field
 };
 
 }  // namespace amb

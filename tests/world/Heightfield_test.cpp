@@ -1,0 +1,140 @@
+// Heightfield_test.cpp — determinism, normals against difference quotients, smoothness and
+// statistics far from the origin, moisture range.
+#include "world/Heightfield.h"
+
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <glm/geometric.hpp>
+
+namespace amb {
+namespace {
+
+WorldSettings seeded(std::uint64_t seed) {
+    WorldSettings s;
+    s.seed = seed;
+    return s;
+}
+
+bool bitEqual(double a, double b) {
+    return std::memcmp(&a, &b, sizeof a) == 0;
+}
+
+TEST(Heightfield, SameSeedGivesBitIdenticalHeights) {
+    const Heightfield a(seeded(7)), b(seeded(7));
+    std::mt19937_64 rng(1);
+    std::uniform_real_distribution<double> u(-2e4, 2e4);
+    for (int n = 0; n < 2000; ++n) {
+        const double x = u(rng), z = u(rng);
+        ASSERT_TRUE(bitEqual(a.height(x, z), b.height(x, z))) << x << ", " << z;
+        ASSERT_TRUE(bitEqual(a.moisture(x, z), b.moisture(x, z)));
+    }
+}
+
+TEST(Heightfield, DifferentSeedGivesDifferentTerrain) {
+    const Heightfield a(seeded(1)), b(seeded(2));
+    int differ = 0;
+    double sumSq = 0.0;
+    for (int n = 0; n < 400; ++n) {
+        const double x = 97.0 * n - 20000.0, z = 53.0 * n - 9000.0;
+        const double d = a.height(x, z) - b.height(x, z);
+        differ += std::abs(d) > 1e-3;
+        sumSq += d * d;
+    }
+    EXPECT_GT(differ, 390);
+    EXPECT_GT(std::sqrt(sumSq / 400.0), 10.0);  // metres: unrelated terrain, not a small shift
+}
+
+TEST(Heightfield, NormalMatchesFineDifferenceQuotient) {
+    const Heightfield hf(seeded(3));
+    std::mt19937_64 rng(2);
+    std::uniform_real_distribution<double> u(-8000.0, 8000.0);
+    for (double offset : {0.0, 1e6}) {
+        for (int n = 0; n < 300; ++n) {
+            const double x = offset + u(rng), z = offset + u(rng);
+            const double e = 0.02;  // metres; independent of the implementation's step
+            const double dhdx = (hf.height(x + e, z) - hf.height(x - e, z)) / (2 * e);
+            const double dhdz = (hf.height(x, z + e) - hf.height(x, z - e)) / (2 * e);
+            const glm::dvec3 ref = glm::normalize(glm::dvec3(-dhdx, 1.0, -dhdz));
+            const glm::dvec3 n3 = hf.normal(x, z);
+            EXPECT_NEAR(glm::length(n3), 1.0, 1e-12);
+            EXPECT_GT(n3.y, 0.0);
+            // Angle between the normals below 0.01 rad (features are tens of metres wide).
+            EXPECT_GT(glm::dot(n3, ref), std::cos(0.01)) << x << ", " << z;
+        }
+    }
+}
+
+// Smoothness at centimetre scale: second differences of a C1 noise sum stay tiny. A float
+// evaluation at 10^6 m would quantise positions to ~6 cm and show steps here.
+void expectSmoothAtCentimetres(const Heightfield& hf, double x0, double z0) {
+    std::vector<double> h;
+    for (int i = 0; i <= 200; ++i) h.push_back(hf.height(x0 + 0.01 * i, z0 + 0.007 * i));
+    for (int i = 1; i < 200; ++i) {
+        ASSERT_LT(std::abs(h[i + 1] - 2.0 * h[i] + h[i - 1]), 1e-5) << "at " << x0 << " step " << i;
+    }
+}
+
+TEST(Heightfield, SmoothAtCentimetresNearAndFarFromOrigin) {
+    const Heightfield hf(seeded(4));
+    for (double offset : {0.0, 1e6, -1e6, 3.7e6}) {
+        for (int n = 0; n < 10; ++n)
+            expectSmoothAtCentimetres(hf, offset + 731.0 * n, offset - 377.0 * n);
+    }
+}
+
+struct Stats {
+    double mean = 0, sd = 0, meanSlope = 0;
+};
+
+Stats statistics(const Heightfield& hf, double x0, double z0) {
+    // 60 x 60 km sampled every 300 m: several continent wavelengths.
+    Stats s;
+    double sum = 0, sum2 = 0, slope = 0;
+    int n = 0;
+    for (int j = 0; j < 200; ++j) {
+        for (int i = 0; i < 200; ++i) {
+            const double x = x0 + 300.0 * i, z = z0 + 300.0 * j;
+            const double h = hf.height(x, z);
+            sum += h;
+            sum2 += h * h;
+            if ((i + j) % 8 == 0) slope += 1.0 - hf.normal(x, z).y;
+            ++n;
+        }
+    }
+    s.mean = sum / n;
+    s.sd = std::sqrt(sum2 / n - s.mean * s.mean);
+    s.meanSlope = slope / (n / 8.0);
+    return s;
+}
+
+TEST(Heightfield, FarFromOriginHasTheSameStatistics) {
+    const Heightfield hf(seeded(5));
+    const Stats near = statistics(hf, -30000.0, -30000.0);
+    const Stats far = statistics(hf, 1e6 - 30000.0, 1e6 - 30000.0);
+    // Same process, different region: means within 60 m, spreads and slopes within 35 %.
+    EXPECT_NEAR(near.mean, far.mean, 60.0);
+    EXPECT_NEAR(far.sd / near.sd, 1.0, 0.35);
+    EXPECT_NEAR(far.meanSlope / near.meanSlope, 1.0, 0.35);
+    EXPECT_GT(near.sd, 50.0);  // real relief, metres
+}
+
+TEST(Heightfield, PlausibleRangeAndMoistureInUnitInterval) {
+    const Heightfield hf(seeded(6));
+    for (int n = 0; n < 5000; ++n) {
+        const double x = -25000.0 + 10.3 * n, z = 13000.0 - 7.9 * n;
+        const double h = hf.height(x, z);
+        ASSERT_TRUE(std::isfinite(h));
+        ASSERT_GT(h, -400.0);
+        ASSERT_LT(h, 2000.0);
+        const double m = hf.moisture(x, z);
+        ASSERT_GE(m, 0.0);
+        ASSERT_LE(m, 1.0);
+    }
+}
+
+}  // namespace
+}  // namespace amb

@@ -1,0 +1,265 @@
+// TerrainPatch_test.cpp — patches are deterministic and cached by key, LOD selection refines
+// towards the camera, edges coincide across patch borders and LOD transitions (no cracks), near
+// and 10^6 m from the origin; the terrain proxy stays small.
+#include "world/TerrainPatch.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <set>
+
+#include <gtest/gtest.h>
+#include <glm/geometric.hpp>
+
+#include "world/World.h"
+
+namespace amb {
+namespace {
+
+const World& defaultWorld() {
+    static const World world(WorldSettings{});
+    return world;
+}
+
+TerrainLodSettings smallLod() {
+    TerrainLodSettings s;
+    s.coarsestLevel = 6;  // 2048 m roots
+    s.viewRadius_m = 2500.0;
+    return s;
+}
+
+constexpr int kQ = TerrainPatch::kPatchQuads;
+constexpr int kV = TerrainPatch::kVerticesPerSide;
+
+// World XZ of vertex (a, b) of a patch, exact.
+double vertexX(const PatchKey& k, int a) {
+    return TerrainPatch::originX_m(k) + a * TerrainPatch::spacing_m(k.level);
+}
+double vertexZ(const PatchKey& k, int b) {
+    return TerrainPatch::originZ_m(k) + b * TerrainPatch::spacing_m(k.level);
+}
+
+// Rendered height (relative to the mesh origin, float) of vertex (a, b) of a drawn patch.
+float vertexY(const TerrainMesh& m, const TerrainPatchDraw& d, int a, int b) {
+    return m.mesh.positions[3 * (d.firstVertex + b * kV + a) + 1];
+}
+
+struct CrackReport {
+    int sharedVertices = 0;        // vertices at the same lattice point in two patches
+    int interpolatedVertices = 0;  // finer vertices checked against a coarser edge
+    int levelTransitions = 0;      // neighbouring pairs with different levels
+    double worstGap_m = 0.0;
+};
+
+// For every pair of leaves sharing a stretch of edge, every vertex of either one on the shared
+// stretch must lie on the other one's edge polyline: exactly where both have a vertex, within
+// float rounding where the coarser edge interpolates.
+CrackReport checkCracks(const TerrainMesh& m) {
+    CrackReport r;
+    const auto& P = m.patches;
+    for (std::size_t p = 0; p < P.size(); ++p) {
+        for (std::size_t q = 0; q < P.size(); ++q) {
+            if (p == q) continue;
+            const PatchKey& kp = P[p].key;
+            const PatchKey& kq = P[q].key;
+            const double sp = TerrainPatch::size_m(kp.level), sq = TerrainPatch::size_m(kq.level);
+            const double px0 = TerrainPatch::originX_m(kp), pz0 = TerrainPatch::originZ_m(kp);
+            const double qx0 = TerrainPatch::originX_m(kq), qz0 = TerrainPatch::originZ_m(kq);
+            // Vertical shared line x = const (p's right edge on q's left edge or vice versa).
+            for (int side = 0; side < 4; ++side) {
+                const bool alongZ = side < 2;  // the shared line is x = const
+                double line;
+                int pa, qa;  // p's and q's fixed vertex index across the line
+                if (side == 0 && px0 + sp == qx0) {
+                    line = qx0;
+                    pa = kQ;
+                    qa = 0;
+                } else if (side == 1 && qx0 + sq == px0) {
+                    line = px0;
+                    pa = 0;
+                    qa = kQ;
+                } else if (side == 2 && pz0 + sp == qz0) {
+                    line = qz0;
+                    pa = kQ;
+                    qa = 0;
+                } else if (side == 3 && qz0 + sq == pz0) {
+                    line = pz0;
+                    pa = 0;
+                    qa = kQ;
+                } else
+                    continue;
+                (void)line;
+                // Overlap of the two edges along the line.
+                const double p0 = alongZ ? pz0 : px0, q0 = alongZ ? qz0 : qx0;
+                const double lo = std::max(p0, q0), hi = std::min(p0 + sp, q0 + sq);
+                if (hi <= lo) continue;
+                if (kp.level != kq.level) ++r.levelTransitions;
+                const double stepP = TerrainPatch::spacing_m(kp.level);
+                const double stepQ = TerrainPatch::spacing_m(kq.level);
+                for (int t = 0; t <= kQ; ++t) {
+                    const double s = p0 + t * stepP;  // coordinate along the line
+                    if (s < lo || s > hi) continue;
+                    const float yp = alongZ ? vertexY(m, P[p], pa, t) : vertexY(m, P[p], t, pa);
+                    // q's polyline at s.
+                    const double u = (s - q0) / stepQ;
+                    const int j = std::min(static_cast<int>(std::floor(u)), kQ - 1);
+                    const double f = u - j;
+                    const float y0 = alongZ ? vertexY(m, P[q], qa, j) : vertexY(m, P[q], j, qa);
+                    const float y1 =
+                        alongZ ? vertexY(m, P[q], qa, j + 1) : vertexY(m, P[q], j + 1, qa);
+                    if (f == 0.0) {
+                        if (yp != y0)
+                            r.worstGap_m = std::max(r.worstGap_m, std::abs(double(yp) - y0) + 1.0);
+                        ++r.sharedVertices;
+                    } else {
+                        const double yq = y0 + f * (double(y1) - y0);
+                        r.worstGap_m = std::max(r.worstGap_m, std::abs(yp - yq));
+                        ++r.interpolatedVertices;
+                    }
+                }
+            }
+        }
+    }
+    return r;
+}
+
+TEST(TerrainPatch, GenerationIsDeterministicAndKeyed) {
+    const PatchKey key{2, 3, -5};
+    const TerrainPatch a = TerrainPatch::generate(defaultWorld(), key);
+    const World other(WorldSettings{});
+    const TerrainPatch b = TerrainPatch::generate(other, key);
+    ASSERT_EQ(a.heights_m.size(), std::size_t(kV * kV));
+    EXPECT_EQ(
+        std::memcmp(a.heights_m.data(), b.heights_m.data(), a.heights_m.size() * sizeof(double)),
+        0);
+    EXPECT_EQ(a.normals, b.normals);
+    EXPECT_EQ(a.albedo, b.albedo);
+    // Heights are World::height at the lattice points, exactly.
+    for (int v = 0; v < kV * kV; v += 7) {
+        EXPECT_EQ(a.heights_m[v],
+                  defaultWorld().height(vertexX(key, v % kV), vertexZ(key, v / kV)));
+    }
+    WorldSettings s2;
+    s2.seed = 99;
+    const World w2(s2);
+    const TerrainPatch c = TerrainPatch::generate(w2, key);
+    EXPECT_NE(a.heights_m, c.heights_m);
+}
+
+TEST(TerrainPatch, LodRefinesTowardsTheCamera) {
+    TerrainPatchCache cache(defaultWorld(), smallLod());
+    const double h = defaultWorld().height(300.0, -200.0);
+    const auto leaves = cache.selectPatches(glm::dvec3(300.0, h + 2.0, -200.0));
+    ASSERT_FALSE(leaves.empty());
+    // The patch under the camera is the finest; far patches are coarse.
+    int under = -1, maxLevel = 0;
+    double area = 0.0;
+    for (const PatchKey& k : leaves) {
+        const double s = TerrainPatch::size_m(k.level);
+        const double x0 = TerrainPatch::originX_m(k), z0 = TerrainPatch::originZ_m(k);
+        if (300.0 >= x0 && 300.0 < x0 + s && -200.0 >= z0 && -200.0 < z0 + s) under = k.level;
+        maxLevel = std::max(maxLevel, k.level);
+        area += s * s;
+    }
+    EXPECT_EQ(under, 0);
+    EXPECT_GE(maxLevel, 4);
+    // Leaves tile the selected roots without overlap: their area is a whole number of roots.
+    const double root = TerrainPatch::size_m(6);
+    EXPECT_NEAR(std::fmod(area, root * root), 0.0, 1e-6);
+    // Deterministic.
+    EXPECT_EQ(leaves.size(), cache.selectPatches(glm::dvec3(300.0, h + 2.0, -200.0)).size());
+}
+
+void expectCrackFree(const glm::dvec3& cameraXZ) {
+    TerrainPatchCache cache(defaultWorld(), smallLod());
+    const glm::dvec3 camera(cameraXZ.x, defaultWorld().height(cameraXZ.x, cameraXZ.z) + 3.0,
+                            cameraXZ.z);
+    const TerrainMesh mesh = cache.build(camera, camera);
+    ASSERT_FALSE(mesh.patches.empty());
+    const CrackReport r = checkCracks(mesh);
+    EXPECT_GT(r.levelTransitions, 10);
+    EXPECT_GT(r.sharedVertices, 1000);
+    EXPECT_GT(r.interpolatedVertices, 100);
+    // Float positions relative to the camera: interpolation agrees to a few millimetres.
+    EXPECT_LT(r.worstGap_m, 5e-3);
+
+    // Corners: patches sharing a corner agree on its position and normal; normals are unit.
+    std::map<std::pair<double, double>, std::pair<glm::dvec3, glm::dvec3>> corners;
+    for (const TerrainPatchDraw& d : mesh.patches) {
+        for (int c = 0; c < 4; ++c) {
+            EXPECT_NEAR(glm::length(d.cornerNormals[c]), 1.0, 1e-9);
+            const auto key = std::make_pair(d.corners_m[c].x, d.corners_m[c].z);
+            auto [it, fresh] =
+                corners.emplace(key, std::make_pair(d.corners_m[c], d.cornerNormals[c]));
+            if (!fresh) {
+                EXPECT_EQ(it->second.first.y, d.corners_m[c].y);
+                EXPECT_EQ(it->second.second, d.cornerNormals[c]);
+            }
+        }
+    }
+    // Every triangle faces up (counter-clockwise seen from +Y) and positions stay small.
+    const auto& pos = mesh.mesh.positions;
+    for (std::size_t t = 0; t < mesh.mesh.indices.size(); t += 3) {
+        const auto v = [&](int k) {
+            const std::uint32_t i = mesh.mesh.indices[t + k];
+            return glm::dvec3(pos[3 * i], pos[3 * i + 1], pos[3 * i + 2]);
+        };
+        ASSERT_GT(glm::cross(v(1) - v(0), v(2) - v(0)).y, 0.0);
+    }
+    for (float p : pos) ASSERT_LT(std::abs(p), 2.0f * 2500.0f + 2048.0f);
+}
+
+TEST(TerrainPatch, NoCracksAcrossBordersAndLodTransitions) {
+    expectCrackFree({250.0, 0.0, -730.0});
+}
+
+TEST(TerrainPatch, NoCracksTenToTheSixMetresFromOrigin) {
+    expectCrackFree({1e6 + 250.0, 0.0, 1e6 - 730.0});
+}
+
+TEST(TerrainPatch, CacheReusesPatchesAndRebuildsIdentically) {
+    TerrainPatchCache cache(defaultWorld(), smallLod());
+    const glm::dvec3 cam(120.0, defaultWorld().height(120.0, 80.0) + 2.0, 80.0);
+    const TerrainMesh a = cache.build(cam, cam);
+    const std::size_t generated = cache.generatedPatches();
+    EXPECT_EQ(generated, a.patches.size());
+    const TerrainMesh b = cache.build(cam, cam);
+    EXPECT_EQ(cache.generatedPatches(), generated);  // nothing regenerated
+    EXPECT_EQ(a.mesh.positions, b.mesh.positions);
+    EXPECT_EQ(a.mesh.indices, b.mesh.indices);
+    // A fresh cache over an equal world gives the same arrays, bit for bit.
+    const World other(WorldSettings{});
+    TerrainPatchCache cache2(other, smallLod());
+    const TerrainMesh c = cache2.build(cam, cam);
+    EXPECT_EQ(a.mesh.positions, c.mesh.positions);
+    EXPECT_EQ(a.mesh.normals, c.mesh.normals);
+    EXPECT_EQ(a.mesh.albedo, c.mesh.albedo);
+}
+
+TEST(TerrainPatch, ProxyIsSmallAndFollowsTheTerrain) {
+    const World& w = defaultWorld();
+    const glm::dvec3 centre(400.0, w.height(400.0, 900.0) + 5.0, 900.0);
+    const WorldMesh proxy = makeTerrainProxy(w, centre, 2000.0);
+    EXPECT_LE(proxy.triangleCount(), 4000u);
+    EXPECT_GE(proxy.triangleCount(), 500u);
+    float maxX = 0.0f;
+    for (std::size_t v = 0; v < proxy.vertexCount(); ++v) {
+        const double x = centre.x + proxy.positions[3 * v],
+                     z = centre.z + proxy.positions[3 * v + 2];
+        EXPECT_NEAR(centre.y + proxy.positions[3 * v + 1], w.height(x, z), 1e-3);
+        maxX = std::max(maxX, std::abs(proxy.positions[3 * v]));
+    }
+    EXPECT_FLOAT_EQ(maxX, 2000.0f);
+    for (std::size_t t = 0; t < proxy.indices.size(); t += 3) {
+        const auto v = [&](int k) {
+            const std::uint32_t i = proxy.indices[t + k];
+            return glm::dvec3(proxy.positions[3 * i], proxy.positions[3 * i + 1],
+                              proxy.positions[3 * i + 2]);
+        };
+        ASSERT_GT(glm::cross(v(1) - v(0), v(2) - v(0)).y, 0.0);
+    }
+}
+
+}  // namespace
+}  // namespace amb

@@ -1,0 +1,192 @@
+// Vegetation_test.cpp — deterministic placement, minimum spacing across tile borders, nothing on
+// roads, water or steep rock, near and 10^6 m from the origin; mesh budgets and orientation.
+#include "world/Vegetation.h"
+
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <glm/geometric.hpp>
+
+#include "world/World.h"
+
+namespace amb {
+namespace {
+
+const World& defaultWorld() {
+    static const World world(WorldSettings{});
+    return world;
+}
+
+std::vector<Plant> block(const Vegetation& v, std::int64_t i0, std::int64_t k0, int n) {
+    std::vector<Plant> out;
+    for (std::int64_t k = k0; k < k0 + n; ++k) {
+        for (std::int64_t i = i0; i < i0 + n; ++i) {
+            const auto t = v.tile(i, k);
+            out.insert(out.end(), t->begin(), t->end());
+        }
+    }
+    return out;
+}
+
+bool isTree(PlantKind k) {
+    return k == PlantKind::Conifer || k == PlantKind::Broadleaf;
+}
+
+void expectSpacing(const std::vector<Plant>& plants) {
+    for (std::size_t a = 0; a < plants.size(); ++a) {
+        for (std::size_t b = a + 1; b < plants.size(); ++b) {
+            const glm::dvec3 d = plants[a].position_m - plants[b].position_m;
+            const double dist = std::hypot(d.x, d.z);
+            const bool ta = isTree(plants[a].kind), tb = isTree(plants[b].kind);
+            if (ta && tb) {
+                ASSERT_GE(dist, Vegetation::kTreeSpacing_m);
+            } else if (!ta && !tb) {
+                ASSERT_GE(dist, Vegetation::kSmallSpacing_m);
+            } else {
+                ASSERT_GE(dist, Vegetation::kSmallTreeClearance_m);
+            }
+        }
+    }
+}
+
+// Placement rules for each plant: inside its tile, on the ground, off roads, water and rock.
+void expectHabitat(const World& w, const std::vector<Plant>& plants) {
+    for (const Plant& p : plants) {
+        const double x = p.position_m.x, z = p.position_m.z;
+        ASSERT_EQ(p.position_m.y, w.height(x, z));
+        ASSERT_GT(w.heightfield().height(x, z), w.settings().waterLevel_m);
+        if (auto q = w.roads().nearest(x, z, 30.0)) {
+            ASSERT_GE(q->distance_m, q->halfWidth_m + Vegetation::kRoadClearance_m);
+        }
+        const double slope = 1.0 - w.heightfield().normal(x, z).y;
+        // The habitat uses a 1 m forward difference; allow for the difference in estimates.
+        if (isTree(p.kind)) {
+            ASSERT_LT(slope, Vegetation::kTreeMaxSlope + 0.03);
+        }
+        ASSERT_LT(slope, Vegetation::kRockMaxSlope + 0.05);
+        ASSERT_NE(w.material(x, z), Material::Water);
+        ASSERT_NE(w.material(x, z), Material::Road);
+        if (isTree(p.kind)) {
+            ASSERT_NE(w.material(x, z), Material::Snow);
+        }
+    }
+}
+
+TEST(Vegetation, SameSeedSamePlantsDifferentSeedDifferent) {
+    const World& a = defaultWorld();
+    const World b(WorldSettings{});
+    WorldSettings s3;
+    s3.seed = 5;
+    const World c(s3);
+    int plants = 0, same = 0;
+    for (std::int64_t i = -3; i < 3; ++i) {
+        const auto ta = a.vegetation().tile(i, 2), tb = b.vegetation().tile(i, 2),
+                   tc = c.vegetation().tile(i, 2);
+        ASSERT_EQ(ta->size(), tb->size());
+        for (std::size_t n = 0; n < ta->size(); ++n) {
+            ASSERT_EQ(std::memcmp(&(*ta)[n].position_m, &(*tb)[n].position_m, sizeof(glm::dvec3)),
+                      0);
+            ASSERT_EQ((*ta)[n].kind, (*tb)[n].kind);
+            ASSERT_EQ((*ta)[n].scale, (*tb)[n].scale);
+        }
+        plants += static_cast<int>(ta->size());
+        for (const Plant& p : *ta) {
+            for (const Plant& q : *tc) same += p.position_m == q.position_m;
+        }
+    }
+    EXPECT_GT(plants, 50);
+    EXPECT_EQ(same, 0);
+}
+
+TEST(Vegetation, MinimumSpacingHoldsAcrossTileBorders) {
+    const auto plants = block(defaultWorld().vegetation(), -2, -14, 3);
+    ASSERT_GT(plants.size(), 100u);
+    expectSpacing(plants);
+}
+
+TEST(Vegetation, NothingOnRoadsWaterOrSteepRock) {
+    const World& w = defaultWorld();
+    int checked = 0;
+    for (const Road& road : w.roads().roads()) {
+        for (double s = 0.0; s < road.length_m; s += 600.0) {
+            const glm::dvec3 p = road.pointAt(s);
+            const auto plants = w.vegetation().inDisc(p.x, p.z, 60.0);
+            expectHabitat(w, plants);
+            checked += static_cast<int>(plants.size());
+        }
+    }
+    EXPECT_GT(checked, 100);  // roads do run through vegetated land
+    // A mixed area with mountains and lakes.
+    const auto plants = block(w.vegetation(), -30, 10, 4);
+    expectHabitat(w, plants);
+}
+
+TEST(Vegetation, TenToTheSixMetresFromOriginFollowsTheSameRules) {
+    const World& w = defaultWorld();
+    const std::int64_t t = Vegetation::tileIndex(1e6);
+    std::size_t total = 0;
+    for (int n = 0; n < 4; ++n) {
+        const auto plants = block(w.vegetation(), t + 37 * n, t - 11 * n, 2);
+        expectSpacing(plants);
+        expectHabitat(w, plants);
+        total += plants.size();
+    }
+    EXPECT_GT(total, 0u);
+}
+
+TEST(Vegetation, DensityFollowsTheHabitat) {
+    const World& w = defaultWorld();
+    const Vegetation& v = w.vegetation();
+    const Road& road = w.roads().roads().front();
+    const glm::dvec3 p = road.pointAt(0.5 * road.length_m);
+    EXPECT_EQ(v.treeDensity(p.x, p.z), 0.0);  // on the road
+    int water = 0, dense = 0;
+    for (int n = 0; n < 3000; ++n) {
+        const double x = -6000.0 + 4.1 * n, z = 5000.0 - 3.3 * n;
+        const double d = v.treeDensity(x, z);
+        ASSERT_GE(d, 0.0);
+        ASSERT_LE(d, 1.0);
+        if (w.heightfield().height(x, z) < w.settings().waterLevel_m) {
+            EXPECT_EQ(d, 0.0);
+            ++water;
+        }
+        dense += d > 0.3;
+    }
+    EXPECT_GT(dense, 0);
+}
+
+TEST(Vegetation, MeshBudgetsAndOutwardFaces) {
+    for (int k = 0; k < kPlantKinds; ++k) {
+        const PlantKind kind = static_cast<PlantKind>(k);
+        const WorldMesh& full = Vegetation::mesh(kind);
+        const WorldMesh& proxy = Vegetation::proxyMesh(kind);
+        EXPECT_GE(full.triangleCount(), 80u) << toString(kind);
+        EXPECT_LE(full.triangleCount(), 500u) << toString(kind);
+        EXPECT_GE(proxy.triangleCount(), 8u) << toString(kind);
+        EXPECT_LE(proxy.triangleCount(), 60u) << toString(kind);
+        for (const WorldMesh* m : {&full, &proxy}) {
+            ASSERT_EQ(m->normals.size(), m->positions.size());
+            ASSERT_EQ(m->albedo.size(), m->positions.size());
+            // Counter-clockwise from outside: the face normal agrees with the vertex normals.
+            int agree = 0;
+            for (std::size_t t = 0; t < m->indices.size(); t += 3) {
+                glm::dvec3 v[3], n(0.0);
+                for (int c = 0; c < 3; ++c) {
+                    const std::uint32_t i = m->indices[t + c];
+                    ASSERT_LT(i, m->vertexCount());
+                    v[c] = glm::dvec3(m->positions[3 * i], m->positions[3 * i + 1],
+                                      m->positions[3 * i + 2]);
+                    n +=
+                        glm::dvec3(m->normals[3 * i], m->normals[3 * i + 1], m->normals[3 * i + 2]);
+                }
+                agree += glm::dot(glm::cross(v[1] - v[0], v[2] - v[0]), n) > 0.0;
+            }
+            EXPECT_GE(agree, static_cast<int>(m->triangleCount() * 95 / 100)) << toString(kind);
+        }
+    }
+}
+
+}  // namespace
+}  // namespace amb

@@ -1,0 +1,416 @@
+// TerrainPatch.cpp — patch sampling, quadtree LOD selection, crack-free stitching, packing, and
+// the coarse terrain proxy for probe capture.
+//
+// [SECTION] Lattice helpers
+// [SECTION] Patch sampling (cached per key)
+// [SECTION] LOD selection
+// [SECTION] Stitching: a vertex's rendered value comes from the coarsest patch containing it
+// [SECTION] Packing into plain arrays
+// [SECTION] Terrain proxy for probe capture
+#include "world/TerrainPatch.h"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include <tbb/parallel_for.h>
+#include <glm/geometric.hpp>
+
+#include "world/Error.h"
+#include "world/World.h"
+
+namespace amb {
+
+// ---- [SECTION] Lattice helpers ---------------------------------------------------------------
+
+namespace {
+
+constexpr int kQ = TerrainPatch::kPatchQuads;
+constexpr int kV = TerrainPatch::kVerticesPerSide;
+
+inline std::int64_t floorDiv(std::int64_t a, std::int64_t b) {
+    std::int64_t q = a / b;
+    if ((a % b != 0) && ((a < 0) != (b < 0))) --q;
+    return q;
+}
+
+inline double latticeToWorld(std::int64_t v) {
+    return static_cast<double>(v) * TerrainPatch::kFinestSpacing_m;
+}
+
+// Lattice coordinate of a patch's vertex column a (or row).
+inline std::int64_t vertexLattice(std::int64_t patchIndex, int level, int a) {
+    return (patchIndex * kQ + a) * TerrainPatch::latticeStep(level);
+}
+
+}  // namespace
+
+std::size_t PatchKeyHash::operator()(const PatchKey& key) const {
+    std::uint64_t h = static_cast<std::uint64_t>(key.i) * 0x9E3779B97F4A7C15ull;
+    h ^= static_cast<std::uint64_t>(key.k) + 0x632BE59BD9B4E019ull + (h << 6) + (h >> 2);
+    h ^= static_cast<std::uint64_t>(key.level) * 0xD1B54A32D192ED03ull;
+    return static_cast<std::size_t>(h ^ (h >> 29));
+}
+
+double TerrainPatch::spacing_m(int level) {
+    return kFinestSpacing_m * double(latticeStep(level));
+}
+double TerrainPatch::size_m(int level) {
+    return spacing_m(level) * kPatchQuads;
+}
+
+// ---- [SECTION] Patch sampling ----------------------------------------------------------------
+
+TerrainPatch TerrainPatch::generate(const World& world, const PatchKey& key) {
+    TerrainPatch p;
+    p.key = key;
+    const double s = spacing_m(key.level);
+    // Heights on the patch grid plus a one-vertex border, for the normals.
+    constexpr int kB = kV + 2;
+    std::vector<double> h(kB * kB), road(kB * kB);
+    for (int b = -1; b <= kQ + 1; ++b) {
+        for (int a = -1; a <= kQ + 1; ++a) {
+            const double x = latticeToWorld(vertexLattice(key.i, key.level, a));
+            const double z = latticeToWorld(vertexLattice(key.k, key.level, b));
+            const int idx = (b + 1) * kB + (a + 1);
+            h[idx] = world.heightAndRoad(x, z, &road[idx]);
+        }
+    }
+    p.heights_m.resize(kV * kV);
+    p.normals.resize(3 * kV * kV);
+    p.albedo.resize(3 * kV * kV);
+    for (int b = 0; b <= kQ; ++b) {
+        for (int a = 0; a <= kQ; ++a) {
+            const int c = (b + 1) * kB + (a + 1);
+            const double dhdx = (h[c + 1] - h[c - 1]) / (2.0 * s);
+            const double dhdz = (h[c + kB] - h[c - kB]) / (2.0 * s);
+            const glm::dvec3 n = glm::normalize(glm::dvec3(-dhdx, 1.0, -dhdz));
+            const double x = latticeToWorld(vertexLattice(key.i, key.level, a));
+            const double z = latticeToWorld(vertexLattice(key.k, key.level, b));
+            const GroundSample g = world.classify(x, z, h[c], road[c], n);
+            const int v = b * kV + a;
+            p.heights_m[v] = h[c];
+            for (int j = 0; j < 3; ++j) {
+                p.normals[3 * v + j] = static_cast<float>(n[j]);
+                p.albedo[3 * v + j] = g.albedo[j];
+            }
+        }
+    }
+    for (int c = 0; c < 4; ++c) {
+        const double x = latticeToWorld(vertexLattice(key.i, key.level, (c & 1) ? kQ : 0));
+        const double z = latticeToWorld(vertexLattice(key.k, key.level, (c & 2) ? kQ : 0));
+        p.cornerNormals[c] = world.normal(x, z);
+    }
+    return p;
+}
+
+// ---- [SECTION] LOD selection -----------------------------------------------------------------
+
+TerrainPatchCache::TerrainPatchCache(const World& world, TerrainLodSettings settings)
+    : world_(world), settings_(settings) {
+    AMB_CHECK(settings_.coarsestLevel >= 0 && settings_.coarsestLevel < 24);
+}
+
+std::vector<PatchKey> TerrainPatchCache::selectPatches(const glm::dvec3& camera_m) const {
+    const double altitude_m = std::max(0.0, camera_m.y - world_.height(camera_m.x, camera_m.z));
+    const int top = settings_.coarsestLevel;
+    const double rootSize = TerrainPatch::size_m(top);
+    const double r = settings_.viewRadius_m;
+    const auto i0 = static_cast<std::int64_t>(std::floor((camera_m.x - r) / rootSize));
+    const auto i1 = static_cast<std::int64_t>(std::floor((camera_m.x + r) / rootSize));
+    const auto k0 = static_cast<std::int64_t>(std::floor((camera_m.z - r) / rootSize));
+    const auto k1 = static_cast<std::int64_t>(std::floor((camera_m.z + r) / rootSize));
+
+    std::vector<PatchKey> leaves;
+    std::vector<PatchKey> stack;
+    for (std::int64_t k = k1; k >= k0; --k) {
+        for (std::int64_t i = i1; i >= i0; --i) stack.push_back({top, i, k});
+    }
+    while (!stack.empty()) {
+        const PatchKey key = stack.back();
+        stack.pop_back();
+        const double size = TerrainPatch::size_m(key.level);
+        const double x0 = TerrainPatch::originX_m(key), z0 = TerrainPatch::originZ_m(key);
+        // Horizontal distance from the camera to the patch square (0 inside it).
+        const double dx = std::max({x0 - camera_m.x, 0.0, camera_m.x - (x0 + size)});
+        const double dz = std::max({z0 - camera_m.z, 0.0, camera_m.z - (z0 + size)});
+        if (key.level == top && std::sqrt(dx * dx + dz * dz) > r) continue;
+        const double distance = std::sqrt(dx * dx + dz * dz + altitude_m * altitude_m);
+        if (key.level > 0 && distance < settings_.splitFactor * size) {
+            // Children pushed in reverse so they pop in (x0 z0), (x1 z0), (x0 z1), (x1 z1) order.
+            for (int c = 3; c >= 0; --c) {
+                stack.push_back({key.level - 1, 2 * key.i + (c & 1), 2 * key.k + (c >> 1)});
+            }
+        } else {
+            leaves.push_back(key);
+        }
+    }
+    return leaves;
+}
+
+std::shared_ptr<const TerrainPatch> TerrainPatchCache::patch(const PatchKey& key) {
+    auto it = cache_.find(key);
+    if (it == cache_.end()) {
+        auto p = std::make_shared<const TerrainPatch>(TerrainPatch::generate(world_, key));
+        ++generated_;
+        it = cache_.emplace(key, Entry{std::move(p), frame_}).first;
+    }
+    it->second.lastUse = frame_;
+    return it->second.patch;
+}
+
+// ---- [SECTION] Stitching ---------------------------------------------------------------------
+
+namespace {
+
+struct VertexValue {
+    double height_m;
+    glm::vec3 normal;
+    glm::vec3 albedo;
+};
+
+struct LatticeHash {
+    std::size_t operator()(const std::pair<std::int64_t, std::int64_t>& v) const {
+        return PatchKeyHash()(PatchKey{0, v.first, v.second});
+    }
+};
+
+// Rendered values of lattice points for one set of leaves. The coarsest leaf D containing a point
+// P decides: on D's vertex lattice, P takes its native sample; otherwise P lies inside one of D's
+// edges and takes the linear interpolation of the rendered values of the two D vertices around it
+// (those may in turn sit on an even coarser edge: the recursion ends at the coarsest level).
+// Every patch that renders P asks the same question, so shared edges coincide exactly.
+class Stitcher {
+  public:
+    Stitcher(const std::unordered_map<PatchKey, const TerrainPatch*, PatchKeyHash>& leaves,
+             int topLevel)
+        : leaves_(leaves), top_(topLevel) {}
+
+    VertexValue rendered(std::int64_t vx, std::int64_t vz) {
+        const auto key = std::make_pair(vx, vz);
+        if (auto it = memo_.find(key); it != memo_.end()) return it->second;
+        const TerrainPatch* d = coarsestContaining(vx, vz);
+        AMB_CHECK(d != nullptr);
+        const std::int64_t step = TerrainPatch::latticeStep(d->key.level);
+        const bool onX = vx % step == 0, onZ = vz % step == 0;
+        VertexValue v;
+        if (onX && onZ) {
+            const int a = static_cast<int>(vx / step - d->key.i * kQ);
+            const int b = static_cast<int>(vz / step - d->key.k * kQ);
+            const int idx = b * kV + a;
+            v.height_m = d->heights_m[idx];
+            v.normal =
+                glm::vec3(d->normals[3 * idx], d->normals[3 * idx + 1], d->normals[3 * idx + 2]);
+            v.albedo =
+                glm::vec3(d->albedo[3 * idx], d->albedo[3 * idx + 1], d->albedo[3 * idx + 2]);
+        } else {
+            AMB_CHECK(onX || onZ);  // a vertex of a finer patch lies on D's boundary
+            VertexValue a, b;
+            double t;
+            if (!onX) {
+                const std::int64_t x0 = floorDiv(vx, step) * step;
+                t = double(vx - x0) / double(step);
+                a = rendered(x0, vz);
+                b = rendered(x0 + step, vz);
+            } else {
+                const std::int64_t z0 = floorDiv(vz, step) * step;
+                t = double(vz - z0) / double(step);
+                a = rendered(vx, z0);
+                b = rendered(vx, z0 + step);
+            }
+            v.height_m = a.height_m + t * (b.height_m - a.height_m);
+            v.normal = glm::normalize(a.normal + float(t) * (b.normal - a.normal));
+            v.albedo = a.albedo + float(t) * (b.albedo - a.albedo);
+        }
+        memo_.emplace(key, v);
+        return v;
+    }
+
+  private:
+    const TerrainPatch* coarsestContaining(std::int64_t vx, std::int64_t vz) const {
+        for (int level = top_; level >= 0; --level) {
+            const std::int64_t n = std::int64_t(kQ) * TerrainPatch::latticeStep(level);
+            const std::int64_t ix = floorDiv(vx, n), iz = floorDiv(vz, n);
+            // A point on a patch boundary belongs to the patches on both sides.
+            const std::int64_t xs[2] = {ix, ix - 1}, zs[2] = {iz, iz - 1};
+            const int nx = (vx == ix * n) ? 2 : 1, nz = (vz == iz * n) ? 2 : 1;
+            for (int a = 0; a < nx; ++a) {
+                for (int b = 0; b < nz; ++b) {
+                    auto it = leaves_.find(PatchKey{level, xs[a], zs[b]});
+                    if (it != leaves_.end()) return it->second;
+                }
+            }
+        }
+        return nullptr;
+    }
+
+    const std::unordered_map<PatchKey, const TerrainPatch*, PatchKeyHash>& leaves_;
+    int top_;
+    std::unordered_map<std::pair<std::int64_t, std::int64_t>, VertexValue, LatticeHash> memo_;
+};
+
+}  // namespace
+
+// ---- [SECTION] Packing -----------------------------------------------------------------------
+
+TerrainMesh TerrainPatchCache::build(const std::vector<PatchKey>& leaves,
+                                     const glm::dvec3& origin_m) {
+    ++frame_;
+    // Generate the missing patches in parallel; they depend on their key only.
+    std::vector<PatchKey> missing;
+    for (const PatchKey& key : leaves) {
+        if (!cache_.count(key)) missing.push_back(key);
+    }
+    std::vector<std::shared_ptr<const TerrainPatch>> fresh(missing.size());
+    tbb::parallel_for(std::size_t(0), missing.size(), [&](std::size_t n) {
+        fresh[n] = std::make_shared<const TerrainPatch>(TerrainPatch::generate(world_, missing[n]));
+    });
+    for (std::size_t n = 0; n < missing.size(); ++n) {
+        cache_[missing[n]] = Entry{std::move(fresh[n]), frame_};
+        ++generated_;
+    }
+
+    std::unordered_map<PatchKey, const TerrainPatch*, PatchKeyHash> leafMap;
+    std::vector<std::shared_ptr<const TerrainPatch>> held;
+    int top = 0;
+    for (const PatchKey& key : leaves) {
+        held.push_back(patch(key));
+        leafMap[key] = held.back().get();
+        top = std::max(top, key.level);
+    }
+    Stitcher stitcher(leafMap, top);
+
+    TerrainMesh out;
+    out.origin_m = origin_m;
+    WorldMesh& m = out.mesh;
+    m.positions.reserve(leaves.size() * kV * kV * 3);
+    m.normals.reserve(leaves.size() * kV * kV * 3);
+    m.albedo.reserve(leaves.size() * kV * kV * 3);
+    m.indices.reserve(leaves.size() * kQ * kQ * 6);
+    for (std::size_t n = 0; n < leaves.size(); ++n) {
+        const TerrainPatch& p = *held[n];
+        const PatchKey& key = p.key;
+        TerrainPatchDraw draw;
+        draw.key = key;
+        draw.firstVertex = static_cast<std::uint32_t>(m.vertexCount());
+        draw.firstIndex = static_cast<std::uint32_t>(m.indices.size());
+        for (int b = 0; b <= kQ; ++b) {
+            for (int a = 0; a <= kQ; ++a) {
+                const std::int64_t vx = vertexLattice(key.i, key.level, a);
+                const std::int64_t vz = vertexLattice(key.k, key.level, b);
+                const int idx = b * kV + a;
+                VertexValue v;
+                if (a == 0 || b == 0 || a == kQ || b == kQ) {
+                    v = stitcher.rendered(vx, vz);
+                } else {
+                    v.height_m = p.heights_m[idx];
+                    v.normal = glm::vec3(p.normals[3 * idx], p.normals[3 * idx + 1],
+                                         p.normals[3 * idx + 2]);
+                    v.albedo =
+                        glm::vec3(p.albedo[3 * idx], p.albedo[3 * idx + 1], p.albedo[3 * idx + 2]);
+                }
+                const glm::dvec3 world(latticeToWorld(vx), v.height_m, latticeToWorld(vz));
+                const glm::dvec3 rel = world - origin_m;
+                m.positions.insert(m.positions.end(), {float(rel.x), float(rel.y), float(rel.z)});
+                m.normals.insert(m.normals.end(), {v.normal.x, v.normal.y, v.normal.z});
+                m.albedo.insert(m.albedo.end(), {v.albedo.x, v.albedo.y, v.albedo.z});
+                if ((a == 0 || a == kQ) && (b == 0 || b == kQ)) {
+                    const int c = (a == kQ ? 1 : 0) + (b == kQ ? 2 : 0);
+                    draw.corners_m[c] = world;
+                    draw.cornerNormals[c] = p.cornerNormals[c];
+                }
+            }
+        }
+        // Two triangles per quad, counter-clockwise seen from +Y.
+        const std::uint32_t base = draw.firstVertex;
+        for (int b = 0; b < kQ; ++b) {
+            for (int a = 0; a < kQ; ++a) {
+                const std::uint32_t v00 = base + b * kV + a, v10 = v00 + 1;
+                const std::uint32_t v01 = v00 + kV, v11 = v01 + 1;
+                m.indices.insert(m.indices.end(), {v00, v01, v10, v10, v01, v11});
+            }
+        }
+        draw.vertexCount = static_cast<std::uint32_t>(m.vertexCount()) - draw.firstVertex;
+        draw.indexCount = static_cast<std::uint32_t>(m.indices.size()) - draw.firstIndex;
+        out.patches.push_back(draw);
+    }
+
+    // Forget the least recently used patches beyond the capacity (never this frame's).
+    if (cache_.size() > settings_.cacheCapacity) {
+        std::vector<std::pair<std::uint64_t, PatchKey>> old;
+        for (const auto& [key, e] : cache_) {
+            if (e.lastUse < frame_) old.emplace_back(e.lastUse, key);
+        }
+        std::sort(old.begin(), old.end(),
+                  [](const auto& x, const auto& y) { return x.first < y.first; });
+        for (std::size_t n = 0; n < old.size() && cache_.size() > settings_.cacheCapacity; ++n) {
+            cache_.erase(old[n].second);
+        }
+    }
+    return out;
+}
+
+// ---- [SECTION] Terrain proxy -----------------------------------------------------------------
+
+WorldMesh makeTerrainProxy(const World& world, const glm::dvec3& centre_m, double radius_m,
+                           int stepsPerSide, double innerSpacing_m) {
+    AMB_CHECK(stepsPerSide >= 1 && radius_m > 0.0 && innerSpacing_m > 0.0);
+    const int K = stepsPerSide;
+    // Offsets d_k = s (q^k - 1) / (q - 1) with d_K = radius: find the ratio q by bisection
+    // (q = 1 means uniform spacing; a larger inner spacing than radius/K is clamped to uniform).
+    double q = 1.0;
+    if (innerSpacing_m * K < radius_m) {
+        double lo = 1.0, hi = 4.0;
+        for (int it = 0; it < 100; ++it) {
+            const double mid = 0.5 * (lo + hi);
+            const double d = innerSpacing_m * (std::pow(mid, K) - 1.0) / (mid - 1.0);
+            (d < radius_m ? lo : hi) = mid;
+        }
+        q = 0.5 * (lo + hi);
+    }
+    std::vector<double> offsets(2 * K + 1);
+    for (int k = 0; k <= K; ++k) {
+        const double d =
+            (q == 1.0) ? radius_m * k / K : innerSpacing_m * (std::pow(q, k) - 1.0) / (q - 1.0);
+        offsets[K + k] = d;
+        offsets[K - k] = -d;
+    }
+    offsets[2 * K] = radius_m;
+    offsets[0] = -radius_m;
+
+    const int n = 2 * K + 1;
+    std::vector<double> h(n * n), road(n * n);
+    for (int b = 0; b < n; ++b) {
+        for (int a = 0; a < n; ++a) {
+            h[b * n + a] = world.heightAndRoad(centre_m.x + offsets[a], centre_m.z + offsets[b],
+                                               &road[b * n + a]);
+        }
+    }
+    WorldMesh m;
+    for (int b = 0; b < n; ++b) {
+        for (int a = 0; a < n; ++a) {
+            // Differences over the (non-uniform) neighbours; one-sided at the rim.
+            const int a0 = std::max(a - 1, 0), a1 = std::min(a + 1, n - 1);
+            const int b0 = std::max(b - 1, 0), b1 = std::min(b + 1, n - 1);
+            const double dhdx = (h[b * n + a1] - h[b * n + a0]) / (offsets[a1] - offsets[a0]);
+            const double dhdz = (h[b1 * n + a] - h[b0 * n + a]) / (offsets[b1] - offsets[b0]);
+            const glm::dvec3 nn = glm::normalize(glm::dvec3(-dhdx, 1.0, -dhdz));
+            const double x = centre_m.x + offsets[a], z = centre_m.z + offsets[b];
+            const GroundSample g = world.classify(x, z, h[b * n + a], road[b * n + a], nn);
+            m.positions.insert(
+                m.positions.end(),
+                {float(offsets[a]), float(h[b * n + a] - centre_m.y), float(offsets[b])});
+            m.normals.insert(m.normals.end(), {float(nn.x), float(nn.y), float(nn.z)});
+            m.albedo.insert(m.albedo.end(), {g.albedo.r, g.albedo.g, g.albedo.b});
+        }
+    }
+    for (int b = 0; b + 1 < n; ++b) {
+        for (int a = 0; a + 1 < n; ++a) {
+            const std::uint32_t v00 = b * n + a, v10 = v00 + 1, v01 = v00 + n, v11 = v01 + 1;
+            m.indices.insert(m.indices.end(), {v00, v01, v10, v10, v01, v11});
+        }
+    }
+    return m;
+}
+
+}  // namespace amb

@@ -1,0 +1,129 @@
+// TerrainPatch.h — the terrain as square patches on a quadtree with level of detail by distance,
+// crack-free between levels, handed to the renderer as plain arrays; and the coarse terrain proxy
+// mesh for probe capture.
+//
+// Lattice. Every vertex sits on an integer lattice of spacing kFinestSpacing_m (a power of two, so
+// x = integer * spacing is exact in double and every patch computes a shared vertex at the same
+// bit-identical position). A patch of level L has kPatchQuads x kPatchQuads quads of spacing
+// kFinestSpacing_m * 2^L; its key (L, i, k) covers [i, i + 1) x [k, k + 1) times its size.
+//
+// Cracks. Where a patch borders a coarser one, its edge vertices between two coarse vertices are
+// moved onto the coarse edge (linear interpolation of the coarse edge's own rendered vertices):
+// a vertex's rendered height is defined once, from the coarsest patch that contains it, so every
+// patch sharing an edge renders it identically (TerrainPatchCache::build, "stitching").
+//
+// Caching. A TerrainPatch holds the native (unstitched) samples of one key and depends on nothing
+// else; stitching runs on the edges only, each frame.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <unordered_map>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "world/WorldMesh.h"
+
+namespace amb {
+
+class World;
+
+struct PatchKey {
+    int level = 0;       // 0 = finest
+    std::int64_t i = 0;  // patch index along x at this level
+    std::int64_t k = 0;  // patch index along z at this level
+    bool operator==(const PatchKey& o) const { return level == o.level && i == o.i && k == o.k; }
+    bool operator!=(const PatchKey& o) const { return !(*this == o); }
+};
+
+struct PatchKeyHash {
+    std::size_t operator()(const PatchKey& key) const;
+};
+
+// Native samples of one patch: (kPatchQuads + 1)^2 vertices, row-major in z then x.
+struct TerrainPatch {
+    static constexpr int kPatchQuads = 16;
+    static constexpr int kVerticesPerSide = kPatchQuads + 1;
+    static constexpr double kFinestSpacing_m = 2.0;
+
+    PatchKey key;
+    std::vector<double> heights_m;            // world heights (roads flattened in)
+    std::vector<float> normals;               // xyz per vertex, from the height grid at this level
+    std::vector<float> albedo;                // rgb per vertex
+    std::array<glm::dvec3, 4> cornerNormals;  // World::normal at the corners (exact, shared)
+
+    static double spacing_m(int level);  // vertex spacing
+    static double size_m(int level);     // edge length
+    static std::int64_t latticeStep(int level) { return std::int64_t(1) << level; }
+    // World XZ of the patch's minimum corner.
+    static double originX_m(const PatchKey& key) { return double(key.i) * size_m(key.level); }
+    static double originZ_m(const PatchKey& key) { return double(key.k) * size_m(key.level); }
+
+    // Samples a patch (pure function of the key; thread-safe).
+    static TerrainPatch generate(const World& world, const PatchKey& key);
+};
+
+// Per-patch draw information in a TerrainMesh. Corners are ordered (x0, z0), (x1, z0), (x0, z1),
+// (x1, z1): the minimum corner first, x varying fastest.
+struct TerrainPatchDraw {
+    PatchKey key;
+    std::uint32_t firstIndex = 0, indexCount = 0;
+    std::uint32_t firstVertex = 0, vertexCount = 0;
+    std::array<glm::dvec3, 4> corners_m;      // world positions as rendered (stitched)
+    std::array<glm::dvec3, 4> cornerNormals;  // unit, World::normal at the corner
+};
+
+struct TerrainMesh {
+    glm::dvec3 origin_m{0.0};  // positions in `mesh` are relative to this
+    WorldMesh mesh;            // all patches; indices are absolute into the mesh
+    std::vector<TerrainPatchDraw> patches;
+};
+
+struct TerrainLodSettings {
+    int coarsestLevel = 8;             // patch size 32 m * 2^8 = 8192 m
+    double splitFactor = 1.5;          // split a patch while its distance < splitFactor * size
+    double viewRadius_m = 8000.0;      // patches beyond this horizontal distance are left out
+    std::size_t cacheCapacity = 4096;  // patches kept when unused
+};
+
+class TerrainPatchCache {
+  public:
+    explicit TerrainPatchCache(const World& world, TerrainLodSettings settings = {});
+
+    // Quadtree leaves for a camera: a patch splits while the camera (its height above the
+    // ground counted) is closer than splitFactor * its size. Deterministic.
+    std::vector<PatchKey> selectPatches(const glm::dvec3& camera_m) const;
+    // Generates missing patches (in parallel), stitches edges to coarser neighbours and packs
+    // everything relative to origin_m.
+    TerrainMesh build(const std::vector<PatchKey>& leaves, const glm::dvec3& origin_m);
+    TerrainMesh build(const glm::dvec3& camera_m, const glm::dvec3& origin_m) {
+        return build(selectPatches(camera_m), origin_m);
+    }
+    // The cached native samples of a key (generated on demand).
+    std::shared_ptr<const TerrainPatch> patch(const PatchKey& key);
+    std::size_t cachedPatches() const { return cache_.size(); }
+    std::size_t generatedPatches() const { return generated_; }
+
+  private:
+    const World& world_;
+    TerrainLodSettings settings_;
+    struct Entry {
+        std::shared_ptr<const TerrainPatch> patch;
+        std::uint64_t lastUse = 0;
+    };
+    std::unordered_map<PatchKey, Entry, PatchKeyHash> cache_;
+    std::uint64_t frame_ = 0;
+    std::size_t generated_ = 0;
+};
+
+// Coarse terrain proxy for probe capture: a grid centred on (centre.x, centre.z) whose spacing
+// grows geometrically from `innerSpacing_m` to reach radius_m in `stepsPerSide` steps, so the
+// ground near the probe is detailed and the horizon is cheap. (2 stepsPerSide)^2 * 2 triangles
+// (2048 for the default). Positions relative to centre_m; roads flattened in; albedo per vertex.
+WorldMesh makeTerrainProxy(const World& world, const glm::dvec3& centre_m, double radius_m = 2000.0,
+                           int stepsPerSide = 16, double innerSpacing_m = 6.0);
+
+}  // namespace amb
