@@ -9,6 +9,7 @@
 #include <glm/geometric.hpp>
 #include <nlohmann/json.hpp>
 
+#include "app/CliChecks.h"
 #include "app/Commands.h"
 #include "world/CameraPath.h"
 #include "world/Error.h"
@@ -140,37 +141,48 @@ void addReplayCommand(CLI::App& app) {
     make->add_option("--description", o.description, "One line stored in the file");
     make->add_option("--seed", o.world.seed, "World seed")->capture_default_str();
     make->add_option("--latitude", o.world.latitude_deg, "Latitude [deg]")
-        ->check(CLI::Range(-90.0, 90.0))->capture_default_str();
+        ->check(FiniteRange(-90.0, 90.0))->capture_default_str();
     make->add_option("--day", o.world.dayOfYear, "Day of year (1-366)")
         ->check(CLI::Range(1, 366))->capture_default_str();
     make->add_option("--time", o.timeStart_h, "Time of day at the start [h]")
-        ->check(CLI::Range(0.0, 24.0))->capture_default_str();
+        ->check(FiniteRange(0.0, 24.0))->capture_default_str();
     make->add_option("--time-rate", o.timeRate, "Hours of day per hour of replay")
-        ->check(CLI::Range(0.0, 1.0e5))->capture_default_str();
+        ->check(FiniteRange(0.0, 1.0e5))->capture_default_str();
     make->add_option("--duration", o.duration_s, "Duration [s]")
-        ->check(CLI::Range(0.01, 86400.0))->capture_default_str();
-    make->add_option("--step", o.step_s, "Fixed step [s]")->check(CLI::Range(1e-4, 10.0))->capture_default_str();
+        ->check(FiniteRange(0.01, 86400.0))->capture_default_str();
+    make->add_option("--step", o.step_s, "Fixed step [s]")->check(FiniteRange(1e-4, 10.0))->capture_default_str();
     make->add_option("--speed", o.speed_mps, "Speed [m/s] (default: drive 30, fly 80)")
-        ->check(CLI::Range(0.0, 1.0e4));
+        ->check(FiniteRange(0.0, 1.0e4));
     make->add_option("--road", o.road, "drive: road name (highway, mountain)")->capture_default_str();
     make->add_option("--start-distance", o.startDistance_m, "drive: start along the road [m]")
-        ->check(CLI::Range(0.0, 1.0e7));
+        ->check(FiniteRange(0.0, 1.0e7));
     make->add_flag("--reverse", o.reverse, "drive: from the road's end towards its start");
-    make->add_option("--lane-offset", o.laneOffset_m, "drive: lateral offset, + right [m]");
-    make->add_option("--eye-height", o.eyeHeight_m, "drive: eye above the road [m]")->capture_default_str();
+    make->add_option("--lane-offset", o.laneOffset_m, "drive: lateral offset, + right [m]")
+        ->check(FiniteRange(-50.0, 50.0));
+    make->add_option("--eye-height", o.eyeHeight_m, "drive: eye above the road [m]")
+        ->check(FiniteRange(0.1, 100.0))->capture_default_str();
     make->add_option("--max-lateral-accel", o.lateralAccel,
-                     "drive: slow down in curves to keep v^2 k below this [m/s^2]; 0 = constant speed");
-    make->add_option("--altitude", o.altitude_m, "fly: height above the terrain [m]")->capture_default_str();
-    make->add_option("--clearance", o.clearance_m, "fly: minimum height above the terrain [m]")->capture_default_str();
-    make->add_option("--turn-radius", o.turnRadius_m, "fly: radius of turns [m]")->capture_default_str();
+                     "drive: slow down in curves to keep v^2 k below this [m/s^2]; 0 = constant speed")
+        ->check(FiniteRange(0.0, 100.0));
+    make->add_option("--altitude", o.altitude_m, "fly: height above the terrain [m]")
+        ->check(FiniteRange(1.0, 1.0e5))->capture_default_str();
+    make->add_option("--clearance", o.clearance_m, "fly: minimum height above the terrain [m]")
+        ->check(FiniteRange(0.0, 1.0e5))->capture_default_str();
+    make->add_option("--turn-radius", o.turnRadius_m, "fly: radius of turns [m]")
+        ->check(FiniteRange(1.0, 1.0e5))->capture_default_str();
     make->add_option("--flight-seed", o.flightSeed, "fly: seed of the procedural flight plan");
-    make->add_option("--start", o.start, "fly: start point X,Z [m]")->delimiter(',')->expected(2);
-    make->add_option("--heading", o.heading_deg, "fly/static: heading [deg], 0 = north (-Z), 90 = east");
+    make->add_option("--start", o.start, "fly: start point X,Z [m]")
+        ->delimiter(',')->expected(2)->check(FiniteRange(-1.0e7, 1.0e7));
+    make->add_option("--heading", o.heading_deg, "fly/static: heading [deg], 0 = north (-Z), 90 = east")
+        ->check(FiniteRange(-360.0, 360.0));
     make->add_option("--cuts", o.cuts, "fly: number of camera cuts (teleports)")->check(CLI::Range(0, 1000));
-    make->add_option("--cut-jump", o.cutJump_m, "fly: distance of each cut [m]");
-    make->add_option("--at", o.at, "static: camera ground point X,Z [m]")->delimiter(',')->expected(2);
-    make->add_option("--height", o.height_m, "static: eye above the terrain [m]");
-    make->add_option("--pitch", o.pitch_deg, "static: pitch [deg], + looks up")->check(CLI::Range(-89.0, 89.0));
+    make->add_option("--cut-jump", o.cutJump_m, "fly: distance of each cut [m]")
+        ->check(FiniteRange(0.0, 1.0e6));
+    make->add_option("--at", o.at, "static: camera ground point X,Z [m]")
+        ->delimiter(',')->expected(2)->check(FiniteRange(-1.0e7, 1.0e7));
+    make->add_option("--height", o.height_m, "static: eye above the terrain [m]")
+        ->check(FiniteRange(0.0, 1.0e5));
+    make->add_option("--pitch", o.pitch_deg, "static: pitch [deg], + looks up")->check(FiniteRange(-89.0, 89.0));
     make->callback([] {
         constexpr double kDeg = 3.14159265358979323846 / 180.0;
         Replay rp;

@@ -13,7 +13,9 @@
 int main(int argc, char** argv) {
     CLI::App app{"Ambience: procedural open-world terrain with a dynamic ambience volume"};
     app.name("ambience");
-    app.require_subcommand(1);
+    // At most one subcommand; none is reported after parsing, so that an unknown option or
+    // subcommand is named in the error rather than hidden behind "a subcommand is required".
+    app.require_subcommand(0, 1);
     amb::addRunCommand(app);
     amb::addViewCommand(app);
     amb::addProbeCommand(app);
@@ -23,6 +25,10 @@ int main(int argc, char** argv) {
 
     try {
         app.parse(argc, argv);
+        if (app.get_subcommands().empty()) {
+            std::fprintf(stderr, "ambience: error: a subcommand is required (see 'ambience --help')\n");
+            return 2;
+        }
     } catch (const CLI::CallForHelp& e) {
         return app.exit(e);
     } catch (const CLI::CallForAllHelp& e) {

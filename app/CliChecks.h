@@ -1,0 +1,34 @@
+// CliChecks.h — CLI11 validators shared by the subcommands. CLI11's Range lets NaN through
+// (every comparison with NaN is false), so numeric options use FiniteRange instead.
+#pragma once
+
+#include <cmath>
+#include <sstream>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+namespace amb {
+
+// A number that is finite and within [lo, hi].
+class FiniteRange : public CLI::Validator {
+public:
+    FiniteRange(double lo, double hi) {
+        std::ostringstream d;
+        d << "FINITE in [" << lo << " - " << hi << "]";
+        description(d.str());
+        func_ = [lo, hi](std::string& text) -> std::string {
+            double v = 0.0;
+            if (!CLI::detail::lexical_cast(text, v)) return "not a number: " + text;
+            if (!std::isfinite(v)) return "not a finite number: " + text;
+            if (v < lo || v > hi) {
+                std::ostringstream s;
+                s << "value " << text << " not in range [" << lo << ", " << hi << "]";
+                return s.str();
+            }
+            return {};
+        };
+    }
+};
+
+}  // namespace amb

@@ -1,0 +1,107 @@
+// Cli_test.cpp — the command line as a user meets it: help works, and bad input (unknown
+// options, missing or malformed files, absurd values) gives exactly one line on stderr naming
+// what and where, exit code 2, and no crash.
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "RunAmbience.h"
+
+namespace amb {
+namespace {
+
+using test::runAmbience;
+using test::sourcePath;
+
+// Exit code 2 and one line on stderr that contains every fragment.
+void expectInputError(const std::string& args, std::initializer_list<const char*> fragments) {
+    const test::CommandResult r = runAmbience(args);
+    EXPECT_EQ(r.exitCode, 2) << args << "\nstderr: " << r.err;
+    EXPECT_EQ(r.errLines(), 1) << args << "\nstderr: " << r.err;
+    for (const char* f : fragments)
+        EXPECT_NE(r.err.find(f), std::string::npos) << "'" << f << "' not in: " << r.err;
+}
+
+std::string writeTemp(const std::string& name, const std::string& text) {
+    const std::string path = testing::TempDir() + name;
+    std::ofstream(path) << text;
+    return path;
+}
+
+TEST(Cli, HelpListsEverySubcommand) {
+    const test::CommandResult r = runAmbience("--help");
+    EXPECT_EQ(r.exitCode, 0);
+    for (const char* sub : {"run", "view", "probe", "world", "replay", "sh"})
+        EXPECT_NE(r.out.find(sub), std::string::npos) << sub;
+    EXPECT_EQ(runAmbience("replay make --help").exitCode, 0);
+    EXPECT_EQ(runAmbience("world --help").exitCode, 0);
+}
+
+TEST(Cli, UnknownOptionsAndSubcommands) {
+    expectInputError("--frobnicate", {"frobnicate"});
+    expectInputError("teleport", {"teleport"});
+    expectInputError("replay info", {"file"});                       // missing positional
+    expectInputError("replay make --mode swim --out x.json", {"swim"});
+    expectInputError("", {"subcommand"});
+}
+
+TEST(Cli, ReplayInfoOnShippedReplay) {
+    const test::CommandResult r = runAmbience("replay info " + sourcePath("replays/highway-drive.json"));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("duration"), std::string::npos);
+    EXPECT_NE(r.out.find("30.00"), std::string::npos) << r.out;  // the drive's speed
+    const test::CommandResult j = runAmbience("replay info --json " + sourcePath("replays/stress-flight.json"));
+    ASSERT_EQ(j.exitCode, 0) << j.err;
+    EXPECT_NE(j.out.find("\"cuts\": 1"), std::string::npos) << j.out;
+}
+
+TEST(Cli, ReplayInfoBadFiles) {
+    expectInputError("replay info /nonexistent/x.json", {"/nonexistent/x.json", "cannot open"});
+    const std::string truncated = writeTemp("cli_truncated.json", "{\"format\": \"ambience-replay\", ");
+    expectInputError("replay info " + truncated, {"cli_truncated.json", "not valid JSON"});
+    const std::string wrongVersion = writeTemp(
+        "cli_version.json", "{\"format\": \"ambience-replay\", \"version\": 99}");
+    expectInputError("replay info " + wrongVersion, {"cli_version.json", "version", "99"});
+}
+
+TEST(Cli, ReplayMakeRoundTripsThroughInfo) {
+    const std::string out = testing::TempDir() + "cli_static.json";
+    const test::CommandResult r = runAmbience("replay make --mode static --at 100,200 --duration 2 --out " + out);
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const test::CommandResult info = runAmbience("replay info --json " + out);
+    ASSERT_EQ(info.exitCode, 0) << info.err;
+    EXPECT_NE(info.out.find("\"samples\": 121"), std::string::npos) << info.out;  // 2 s at 60 Hz
+    std::remove(out.c_str());
+}
+
+TEST(Cli, ReplayMakeBadSettings) {
+    expectInputError("replay make --mode drive --road nowhere --out " + testing::TempDir() + "x.json",
+                     {"nowhere"});
+    expectInputError("replay make --mode drive --duration -5 --out x.json", {"duration"});
+    expectInputError("replay make --mode drive --speed nan --out x.json", {"speed"});
+    expectInputError("replay make --mode static --at 1,2 --duration 1 --out /nonexistent/dir/x.json",
+                     {"/nonexistent/dir/x.json"});
+}
+
+TEST(Cli, WorldBadInput) {
+    expectInputError("world --map " + testing::TempDir() + "m.png --size -1", {"size"});
+    expectInputError("world --map " + testing::TempDir() + "m.png --replay /nonexistent/r.json",
+                     {"/nonexistent/r.json"});
+    expectInputError("world --map " + testing::TempDir() + "m.png --centre 1,nan", {"centre"});
+}
+
+TEST(Cli, WorldMapIsWritten) {
+    const std::string map = testing::TempDir() + "cli_map.png";
+    const test::CommandResult r = runAmbience("world --seed 3 --size 2000 --pixels 64 --map " + map);
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    std::ifstream in(map, std::ios::binary);
+    char sig[8] = {};
+    in.read(sig, 8);
+    EXPECT_EQ(std::string(sig + 1, 3), "PNG");
+    std::remove(map.c_str());
+}
+
+}  // namespace
+}  // namespace amb

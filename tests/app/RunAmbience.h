@@ -1,0 +1,51 @@
+// RunAmbience.h — runs the built `ambience` executable with arguments and captures its exit
+// code, stdout and stderr, for tests of the command line.
+#pragma once
+
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+namespace amb::test {
+
+struct CommandResult {
+    int exitCode = -1;
+    std::string out, err;
+    int errLines() const {
+        int n = 0;
+        for (char c : err) n += c == '\n';
+        return n;
+    }
+};
+
+inline std::string slurp(const std::string& path) {
+    std::ifstream in(path);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+// `args` is appended to the command line as is (shell syntax; quote what needs quoting).
+inline CommandResult runAmbience(const std::string& args) {
+    static int counter = 0;
+    const std::string base = testing::TempDir() + "ambience_cli_" + std::to_string(++counter);
+    const std::string cmd = std::string(AMBIENCE_BINARY_DIR) + "/bin/ambience " + args + " >" +
+                            base + ".out 2>" + base + ".err </dev/null";
+    const int status = std::system(cmd.c_str());
+    CommandResult r;
+    r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    r.out = slurp(base + ".out");
+    r.err = slurp(base + ".err");
+    return r;
+}
+
+inline std::string sourcePath(const std::string& relative) {
+    return std::string(AMBIENCE_SOURCE_DIR) + "/" + relative;
+}
+
+}  // namespace amb::test
