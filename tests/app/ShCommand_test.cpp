@@ -1,0 +1,136 @@
+// ShCommand_test.cpp — `ambience sh project` end to end: a cube map written with writeCubeMap,
+// the executable run on it, its JSON checked against closed forms; bad input exits with code 2.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <glm/geometric.hpp>
+#include <nlohmann/json.hpp>
+
+#include "lighting/CubeMapFile.h"
+#include "world/Conventions.h"
+
+namespace amb {
+namespace {
+
+struct RunResult {
+    int exitCode;
+    std::string out;
+};
+
+// Runs the executable with `args`; stdout is captured, stderr goes to `errPath`.
+RunResult run(const std::string& args, const std::string& errPath) {
+    const std::string cmd =
+        std::string(AMBIENCE_BINARY_DIR) + "/bin/ambience " + args + " 2>" + errPath;
+    FILE* pipe = popen(cmd.c_str(), "r");
+    if (!pipe) return {-1, ""};
+    std::string out;
+    char buf[4096];
+    std::size_t got;
+    while ((got = fread(buf, 1, sizeof buf, pipe)) > 0) out.append(buf, got);
+    const int status = pclose(pipe);
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+std::string readFile(const std::string& path) {
+    std::string s;
+    if (FILE* f = std::fopen(path.c_str(), "r")) {
+        char buf[4096];
+        std::size_t got;
+        while ((got = fread(buf, 1, sizeof buf, f)) > 0) s.append(buf, got);
+        std::fclose(f);
+    }
+    return s;
+}
+
+class ShCommand : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        dir_ =
+            std::filesystem::temp_directory_path() / ("ambience_sh_" + std::to_string(::getpid()));
+        std::filesystem::create_directories(dir_);
+        // Sky S = 1 (red 2) above the horizon, ground G = 0.1 below, N = 16.
+        const int n = 16;
+        std::vector<float> rgb(std::size_t(6) * n * n * 3);
+        for (int f = 0; f < 6; ++f)
+            for (int j = 0; j < n; ++j)
+                for (int i = 0; i < n; ++i) {
+                    const bool sky = cubeTexelDirection(f, i, j, n).y > 0.0;
+                    float* p = &rgb[3 * ((std::size_t(f) * n + j) * n + i)];
+                    p[0] = sky ? 2.0f : 0.1f;
+                    p[1] = p[2] = sky ? 1.0f : 0.1f;
+                }
+        cube_ = (dir_ / "sky.exr").string();
+        writeCubeMap(cube_, n, rgb);
+        err_ = (dir_ / "stderr.txt").string();
+    }
+    void TearDown() override { std::filesystem::remove_all(dir_); }
+
+    std::filesystem::path dir_;
+    std::string cube_, err_;
+};
+
+// Coefficients and irradiance against the sky/ground closed forms: L00 = sqrt(pi) (S + G) to
+// 1e-5, E(n) = pi (S (1 + n_y) + G (1 - n_y)) / 2 to 1 % (16 x 16 texels); normals are
+// normalised by the command ("0,5,0" is up).
+TEST_F(ShCommand, ProjectPrintsCoefficientsAndIrradiance) {
+    const RunResult r =
+        run("sh project --cube " + cube_ + " --normals \"0,5,0;0,-1,0;1,0,0\"", err_);
+    ASSERT_EQ(r.exitCode, 0) << readFile(err_);
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j.at("n").get<int>(), 16);
+    ASSERT_EQ(j.at("coefficients").size(), 9u);
+    EXPECT_NEAR(j["coefficients"][0][1].get<double>(), std::sqrt(kPi) * 1.1, 1e-5);
+    EXPECT_NEAR(j["coefficients"][0][0].get<double>(), std::sqrt(kPi) * 2.1, 1e-5);
+    ASSERT_EQ(j.at("irradiance").size(), 3u);
+    const double ny[3] = {1.0, -1.0, 0.0};
+    for (int i = 0; i < 3; ++i) {
+        const double exact = kPi * ((1 + ny[i]) + 0.1 * (1 - ny[i])) / 2.0;
+        EXPECT_NEAR(j["irradiance"][i][1].get<double>(), exact, 0.01 * exact) << i;
+    }
+}
+
+// A window changes the irradiance but not the printed (raw) coefficients; hanning:2 halves the
+// band-1 part: E(up) = pi (S + G) / 2 + (pi (S - G) / 2) / 2.
+TEST_F(ShCommand, WindowAppliesToIrradianceOnly) {
+    const RunResult none = run("sh project --cube " + cube_ + " --normals 0,1,0", err_);
+    const RunResult hann =
+        run("sh project --cube " + cube_ + " --window hanning:2 --normals 0,1,0", err_);
+    const RunResult autoW =
+        run("sh project --cube " + cube_ + " --window auto --normals 0,1,0", err_);
+    ASSERT_EQ(none.exitCode, 0);
+    ASSERT_EQ(hann.exitCode, 0);
+    ASSERT_EQ(autoW.exitCode, 0);
+    const auto a = nlohmann::json::parse(none.out), b = nlohmann::json::parse(hann.out),
+               c = nlohmann::json::parse(autoW.out);
+    EXPECT_EQ(a["coefficients"], b["coefficients"]);
+    const double expected = kPi * 1.1 / 2.0 + kPi * 0.9 / 4.0;
+    EXPECT_NEAR(b["irradiance"][0][1].get<double>(), expected, 0.01 * expected);
+    // This sky never rings, so auto is no window.
+    EXPECT_EQ(a["irradiance"], c["irradiance"]);
+}
+
+// Bad input: exit code 2 and one line naming the input.
+TEST_F(ShCommand, BadInputExitsWithCodeTwo) {
+    const std::string missing = (dir_ / "missing.exr").string();
+    RunResult r = run("sh project --cube " + missing, err_);
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(readFile(err_).find(missing), std::string::npos);
+    r = run("sh project --cube " + cube_ + " --window gauss:3", err_);
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(readFile(err_).find("--window"), std::string::npos);
+    r = run("sh project --cube " + cube_ + " --normals \"0,1,0;1,x,0\"", err_);
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(readFile(err_).find("--normals item 2"), std::string::npos);
+    r = run("sh project --cube " + cube_ + " --normals 0,0,0", err_);
+    EXPECT_EQ(r.exitCode, 2);
+}
+
+}  // namespace
+}  // namespace amb

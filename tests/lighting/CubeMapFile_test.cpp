@@ -1,0 +1,153 @@
+// CubeMapFile_test.cpp — vertical-strip cube-map files: round trip, layout on disk (checked with
+// OpenImageIO directly), 8-bit and grey input, and bad files named in the error.
+#include "lighting/CubeMapFile.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+
+#include "world/Error.h"
+
+namespace amb {
+namespace {
+
+std::string tempPath(const std::string& name) {
+    return (std::filesystem::temp_directory_path() /
+            ("ambience_cubemapfile_" + std::to_string(::getpid()) + "_" + name))
+        .string();
+}
+
+// A distinct value per (face, row, column, channel).
+float texelValue(int face, int j, int i, int c) {
+    return 1000.0f * face + 100.0f * j + 10.0f * i + c + 0.125f;
+}
+
+std::vector<float> distinctMap(int n) {
+    std::vector<float> rgb(std::size_t(6) * n * n * 3);
+    for (int f = 0; f < 6; ++f)
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i)
+                for (int c = 0; c < 3; ++c)
+                    rgb[3 * ((std::size_t(f) * n + j) * n + i) + c] = texelValue(f, j, i, c);
+    return rgb;
+}
+
+void writeImage(const std::string& path, int w, int h, int channels, OIIO::TypeDesc type,
+                const std::vector<float>& data) {
+    auto out = OIIO::ImageOutput::create(path);
+    ASSERT_TRUE(out);
+    OIIO::ImageSpec spec(w, h, channels, type);
+    spec.attribute("oiio:UnassociatedAlpha", 1);  // store colour as given, not divided by alpha
+    ASSERT_TRUE(out->open(path, spec));
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, data.data()));
+    ASSERT_TRUE(out->close());
+}
+
+// EXR stores 32-bit float: the round trip is exact, and HDR values (1e5) survive.
+TEST(CubeMapFile, ExrRoundTripIsExact) {
+    const int n = 5;
+    auto rgb = distinctMap(n);
+    rgb[7] = 1e5f;
+    rgb[8] = 3.5e-7f;
+    const std::string path = tempPath("roundtrip.exr");
+    writeCubeMap(path, n, rgb);
+    const CubeMapImage image = readCubeMap(path);
+    EXPECT_EQ(image.n, n);
+    EXPECT_EQ(image.rgb, rgb);
+    std::filesystem::remove(path);
+}
+
+// On disk: width N, height 6N, float, texel (face f, row j, column i) at pixel (i, f N + j).
+TEST(CubeMapFile, VerticalStripLayout) {
+    const int n = 4;
+    const std::string path = tempPath("layout.exr");
+    writeCubeMap(path, n, distinctMap(n));
+    auto in = OIIO::ImageInput::open(path);
+    ASSERT_TRUE(in);
+    EXPECT_EQ(in->spec().width, n);
+    EXPECT_EQ(in->spec().height, 6 * n);
+    EXPECT_EQ(in->spec().format, OIIO::TypeDesc::FLOAT);
+    std::vector<float> pixels(std::size_t(n) * 6 * n * 3);
+    ASSERT_TRUE(in->read_image(0, 0, 0, 3, OIIO::TypeDesc::FLOAT, pixels.data()));
+    for (int f = 0; f < 6; ++f)
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i)
+                for (int c = 0; c < 3; ++c) {
+                    const std::size_t y = std::size_t(f) * n + j;
+                    EXPECT_EQ(pixels[3 * (y * n + i) + c], texelValue(f, j, i, c));
+                }
+    std::filesystem::remove(path);
+}
+
+// An 8-bit PNG is read as [0, 1] (within 1/255 quantisation); alpha is ignored (colour is not
+// multiplied by it); a grey image fills all three channels.
+TEST(CubeMapFile, ReadsEightBitAndGrey) {
+    const int n = 2;
+    std::vector<float> rgba(std::size_t(n) * 6 * n * 4);
+    for (std::size_t t = 0; t < rgba.size() / 4; ++t) {
+        rgba[4 * t] = 0.2f;
+        rgba[4 * t + 1] = 0.6f;
+        rgba[4 * t + 2] = 1.0f;
+        rgba[4 * t + 3] = 0.5f;
+    }
+    const std::string png = tempPath("rgba.png");
+    writeImage(png, n, 6 * n, 4, OIIO::TypeDesc::UINT8, rgba);
+    const CubeMapImage image = readCubeMap(png);
+    ASSERT_EQ(image.rgb.size(), std::size_t(6) * n * n * 3);
+    for (std::size_t t = 0; t < image.rgb.size() / 3; ++t) {
+        EXPECT_NEAR(image.rgb[3 * t], 0.2f, 0.5f / 255);
+        EXPECT_NEAR(image.rgb[3 * t + 1], 0.6f, 0.5f / 255);
+        EXPECT_NEAR(image.rgb[3 * t + 2], 1.0f, 0.5f / 255);
+    }
+    std::filesystem::remove(png);
+
+    const std::string grey = tempPath("grey.exr");
+    std::vector<float> g(std::size_t(n) * 6 * n, 0.75f);
+    writeImage(grey, n, 6 * n, 1, OIIO::TypeDesc::FLOAT, g);
+    const CubeMapImage greyImage = readCubeMap(grey);
+    for (float v : greyImage.rgb) EXPECT_EQ(v, 0.75f);
+    std::filesystem::remove(grey);
+}
+
+// Bad files raise InputError whose message names the file and the problem.
+TEST(CubeMapFile, BadFilesNameFileAndProblem) {
+    auto expectError = [](const std::string& path, const std::string& problem) {
+        try {
+            readCubeMap(path);
+            ADD_FAILURE() << "no error for " << path;
+        } catch (const InputError& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find(path), std::string::npos) << what;
+            EXPECT_NE(what.find(problem), std::string::npos) << what;
+        }
+    };
+    expectError(tempPath("missing.exr"), "cannot read");
+
+    const std::string square = tempPath("square.exr");
+    writeImage(square, 4, 4, 3, OIIO::TypeDesc::FLOAT, std::vector<float>(4 * 4 * 3, 1.0f));
+    expectError(square, "6N high");
+    std::filesystem::remove(square);
+
+    const std::string twoChannels = tempPath("two.exr");
+    writeImage(twoChannels, 2, 12, 2, OIIO::TypeDesc::FLOAT, std::vector<float>(2 * 12 * 2, 1.0f));
+    expectError(twoChannels, "channels");
+    std::filesystem::remove(twoChannels);
+
+    const std::string garbage = tempPath("garbage.exr");
+    std::ofstream(garbage) << "this is not an image";
+    expectError(garbage, "cannot read");
+    std::filesystem::remove(garbage);
+
+    const std::string unwritable = tempPath("no_such_dir") + "/map.exr";
+    EXPECT_THROW(writeCubeMap(unwritable, 1, std::vector<float>(18, 1.0f)), InputError);
+}
+
+}  // namespace
+}  // namespace amb
