@@ -1,0 +1,314 @@
+// AmbienceVolume.cpp — the per-frame ambience pipeline (see AmbienceVolume.h).
+//
+// [SECTION] Settings from JSON
+// [SECTION] Construction, fallback
+// [SECTION] update(): time, predict, capture + project, store
+#include "lighting/AmbienceVolume.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <map>
+
+#include <nlohmann/json.hpp>
+
+#include "lighting/CubeCapture.h"
+#include "lighting/CubeMapProjector.h"
+#include "lighting/ProbeEnvironment.h"
+#include "world/Error.h"
+
+namespace amb {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t0) {
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// Signed difference b - a of two times of day, in (-12, 12] hours (the wrap at 24 h).
+double dayDifference_h(double a, double b) {
+    double d = std::fmod(b - a, 24.0);
+    if (d > 12.0) d -= 24.0;
+    if (d <= -12.0) d += 24.0;
+    return d;
+}
+
+// ---- Settings from JSON -------------------------------------------------------------------------
+
+// Reads the keys of one JSON object into fields; unknown keys and bad values are input errors.
+class JsonFields {
+  public:
+    JsonFields(const nlohmann::json& object, std::string where)
+        : object_(object), where_(std::move(where)) {
+        if (!object_.is_object()) throw InputError(where_, "expected a JSON object");
+    }
+    void number(const char* key, double& field, double lo, double hi) {
+        known_.push_back(key);
+        if (!object_.contains(key)) return;
+        const auto& v = object_.at(key);
+        if (!v.is_number()) throw InputError(where_, std::string("'") + key + "' must be a number");
+        const double x = v.get<double>();
+        if (!(x >= lo && x <= hi)) {
+            throw InputError(where_, std::string("'") + key + "' must be in [" +
+                                         std::to_string(lo) + ", " + std::to_string(hi) + "]");
+        }
+        field = x;
+    }
+    void integer(const char* key, int& field, int lo, int hi) {
+        known_.push_back(key);
+        if (!object_.contains(key)) return;
+        const auto& v = object_.at(key);
+        if (!v.is_number_integer()) {
+            throw InputError(where_, std::string("'") + key + "' must be an integer");
+        }
+        const long long x = v.get<long long>();
+        if (x < lo || x > hi) {
+            throw InputError(where_, std::string("'") + key + "' must be in [" +
+                                         std::to_string(lo) + ", " + std::to_string(hi) + "]");
+        }
+        field = int(x);
+    }
+    void object(const char* key, const std::function<void(JsonFields&)>& read) {
+        known_.push_back(key);
+        if (!object_.contains(key)) return;
+        JsonFields inner(object_.at(key), where_ + ": '" + key + "'");
+        read(inner);
+        inner.finish();
+    }
+    void finish() const {
+        for (auto it = object_.begin(); it != object_.end(); ++it) {
+            if (std::find(known_.begin(), known_.end(), it.key()) == known_.end()) {
+                throw InputError(where_, "unknown key '" + it.key() + "'");
+            }
+        }
+    }
+
+  private:
+    const nlohmann::json& object_;
+    std::string where_;
+    std::vector<std::string> known_;
+};
+
+}  // namespace
+
+AmbienceVolumeSettings ambienceSettingsFromJson(const std::string& jsonText,
+                                                const std::string& where) {
+    nlohmann::json root;
+    try {
+        root = nlohmann::json::parse(jsonText);
+    } catch (const nlohmann::json::exception& e) {
+        throw InputError(where, std::string("not valid JSON: ") + e.what());
+    }
+    constexpr double kBig = 1e9;
+    AmbienceVolumeSettings s;
+    JsonFields f(root, where);
+    f.object("store", [&](JsonFields& o) {
+        AnchorStoreSettings& t = s.store;
+        o.number("coarsestSpacing_m", t.coarsestSpacing_m, 1e-3, 1e6);
+        o.integer("levels", t.levels, 1, kMaxAnchorLevels);
+        o.number("blendTime_s", t.blendTime_s, 0.0, 3600.0);
+        o.number("allowedSunAngle_rad", t.allowedSunAngle_rad, 1e-6, kPi);
+        o.number("minLifetime_s", t.minLifetime_s, 1e-3, kBig);
+        o.number("maxLifetime_s", t.maxLifetime_s, 1e-3, kBig);
+        o.number("regenerateFraction", t.regenerateFraction, 0.0, 1.0);
+        o.integer("searchCells", t.searchCells, 1, 16);
+    });
+    f.object("scheduler", [&](JsonFields& o) {
+        ProbeSchedulerSettings& t = s.scheduler;
+        o.number("velocityTimeConstant_s", t.velocityTimeConstant_s, 0.0, 60.0);
+        o.number("horizon_s", t.horizon_s, 0.0, 60.0);
+        o.number("pathStep_s", t.pathStep_s, 0.01, 60.0);
+        o.number("historyLength_s", t.historyLength_s, 0.0, 600.0);
+        o.number("roadSnap_m", t.roadSnap_m, 0.0, 1000.0);
+        o.number("roadAlignment", t.roadAlignment, 0.0, 1.0);
+        o.number("teleportDistance_m", t.teleportDistance_m, 0.0, kBig);
+        o.number("corridorCells", t.corridorCells, 0.01, 100.0);
+        o.integer("maxLevel", t.maxLevel, 0, kMaxAnchorLevels - 1);
+        o.number("finestRingCells", t.finestRingCells, 0.0, 100.0);
+        o.number("coarseRingCells", t.coarseRingCells, 0.0, 100.0);
+        o.integer("maxWiden", t.maxWiden, 0, 8);
+        o.number("minReachSpeed_mps", t.minReachSpeed_mps, 1e-3, 1e6);
+        o.number("gapBonus_s", t.gapBonus_s, -1e3, 1e3);
+        o.number("staleBias_s", t.staleBias_s, -1e3, 1e3);
+    });
+    f.integer("facesPerFrame", s.facesPerFrame, 1, 64);
+    f.number("nominalFrameTime_s", s.nominalFrameTime_s, 1e-4, 10.0);
+    f.number("defaultTimeRate_hPerS", s.defaultTimeRate_hPerS, -10.0, 10.0);
+    f.number("timeJump_h", s.timeJump_h, 0.0, 12.0);
+    f.number("sunThreshold", s.sunThreshold, 0.0, std::numeric_limits<double>::infinity());
+    f.integer("fallbackFaceSize", s.fallbackFaceSize, 1, 256);
+    f.number("fallbackRefresh_h", s.fallbackRefresh_h, 0.0, 24.0);
+    f.number("asideFraction", s.asideFraction, 0.0, 10.0);
+    f.number("maxAside_m", s.maxAside_m, 0.0, 1000.0);
+    f.finish();
+    if (s.store.minLifetime_s > s.store.maxLifetime_s) {
+        throw InputError(where, "'store': minLifetime_s exceeds maxLifetime_s");
+    }
+    return s;
+}
+
+// ---- Construction, fallback ---------------------------------------------------------------------
+
+AmbienceVolume::AmbienceVolume(CubeCapture& capture, const ProbeEnvironment& environment,
+                               const AmbienceVolumeSettings& settings, const RoadNetwork* roads)
+    : capture_(capture),
+      environment_(environment),
+      settings_(settings),
+      store_(settings.store),
+      scheduler_(settings.scheduler) {
+    AMB_CHECK(settings.facesPerFrame >= 1);
+    scheduler_.setRoads(roads);
+    CubeMapProjector::Options options;
+    options.sunThreshold = settings.sunThreshold;
+    projector_ = std::make_unique<CubeMapProjector>(capture_.faceSize(), options);
+    timeRate_hPerS_ = settings.defaultTimeRate_hPerS;
+    frameTime_s_ = settings.nominalFrameTime_s;
+}
+
+AmbienceVolume::~AmbienceVolume() = default;
+
+std::optional<ProbeInProgress> AmbienceVolume::probeInProgress() const {
+    if (!job_) return std::nullopt;
+    return ProbeInProgress{job_->key, job_->position_m, job_->facesDone};
+}
+
+double AmbienceVolume::currentLifetime_s() const {
+    return anchorLifetime_s(settings_.store, environment_.sunAngularSpeed_radPerHour(),
+                            timeRate_hPerS_);
+}
+
+void AmbienceVolume::updateFallback(double timeOfDay_h) {
+    if (haveFallback_ && std::fabs(dayDifference_h(fallbackTimeOfDay_h_, timeOfDay_h)) <
+                             settings_.fallbackRefresh_h) {
+        return;
+    }
+    std::vector<float> cube;
+    const int n = settings_.fallbackFaceSize;
+    environment_.fallbackCubeMap(timeOfDay_h, n, cube);
+    const CubeMapProjection p = projectCubeMap(n, cube);
+    store_.setFallback(toFloat(p.sh));
+    haveFallback_ = true;
+    fallbackTimeOfDay_h_ = timeOfDay_h;
+}
+
+// ---- update() -----------------------------------------------------------------------------------
+
+void AmbienceVolume::update(const glm::dvec3& cameraPosition_m,
+                            const glm::dvec3& cameraVelocity_mps, double timeOfDay_h, double dt_s) {
+    stats_.facesThisFrame = 0;
+    stats_.predict_s = stats_.capture_s = stats_.project_s = stats_.store_s = 0.0;
+    if (!std::isfinite(dt_s) || dt_s < 0.0) dt_s = 0.0;
+    if (!std::isfinite(timeOfDay_h)) timeOfDay_h = haveTime_ ? lastTimeOfDay_h_ : 12.0;
+    timeOfDay_h = std::fmod(timeOfDay_h, 24.0);
+    if (timeOfDay_h < 0.0) timeOfDay_h += 24.0;
+
+    // 1. Time: clock, rate of the time of day (wrap-safe), jumps.
+    if (haveTime_) {
+        const double d = dayDifference_h(lastTimeOfDay_h_, timeOfDay_h);
+        if (std::fabs(d) > settings_.timeJump_h) {
+            store_.expireAllWithin(settings_.store.blendTime_s);
+        } else if (dt_s > 0.0) {
+            timeRate_hPerS_ = d / dt_s;
+        }
+    }
+    haveTime_ = true;
+    lastTimeOfDay_h_ = timeOfDay_h;
+    if (dt_s > 0.0) frameTime_s_ = std::clamp(dt_s, 1.0 / 240.0, 0.25);
+    time_s_ += dt_s;
+    const double probesPerSecond =
+        double(settings_.facesPerFrame) / double(kCubeFaces) / frameTime_s_;
+
+    // 2. Predict.
+    Clock::time_point t0 = Clock::now();
+    if (scheduler_.observe(cameraPosition_m, cameraVelocity_mps, time_s_)) {
+        stats_.teleports = scheduler_.teleports();
+        if (job_) {
+            ++stats_.abortedProbes;
+            job_.reset();
+        }
+    }
+    stats_.finestLevel = scheduler_.finestLevel(store_, probesPerSecond);
+    stats_.predict_s += secondsSince(t0);
+
+    // 3. Capture this frame's faces, projecting each as it arrives.
+    struct Completed {
+        Job job;
+        ShRgbD sh;
+    };
+    std::vector<Completed> completed;
+    const int n = capture_.faceSize();
+    const std::size_t faceFloats = std::size_t(n) * n * 3;
+    int budget = settings_.facesPerFrame;
+    while (budget > 0) {
+        if (!job_) {
+            t0 = Clock::now();
+            std::vector<LatticeKey> busy;
+            for (const Completed& c : completed) busy.push_back(c.job.key);
+            const auto choice = scheduler_.choose(store_, probesPerSecond, busy);
+            if (choice) {
+                const double aside =
+                    std::min(settings_.asideFraction * store_.spacing_m(choice->key.level),
+                             settings_.maxAside_m);
+                Job job;
+                job.key = choice->key;
+                job.position_m = environment_.placeProbe(store_.keyX_m(choice->key),
+                                                         store_.keyZ_m(choice->key), aside);
+                job_ = job;
+                projector_->reset();
+            }
+            stats_.predict_s += secondsSince(t0);
+            if (!job_) break;  // nothing worth capturing: the budget stays unused
+        }
+        const int first = job_->facesDone;
+        const int count = std::min(budget, kCubeFaces - first);
+        CubeFaceMask mask = 0;
+        for (int f = first; f < first + count; ++f) mask |= cubeFaceBit(f);
+
+        t0 = Clock::now();
+        capture_.capture(job_->position_m, timeOfDay_h, mask, cube_);
+        stats_.capture_s += secondsSince(t0);
+        AMB_CHECK(cube_.size() == faceFloats * kCubeFaces);
+
+        t0 = Clock::now();
+        for (int f = first; f < first + count; ++f) {
+            const float* face = cube_.data() + faceFloats * std::size_t(f);
+            // A texel that is NaN, infinite or negative spoils the whole probe.
+            for (std::size_t t = 0; t < faceFloats && !job_->bad; ++t) {
+                if (!(face[t] >= 0.0f) || !std::isfinite(face[t])) job_->bad = true;
+            }
+            projector_->addFace(f, face);
+        }
+        stats_.project_s += secondsSince(t0);
+
+        job_->facesDone += count;
+        budget -= count;
+        stats_.facesThisFrame += count;
+        stats_.facesCaptured += count;
+        if (job_->facesDone == kCubeFaces) {
+            completed.push_back({*job_, projector_->coefficients()});
+            job_.reset();
+        }
+    }
+
+    // 4. Store: advance the clock (blend, fade, expire, prune), then insert completed probes.
+    t0 = Clock::now();
+    store_.advance(time_s_);
+    const double lifetime = currentLifetime_s();
+    for (const Completed& c : completed) {
+        ++stats_.probesCompleted;
+        if (c.job.bad) {
+            ++stats_.rejectedProbes;
+            continue;
+        }
+        const auto result =
+            store_.insert(c.job.key, toFloat(c.sh), c.job.position_m, lifetime, timeOfDay_h);
+        if (result == AnchorStore::InsertResult::Rejected) ++stats_.rejectedProbes;
+    }
+    updateFallback(timeOfDay_h);
+    stats_.store_s += secondsSince(t0);
+    stats_.store = store_.statistics();
+}
+
+}  // namespace amb

@@ -1,0 +1,148 @@
+// AmbienceVolume.h — the dynamic ambience volume: predict, capture, project, store, blend, and
+// answer "what ambience at this ground point" (thesis 5, 7-9; DESIGN.md "The frame", 2-4).
+//
+// Per frame the renderer calls update(camera, time of day, dt), which runs, in order:
+//   1. time     simulation clock += dt; the rate of the time of day (hours per second, wrap at
+//               24 h handled) sets the anchor lifetime; a jump of the time of day (more than
+//               timeJump_h in one update) shortens every anchor's life to blendTime_s;
+//   2. predict  the scheduler observes the camera (teleports reset it and abort the probe in
+//               progress) and, when no probe is in progress, picks the next lattice point; the
+//               environment places the probe (out of terrain and trees);
+//   3. capture  facesPerFrame faces of the probe's cube map from the CubeCapture (a probe spans
+//               several frames: 6 frames at the default one face per frame), each projected to
+//               SH as it arrives (CubeMapProjector, sun disc extracted, not kept);
+//   4. store    the clock advances (blending, fades, regeneration requests, expiry, pruning),
+//               then a completed probe is inserted or refreshes its anchor — after the advance,
+//               so it starts at presence 0 and changes nothing this frame. A probe with any
+//               texel that is NaN, infinite or negative, or with non-finite coefficients, never
+//               enters the store (counted in rejectedProbes).
+// shAt(x, z) then gives the interpolated SH at any ground point (AnchorStore::interpolate).
+// Where no anchor is in reach it is the fallback: the SH of ProbeEnvironment::fallbackCubeMap
+// (sky model over a flat ground), refreshed when the time of day moves by fallbackRefresh_h.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "lighting/AnchorStore.h"
+#include "lighting/ProbeScheduler.h"
+
+namespace amb {
+
+class CubeCapture;
+class CubeMapProjector;
+class ProbeEnvironment;
+class RoadNetwork;
+
+// Every parameter of the volume, in one place (settable from JSON, see ambienceSettingsFromJson).
+struct AmbienceVolumeSettings {
+    AnchorStoreSettings store;
+    ProbeSchedulerSettings scheduler;
+    int facesPerFrame = 1;                   // capture budget (the thesis' one face per frame, 9.1)
+    double nominalFrameTime_s = 1.0 / 60.0;  // frame time assumed before any dt > 0 is seen
+    double defaultTimeRate_hPerS = 1.0 / 3600.0;  // before the rate is measured (real time)
+    double timeJump_h = 0.25;      // a larger change of the time of day in one update is a jump
+    double sunThreshold = 5000.0;  // texels brighter (luminance radiance) are the sun disc:
+                                   // taken out of the SH (the renderer lights the sun directly)
+    int fallbackFaceSize = 16;     // cube map size for the fallback SH
+    double fallbackRefresh_h = 1.0 / 60.0;  // recompute the fallback after this much day time
+    double asideFraction = 0.5;  // a probe may move aside up to this x its level's spacing
+    double maxAside_m = 4.0;     // ... and at most this far [m]
+};
+
+// Parses settings from JSON text: an object whose keys are the field names above (nested
+// objects "store" and "scheduler"); missing keys keep their defaults. Unknown keys, wrong types
+// or out-of-range values throw InputError(where, ...).
+AmbienceVolumeSettings ambienceSettingsFromJson(const std::string& jsonText,
+                                                const std::string& where);
+
+struct AmbienceStatistics {
+    AnchorStoreStatistics store;  // anchors held (per level), bytes, inserts, expiries
+    int facesThisFrame = 0;
+    std::int64_t facesCaptured = 0;    // since construction
+    std::int64_t probesCompleted = 0;  // probes projected (accepted or rejected)
+    std::int64_t rejectedProbes = 0;   // probes with NaN/Inf/negative texels or coefficients
+    std::int64_t abortedProbes = 0;    // probes dropped on a teleport
+    std::int64_t teleports = 0;
+    int finestLevel = 0;  // scheduler's finest level this frame
+    // Wall time of this frame's stages [s].
+    double predict_s = 0.0, capture_s = 0.0, project_s = 0.0, store_s = 0.0;
+};
+
+// The probe being captured (for debug overlays).
+struct ProbeInProgress {
+    LatticeKey key;
+    glm::dvec3 position_m{0.0};  // where it is captured
+    int facesDone = 0;           // 0..6
+};
+
+class AmbienceVolume {
+  public:
+    // `capture`, `environment` (and `roads`, may be null) must outlive the volume.
+    AmbienceVolume(CubeCapture& capture, const ProbeEnvironment& environment,
+                   const AmbienceVolumeSettings& settings = {}, const RoadNetwork* roads = nullptr);
+    ~AmbienceVolume();
+    AmbienceVolume(const AmbienceVolume&) = delete;
+    AmbienceVolume& operator=(const AmbienceVolume&) = delete;
+
+    // One frame (see the list at the top). dt_s <= 0 or non-finite is treated as 0: nothing
+    // ages or blends, the budget is still spent. timeOfDay_h in hours, any value (wrapped).
+    void update(const glm::dvec3& cameraPosition_m, const glm::dvec3& cameraVelocity_mps,
+                double timeOfDay_h, double dt_s);
+
+    // Interpolated SH at ground point (x, z); finite everywhere.
+    ShRgb shAt(double x_m, double z_m) const { return store_.interpolate(x_m, z_m); }
+    // The same at many points (terrain-patch corners, object instances), in parallel.
+    void shAt(std::size_t count, const double* x_m, const double* z_m, ShRgb* out) const {
+        store_.interpolateMany(count, x_m, z_m, out);
+    }
+
+    const AmbienceStatistics& statistics() const { return stats_; }
+    const AnchorStore& store() const { return store_; }
+    AnchorStore& store() { return store_; }
+    const ProbeScheduler& scheduler() const { return scheduler_; }
+    const AmbienceVolumeSettings& settings() const { return settings_; }
+    std::optional<ProbeInProgress> probeInProgress() const;
+    double simulationTime_s() const { return time_s_; }
+    double timeRate_hPerS() const { return timeRate_hPerS_; }
+    // Lifetime given to a capture now (anchorLifetime_s with the measured time rate).
+    double currentLifetime_s() const;
+
+    void saveAnchors(const std::string& path) const { store_.save(path); }
+    void loadAnchors(const std::string& path) { store_.load(path); }
+
+  private:
+    void updateFallback(double timeOfDay_h);
+
+    CubeCapture& capture_;
+    const ProbeEnvironment& environment_;
+    AmbienceVolumeSettings settings_;
+    AnchorStore store_;
+    ProbeScheduler scheduler_;
+    std::unique_ptr<CubeMapProjector> projector_;
+    std::vector<float> cube_;
+
+    struct Job {
+        LatticeKey key;
+        glm::dvec3 position_m{0.0};
+        int facesDone = 0;
+        bool bad = false;
+    };
+    std::optional<Job> job_;
+
+    double time_s_ = 0.0;
+    bool haveTime_ = false;
+    double lastTimeOfDay_h_ = 0.0;
+    double timeRate_hPerS_ = 0.0;
+    double frameTime_s_ = 0.0;
+    bool haveFallback_ = false;
+    double fallbackTimeOfDay_h_ = 0.0;
+    AmbienceStatistics stats_;
+};
+
+}  // namespace amb

@@ -1,0 +1,807 @@
+// AnchorStore.cpp — sparse anchor store on OpenVDB, blending, four-quadrant interpolation, .vdb
+// files (see AnchorStore.h).
+//
+// [SECTION] Lifetime
+// [SECTION] Storage       Impl: one int32 grid per level, anchor pool with a free list
+// [SECTION] Lattice
+// [SECTION] Insert, remove, advance (blending, presence, expiry, pruning)
+// [SECTION] Interpolation (thesis 9.3, with the 7.6 pattern fade)
+// [SECTION] Statistics
+// [SECTION] Files (.vdb)
+#include "lighting/AnchorStore.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+#include <openvdb/io/File.h>
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/Prune.h>
+#include <openvdb/tree/ValueAccessor.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "world/Error.h"
+
+namespace amb {
+
+namespace {
+
+constexpr std::int32_t kNoAnchor = -1;
+constexpr double kExact_m = 1e-9;  // a query this close to an anchor is "on" it
+constexpr std::int64_t kCoordLimit = 2147483647LL;
+constexpr const char* kFormat = "ambience-anchor-store-v1";
+
+// In memory, the per-level index grids use smaller nodes than the standard Int32Grid
+// (internal nodes 16^3 and 8^3 instead of 32^3 and 16^3, leaves 4^3 instead of 8^3): the
+// standard tree's first internal node alone holds a 32^3 child table (~260 kB), which would
+// dominate the memory of a store of a few thousand anchors on a plane. Files hold standard
+// Int32Grids (save/load convert), so standard OpenVDB tools read them.
+using IndexTree = openvdb::tree::Tree4<std::int32_t, 4, 3, 2>::Type;
+using IndexGrid = openvdb::Grid<IndexTree>;
+
+bool finiteSh(const ShRgb& sh, float limit) {
+    for (const glm::vec3& c : sh.c) {
+        for (int ch = 0; ch < 3; ++ch) {
+            if (!std::isfinite(c[ch]) || std::fabs(c[ch]) > limit) return false;
+        }
+    }
+    return true;
+}
+
+double clamp01(double v) {
+    return v < 0.0 ? 0.0 : (v > 1.0 ? 1.0 : v);
+}
+
+}  // namespace
+
+// ---- Lifetime -----------------------------------------------------------------------------------
+
+double anchorLifetime_s(const AnchorStoreSettings& settings, double sunSpeed_radPerHour,
+                        double timeRate_hPerS) {
+    // Angular speed of the sun in radians per simulated second.
+    const double speed = std::fabs(sunSpeed_radPerHour * timeRate_hPerS);
+    double lifetime = settings.maxLifetime_s;
+    if (std::isfinite(speed) && speed > 0.0) lifetime = settings.allowedSunAngle_rad / speed;
+    return std::clamp(lifetime, settings.minLifetime_s, settings.maxLifetime_s);
+}
+
+// ---- Storage ------------------------------------------------------------------------------------
+
+struct AnchorStore::Impl {
+    AnchorStoreSettings settings;
+    int levels = 1;
+    std::array<double, kMaxAnchorLevels> spacing{};      // s_L
+    std::array<std::int64_t, kMaxAnchorLevels> scale{};  // fine units per level-L unit: 3^(F-L)
+    double fineSpacing = 1.0;
+    std::vector<IndexGrid::Ptr> grids;  // per level: (i, 0, k) -> pool index
+    std::vector<Anchor> pool;
+    std::vector<std::uint8_t> alive;
+    std::vector<std::int32_t> freeList;
+    std::size_t count = 0;
+    double now = 0.0;
+    ShRgb fallback;
+    AnchorStoreStatistics counters;
+
+    explicit Impl(const AnchorStoreSettings& s) : settings(s) {
+        openvdb::initialize();
+        AMB_CHECK(s.levels >= 1 && s.levels <= kMaxAnchorLevels);
+        AMB_CHECK(std::isfinite(s.coarsestSpacing_m) && s.coarsestSpacing_m > 0.0);
+        AMB_CHECK(s.searchCells >= 1);
+        levels = s.levels;
+        std::int64_t sc = 1;
+        for (int L = levels - 1; L >= 0; --L) {
+            scale[L] = sc;
+            sc *= 3;
+        }
+        for (int L = 0; L < levels; ++L)
+            spacing[L] = s.coarsestSpacing_m / double(scale[0] / scale[L]);
+        fineSpacing = spacing[levels - 1];
+        for (int L = 0; L < levels; ++L) {
+            auto grid = IndexGrid::create(kNoAnchor);
+            grid->setName("anchor_index_L" + std::to_string(L));
+            grid->setTransform(openvdb::math::Transform::createLinearTransform(spacing[L]));
+            grid->setGridClass(openvdb::GRID_UNKNOWN);
+            grids.push_back(grid);
+        }
+    }
+
+    LatticeKey canonical(LatticeKey key) const {
+        while (key.level > 0 && key.i % 3 == 0 && key.k % 3 == 0) {
+            key.i /= 3;
+            key.k /= 3;
+            --key.level;
+        }
+        return key;
+    }
+    bool validKey(const LatticeKey& key) const {
+        if (key.level < 0 || key.level >= levels) return false;
+        const std::int64_t fi = std::int64_t(key.i) * scale[key.level];
+        const std::int64_t fk = std::int64_t(key.k) * scale[key.level];
+        return fi >= -kCoordLimit && fi <= kCoordLimit && fk >= -kCoordLimit && fk <= kCoordLimit;
+    }
+    std::int32_t indexOf(const LatticeKey& canonicalKey) const {
+        return grids[canonicalKey.level]->tree().getValue(
+            openvdb::Coord(canonicalKey.i, 0, canonicalKey.k));
+    }
+    double x(const LatticeKey& key) const {
+        return double(std::int64_t(key.i) * scale[key.level]) * fineSpacing;
+    }
+    double z(const LatticeKey& key) const {
+        return double(std::int64_t(key.k) * scale[key.level]) * fineSpacing;
+    }
+
+    std::int32_t allocate(const Anchor& anchor) {
+        std::int32_t index;
+        if (!freeList.empty()) {
+            index = freeList.back();
+            freeList.pop_back();
+            pool[index] = anchor;
+            alive[index] = 1;
+        } else {
+            index = std::int32_t(pool.size());
+            pool.push_back(anchor);
+            alive.push_back(1);
+        }
+        ++count;
+        return index;
+    }
+    void release(std::int32_t index) {
+        const LatticeKey key = pool[index].key;
+        grids[key.level]->tree().setValueOff(openvdb::Coord(key.i, 0, key.k), kNoAnchor);
+        alive[index] = 0;
+        freeList.push_back(index);
+        --count;
+    }
+
+    // Presence from the fade state: rising towards 1 unless expired, then falling towards 0.
+    static float presenceAt(const Anchor& a, double now, double blend) {
+        if (blend <= 0.0) return a.expired ? 0.0f : 1.0f;
+        const double change = (now - a.presenceChange_s) / blend;
+        return float(clamp01(a.expired ? a.presenceFrom - change : a.presenceFrom + change));
+    }
+    void setFadeDirection(Anchor& a, bool expired) {
+        a.presenceFrom = a.presence;
+        a.presenceChange_s = now;
+        a.expired = expired;
+    }
+
+    ShRgb interpolate(double x, double z, InterpolationDetail* detail) const;
+};
+
+AnchorStore::AnchorStore(const AnchorStoreSettings& settings)
+    : impl_(std::make_unique<Impl>(settings)) {}
+AnchorStore::~AnchorStore() = default;
+AnchorStore::AnchorStore(AnchorStore&&) noexcept = default;
+AnchorStore& AnchorStore::operator=(AnchorStore&&) noexcept = default;
+
+const AnchorStoreSettings& AnchorStore::settings() const {
+    return impl_->settings;
+}
+int AnchorStore::levels() const {
+    return impl_->levels;
+}
+double AnchorStore::spacing_m(int level) const {
+    AMB_CHECK(level >= 0 && level < impl_->levels);
+    return impl_->spacing[level];
+}
+
+// ---- Lattice ------------------------------------------------------------------------------------
+
+LatticeKey AnchorStore::keyNear(double x_m, double z_m, int level) const {
+    AMB_CHECK(level >= 0 && level < impl_->levels);
+    AMB_CHECK(std::isfinite(x_m) && std::isfinite(z_m));
+    const double s = impl_->spacing[level];
+    const double i = std::floor(x_m / s + 0.5), k = std::floor(z_m / s + 0.5);
+    const double limit = double(kCoordLimit / impl_->scale[level]);
+    AMB_CHECK(std::fabs(i) <= limit && std::fabs(k) <= limit);
+    return impl_->canonical({level, std::int32_t(i), std::int32_t(k)});
+}
+
+LatticeKey AnchorStore::canonical(const LatticeKey& key) const {
+    return impl_->canonical(key);
+}
+double AnchorStore::keyX_m(const LatticeKey& key) const {
+    return impl_->x(key);
+}
+double AnchorStore::keyZ_m(const LatticeKey& key) const {
+    return impl_->z(key);
+}
+std::int64_t AnchorStore::fineI(const LatticeKey& key) const {
+    return std::int64_t(key.i) * impl_->scale[key.level];
+}
+std::int64_t AnchorStore::fineK(const LatticeKey& key) const {
+    return std::int64_t(key.k) * impl_->scale[key.level];
+}
+
+const Anchor* AnchorStore::find(const LatticeKey& key) const {
+    if (!impl_->validKey(key)) return nullptr;
+    const std::int32_t index = impl_->indexOf(impl_->canonical(key));
+    return index == kNoAnchor ? nullptr : &impl_->pool[index];
+}
+
+std::size_t AnchorStore::size() const {
+    return impl_->count;
+}
+
+void AnchorStore::forEach(const std::function<void(const Anchor&)>& f) const {
+    for (std::size_t n = 0; n < impl_->pool.size(); ++n) {
+        if (impl_->alive[n]) f(impl_->pool[n]);
+    }
+}
+
+// ---- Insert, remove, advance --------------------------------------------------------------------
+
+AnchorStore::InsertResult AnchorStore::insert(const LatticeKey& key, const ShRgb& sh,
+                                              const glm::dvec3& capturedPosition_m,
+                                              double lifetime_s, double timeOfDay_h) {
+    Impl& m = *impl_;
+    AMB_CHECK(m.validKey(key));
+    const bool positionOk = std::isfinite(capturedPosition_m.x) &&
+                            std::isfinite(capturedPosition_m.y) &&
+                            std::isfinite(capturedPosition_m.z);
+    if (!finiteSh(sh, kMaxCoefficient) || !positionOk || !std::isfinite(lifetime_s) ||
+        lifetime_s <= 0.0) {
+        ++m.counters.rejected;
+        return InsertResult::Rejected;
+    }
+    const LatticeKey c = m.canonical(key);
+    const bool instant = m.settings.blendTime_s <= 0.0;
+    const std::int32_t index = m.indexOf(c);
+    if (index != kNoAnchor) {
+        // Refresh (thesis appendix B: the anchor interpolates slowly to the new coefficients).
+        Anchor& a = m.pool[index];
+        a.presence = Impl::presenceAt(a, m.now, m.settings.blendTime_s);
+        m.setFadeDirection(a, false);
+        a.blendFrom = a.current;
+        a.target = sh;
+        a.blendStart_s = m.now;
+        a.blendProgress = instant ? 1.0f : 0.0f;
+        if (instant) a.current = sh;
+        a.captureTime_s = m.now;
+        a.captureTimeOfDay_h = timeOfDay_h;
+        a.lifetime_s = lifetime_s;
+        a.capturedPosition_m = capturedPosition_m;
+        a.regenerationRequested = false;
+        ++m.counters.refreshed;
+        return InsertResult::Refreshed;
+    }
+    // New anchor: start from what the store shows here now (thesis 7.6), fade in.
+    Anchor a;
+    a.current = instant ? sh : m.interpolate(m.x(c), m.z(c), nullptr);
+    a.blendFrom = a.current;
+    a.target = sh;
+    a.blendStart_s = m.now;
+    a.blendProgress = instant ? 1.0f : 0.0f;
+    a.presence = instant ? 1.0f : 0.0f;
+    a.presenceFrom = a.presence;
+    a.presenceChange_s = m.now;
+    a.birth_s = m.now;
+    a.captureTime_s = m.now;
+    a.captureTimeOfDay_h = timeOfDay_h;
+    a.lifetime_s = lifetime_s;
+    a.capturedPosition_m = capturedPosition_m;
+    a.key = c;
+    const std::int32_t slot = m.allocate(a);
+    m.grids[c.level]->tree().setValueOn(openvdb::Coord(c.i, 0, c.k), slot);
+    ++m.counters.inserted;
+    return InsertResult::Inserted;
+}
+
+bool AnchorStore::remove(const LatticeKey& key) {
+    Impl& m = *impl_;
+    if (!m.validKey(key)) return false;
+    const LatticeKey c = m.canonical(key);
+    const std::int32_t index = m.indexOf(c);
+    if (index == kNoAnchor) return false;
+    m.release(index);
+    openvdb::tools::pruneInactive(m.grids[c.level]->tree());
+    ++m.counters.prunes;
+    return true;
+}
+
+void AnchorStore::clear() {
+    Impl& m = *impl_;
+    for (auto& grid : m.grids) grid->clear();
+    m.pool.clear();
+    m.alive.clear();
+    m.freeList.clear();
+    m.count = 0;
+}
+
+void AnchorStore::advance(double now_s) {
+    Impl& m = *impl_;
+    if (!std::isfinite(now_s) || now_s <= m.now) return;  // dt = 0 (or backwards): no change
+    m.now = now_s;
+    const double blend = m.settings.blendTime_s;
+    std::array<bool, kMaxAnchorLevels> removedAt{};
+    for (std::size_t n = 0; n < m.pool.size(); ++n) {
+        if (!m.alive[n]) continue;
+        Anchor& a = m.pool[n];
+        // Blending current -> target; exact at the end of the blend time.
+        if (a.blendProgress < 1.0f) {
+            const double t = blend > 0.0 ? (now_s - a.blendStart_s) / blend : 1.0;
+            if (t >= 1.0) {
+                a.blendProgress = 1.0f;
+                a.current = a.target;
+            } else {
+                a.blendProgress = float(t);
+                a.current = lerp(a.blendFrom, a.target, float(t));
+            }
+        }
+        // Regeneration request before expiry, expiry at the end of the lifetime.
+        const double age = a.age_s(now_s);
+        if (age >= m.settings.regenerateFraction * a.lifetime_s) a.regenerationRequested = true;
+        if (!a.expired && age >= a.lifetime_s) {
+            a.presence = Impl::presenceAt(a, now_s, blend);
+            m.setFadeDirection(a, true);
+            // The fade-out started when the lifetime ended, not at this (possibly late) step.
+            a.presenceChange_s = std::min(now_s, a.captureTime_s + a.lifetime_s);
+        }
+        a.presence = Impl::presenceAt(a, now_s, blend);
+        if (a.expired && a.presence <= 0.0f) {
+            removedAt[a.key.level] = true;
+            m.release(std::int32_t(n));
+            ++m.counters.expired;
+        }
+    }
+    // Prune the branches emptied by removals.
+    for (int L = 0; L < m.levels; ++L) {
+        if (!removedAt[L]) continue;
+        openvdb::tools::pruneInactive(m.grids[L]->tree());
+        ++m.counters.prunes;
+    }
+}
+
+double AnchorStore::now_s() const {
+    return impl_->now;
+}
+
+void AnchorStore::expireAllWithin(double remaining_s) {
+    Impl& m = *impl_;
+    for (std::size_t n = 0; n < m.pool.size(); ++n) {
+        if (!m.alive[n]) continue;
+        Anchor& a = m.pool[n];
+        const double end = m.now + std::max(0.0, remaining_s);
+        if (a.captureTime_s + a.lifetime_s > end) a.lifetime_s = end - a.captureTime_s;
+        a.regenerationRequested = true;
+    }
+}
+
+std::vector<LatticeKey> AnchorStore::regenerationRequests() const {
+    const Impl& m = *impl_;
+    std::vector<std::pair<double, LatticeKey>> list;
+    for (std::size_t n = 0; n < m.pool.size(); ++n) {
+        if (!m.alive[n] || !m.pool[n].regenerationRequested) continue;
+        const Anchor& a = m.pool[n];
+        list.push_back({a.age_s(m.now) / a.lifetime_s, a.key});
+    }
+    std::stable_sort(list.begin(), list.end(),
+                     [](const auto& a, const auto& b) { return a.first > b.first; });
+    std::vector<LatticeKey> keys;
+    keys.reserve(list.size());
+    for (const auto& e : list) keys.push_back(e.second);
+    return keys;
+}
+
+// ---- Interpolation ------------------------------------------------------------------------------
+
+void AnchorStore::setFallback(const ShRgb& sh) {
+    // The fallback must never carry NaN into the frame: non-finite values are ignored.
+    if (finiteSh(sh, kMaxCoefficient)) impl_->fallback = sh;
+}
+const ShRgb& AnchorStore::fallback() const {
+    return impl_->fallback;
+}
+
+ShRgb AnchorStore::Impl::interpolate(double qx, double qz, InterpolationDetail* detail) const {
+    if (detail) *detail = InterpolationDetail{};
+    const double reach = double(kCoordLimit) * fineSpacing;
+    if (!std::isfinite(qx) || !std::isfinite(qz) || std::fabs(qx) > reach ||
+        std::fabs(qz) > reach || count == 0) {
+        if (detail) detail->fallback = true;
+        return fallback;
+    }
+    using ConstAccessor = openvdb::tree::ValueAccessor<const IndexTree, false>;
+
+    struct Candidate {
+        std::int32_t index;
+        double d;
+        int quadrant;
+    };
+    std::array<double, 4> remaining{1.0, 1.0, 1.0, 1.0};
+    std::array<double, 27> numerator{};
+    double denominator = 0.0;
+    // Scratch kept per thread, so a query allocates nothing once warm.
+    thread_local std::vector<std::int32_t> seen;
+    thread_local std::vector<Candidate> candidates;
+    seen.clear();
+
+    // Accessors that do not register with the tree (the store is not modified meanwhile).
+    std::array<std::optional<ConstAccessor>, kMaxAnchorLevels> acc;
+
+    for (int L = levels - 1; L >= 0; --L) {
+        if (remaining[0] <= 0.0 && remaining[1] <= 0.0 && remaining[2] <= 0.0 &&
+            remaining[3] <= 0.0) {
+            break;
+        }
+        const double s = spacing[L];
+        const double radius = settings.searchCells * s;
+        const double i0 = std::ceil((qx - radius) / s), i1 = std::floor((qx + radius) / s);
+        const double k0 = std::ceil((qz - radius) / s), k1 = std::floor((qz + radius) / s);
+        const double limit = double(kCoordLimit / scale[L]);
+        candidates.clear();
+        for (double di = i0; di <= i1; di += 1.0) {
+            if (std::fabs(di) > limit) continue;
+            for (double dk = k0; dk <= k1; dk += 1.0) {
+                if (std::fabs(dk) > limit) continue;
+                const LatticeKey c = canonical({L, std::int32_t(di), std::int32_t(dk)});
+                if (!acc[c.level]) acc[c.level].emplace(grids[c.level]->tree());
+                const std::int32_t index = acc[c.level]->getValue(openvdb::Coord(c.i, 0, c.k));
+                if (index == kNoAnchor) continue;
+                if (std::find(seen.begin(), seen.end(), index) != seen.end()) continue;
+                const Anchor& a = pool[index];
+                // Anchor minus query, from the exact lattice position.
+                const double dx = x(c) - qx, dz = z(c) - qz;
+                const double d = std::sqrt(dx * dx + dz * dz);
+                if (d > radius) continue;
+                seen.push_back(index);
+                if (a.presence <= 0.0f) continue;
+                if (d < kExact_m) {
+                    // On an anchor: that anchor (thesis 9.3, "if one, use it").
+                    if (detail) {
+                        detail->used = {{a.key, 0, d, 1.0}};
+                        detail->exact = true;
+                    }
+                    return a.current;
+                }
+                const int q = dx >= 0.0 ? (dz >= 0.0 ? 0 : 3) : (dz >= 0.0 ? 1 : 2);
+                candidates.push_back({index, d, q});
+            }
+        }
+        // Nearest first within this level's pass; a quadrant takes shares until one present
+        // anchor (presence 1) closes it.
+        // (Ties by key, so the order does not depend on pool slots.)
+        std::sort(candidates.begin(), candidates.end(),
+                  [this](const Candidate& a, const Candidate& b) {
+                      if (a.d != b.d) return a.d < b.d;
+                      const LatticeKey& ka = pool[a.index].key;
+                      const LatticeKey& kb = pool[b.index].key;
+                      if (ka.level != kb.level) return ka.level < kb.level;
+                      return ka.i != kb.i ? ka.i < kb.i : ka.k < kb.k;
+                  });
+        for (const Candidate& cand : candidates) {
+            double& rest = remaining[cand.quadrant];
+            if (rest <= 0.0) continue;
+            const Anchor& a = pool[cand.index];
+            const double share = a.presence >= 1.0f ? rest : rest * double(a.presence);
+            rest = a.presence >= 1.0f ? 0.0 : rest - share;
+            const double w = share / cand.d;
+            for (int k = 0; k < kShCoefficients; ++k) {
+                for (int ch = 0; ch < 3; ++ch)
+                    numerator[3 * k + ch] += w * double(a.current.c[k][ch]);
+            }
+            denominator += w;
+            if (detail) detail->used.push_back({a.key, cand.quadrant, cand.d, w});
+        }
+    }
+    if (!(denominator > 0.0)) {
+        if (detail) {
+            detail->used.clear();
+            detail->fallback = true;
+        }
+        return fallback;
+    }
+    ShRgb out;
+    for (int k = 0; k < kShCoefficients; ++k) {
+        for (int ch = 0; ch < 3; ++ch) out.c[k][ch] = float(numerator[3 * k + ch] / denominator);
+    }
+    if (detail) {
+        for (auto& u : detail->used) u.weight /= denominator;
+    }
+    return out;
+}
+
+ShRgb AnchorStore::interpolate(double x_m, double z_m, InterpolationDetail* detail) const {
+    return impl_->interpolate(x_m, z_m, detail);
+}
+
+void AnchorStore::interpolateMany(std::size_t count, const double* x_m, const double* z_m,
+                                  ShRgb* out) const {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                              out[i] = impl_->interpolate(x_m[i], z_m[i], nullptr);
+                          }
+                      });
+}
+
+// ---- Statistics ---------------------------------------------------------------------------------
+
+AnchorStoreStatistics AnchorStore::statistics() const {
+    const Impl& m = *impl_;
+    AnchorStoreStatistics s = m.counters;
+    s.anchors = m.count;
+    for (std::size_t n = 0; n < m.pool.size(); ++n) {
+        if (m.alive[n]) ++s.anchorsPerLevel[m.pool[n].key.level];
+    }
+    s.poolBytes = sizeof(Impl) + m.pool.capacity() * sizeof(Anchor) +
+                  m.alive.capacity() * sizeof(std::uint8_t) +
+                  m.freeList.capacity() * sizeof(std::int32_t);
+    s.gridBytes = 0;
+    for (const auto& grid : m.grids) s.gridBytes += std::size_t(grid->memUsage());
+    return s;
+}
+
+// ---- Files --------------------------------------------------------------------------------------
+
+namespace {
+
+enum AnchorFlags : int { kFlagRegenerate = 1, kFlagExpired = 2 };
+
+std::string shGridName(const char* what, int k) {
+    return std::string(what) + "_" + std::to_string(k);
+}
+
+template <typename GridT>
+typename GridT::Ptr makePayloadGrid(const std::string& name, double fineSpacing,
+                                    const typename GridT::ValueType& background) {
+    auto grid = GridT::create(background);
+    grid->setName(name);
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(fineSpacing));
+    return grid;
+}
+
+}  // namespace
+
+void AnchorStore::save(const std::string& path) const {
+    const Impl& m = *impl_;
+    openvdb::GridPtrVec grids;
+    for (const auto& g : m.grids) {
+        // Anchor numbers in the file are 0..n-1 in pool order (pool slots are not kept).
+        auto copy = openvdb::Int32Grid::create(kNoAnchor);
+        copy->setName(g->getName());
+        copy->setTransform(g->transform().copy());
+        grids.push_back(copy);
+    }
+    std::array<openvdb::Vec3SGrid::Ptr, kShCoefficients> current, target, from;
+    for (int k = 0; k < kShCoefficients; ++k) {
+        current[k] = makePayloadGrid<openvdb::Vec3SGrid>(shGridName("sh_current", k), m.fineSpacing,
+                                                         openvdb::Vec3s(0.0f));
+        target[k] = makePayloadGrid<openvdb::Vec3SGrid>(shGridName("sh_target", k), m.fineSpacing,
+                                                        openvdb::Vec3s(0.0f));
+        from[k] = makePayloadGrid<openvdb::Vec3SGrid>(shGridName("sh_blend_from", k), m.fineSpacing,
+                                                      openvdb::Vec3s(0.0f));
+        grids.push_back(current[k]);
+        grids.push_back(target[k]);
+        grids.push_back(from[k]);
+    }
+    auto position = makePayloadGrid<openvdb::Vec3DGrid>("captured_position", m.fineSpacing,
+                                                        openvdb::Vec3d(0.0));
+    auto age = makePayloadGrid<openvdb::FloatGrid>("age_s", m.fineSpacing, 0.0f);
+    auto lifetime = makePayloadGrid<openvdb::FloatGrid>("lifetime_s", m.fineSpacing, 0.0f);
+    auto blendElapsed = makePayloadGrid<openvdb::FloatGrid>("blend_elapsed_s", m.fineSpacing, 0.0f);
+    auto presence = makePayloadGrid<openvdb::FloatGrid>("presence", m.fineSpacing, 0.0f);
+    auto sinceBirth = makePayloadGrid<openvdb::FloatGrid>("since_birth_s", m.fineSpacing, 0.0f);
+    auto tod = makePayloadGrid<openvdb::FloatGrid>("capture_time_of_day_h", m.fineSpacing, 0.0f);
+    auto flags = makePayloadGrid<openvdb::Int32Grid>("flags", m.fineSpacing, 0);
+    grids.push_back(position);
+    for (auto& g : {age, lifetime, blendElapsed, presence, sinceBirth, tod}) grids.push_back(g);
+    grids.push_back(flags);
+
+    std::int32_t number = 0;
+    for (std::size_t n = 0; n < m.pool.size(); ++n) {
+        if (!m.alive[n]) continue;
+        const Anchor& a = m.pool[n];
+        const auto levelGrid = openvdb::GridBase::grid<openvdb::Int32Grid>(grids[a.key.level]);
+        levelGrid->tree().setValueOn(openvdb::Coord(a.key.i, 0, a.key.k), number++);
+        const openvdb::Coord fine(std::int32_t(fineI(a.key)), 0, std::int32_t(fineK(a.key)));
+        for (int k = 0; k < kShCoefficients; ++k) {
+            current[k]->tree().setValueOn(
+                fine, openvdb::Vec3s(a.current.c[k].x, a.current.c[k].y, a.current.c[k].z));
+            target[k]->tree().setValueOn(
+                fine, openvdb::Vec3s(a.target.c[k].x, a.target.c[k].y, a.target.c[k].z));
+            from[k]->tree().setValueOn(
+                fine, openvdb::Vec3s(a.blendFrom.c[k].x, a.blendFrom.c[k].y, a.blendFrom.c[k].z));
+        }
+        position->tree().setValueOn(
+            fine,
+            openvdb::Vec3d(a.capturedPosition_m.x, a.capturedPosition_m.y, a.capturedPosition_m.z));
+        age->tree().setValueOn(fine, float(a.age_s(m.now)));
+        lifetime->tree().setValueOn(fine, float(a.lifetime_s));
+        blendElapsed->tree().setValueOn(
+            fine, float(a.blendProgress >= 1.0f ? m.settings.blendTime_s : m.now - a.blendStart_s));
+        presence->tree().setValueOn(fine, a.presence);
+        sinceBirth->tree().setValueOn(fine, float(m.now - a.birth_s));
+        tod->tree().setValueOn(fine, float(a.captureTimeOfDay_h));
+        flags->tree().setValueOn(
+            fine, (a.regenerationRequested ? kFlagRegenerate : 0) | (a.expired ? kFlagExpired : 0));
+    }
+
+    openvdb::MetaMap meta;
+    meta.insertMeta("format", openvdb::StringMetadata(kFormat));
+    meta.insertMeta("coarsest_spacing_m", openvdb::DoubleMetadata(m.settings.coarsestSpacing_m));
+    meta.insertMeta("levels", openvdb::Int32Metadata(m.levels));
+    meta.insertMeta("anchors", openvdb::Int32Metadata(number));
+    meta.insertMeta("clock_s", openvdb::DoubleMetadata(m.now));
+    try {
+        openvdb::io::File file(path);
+        file.write(grids, meta);
+        file.close();
+    } catch (const std::exception& e) {
+        throw InputError(path, std::string("cannot write anchor store: ") + e.what());
+    }
+}
+
+namespace {
+
+std::string coordString(const openvdb::Coord& c) {
+    return "(" + std::to_string(c.x()) + ", " + std::to_string(c.y()) + ", " +
+           std::to_string(c.z()) + ")";
+}
+
+template <typename GridT>
+typename GridT::Ptr requireGrid(const openvdb::GridPtrVec& grids, const std::string& name,
+                                const std::string& path) {
+    for (const auto& g : grids) {
+        if (g && g->getName() == name) {
+            auto typed = openvdb::gridPtrCast<GridT>(g);
+            if (!typed) {
+                throw InputError(path, "grid '" + name + "' has type " + g->type() + ", expected " +
+                                           GridT::gridType());
+            }
+            return typed;
+        }
+    }
+    throw InputError(path, "grid '" + name + "' is missing");
+}
+
+template <typename T>
+T requireMeta(const openvdb::MetaMap& meta, const std::string& name, const std::string& path) {
+    auto value = meta.getMetadata<openvdb::TypedMetadata<T>>(name);
+    if (!value) throw InputError(path, "metadata '" + name + "' is missing or has the wrong type");
+    return value->value();
+}
+
+template <typename GridT>
+typename GridT::ValueType requireVoxel(const GridT& grid, const openvdb::Coord& c,
+                                       const std::string& path) {
+    typename GridT::ValueType v;
+    if (!grid.tree().probeValue(c, v)) {
+        throw InputError(path,
+                         "grid '" + grid.getName() + "' has no value at voxel " + coordString(c));
+    }
+    return v;
+}
+
+}  // namespace
+
+void AnchorStore::load(const std::string& path) {
+    openvdb::GridPtrVecPtr grids;
+    openvdb::MetaMap::Ptr meta;
+    try {
+        openvdb::io::File file(path);
+        file.open();
+        grids = file.getGrids();
+        meta = file.getMetadata();
+        file.close();
+    } catch (const InputError&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw InputError(path, std::string("cannot read anchor store: ") + e.what());
+    }
+    if (!grids || !meta) throw InputError(path, "not an anchor store file");
+
+    if (requireMeta<std::string>(*meta, "format", path) != kFormat) {
+        throw InputError(path, std::string("metadata 'format' is not ") + kFormat);
+    }
+    const double s0 = requireMeta<double>(*meta, "coarsest_spacing_m", path);
+    const int levels = requireMeta<std::int32_t>(*meta, "levels", path);
+    const int anchors = requireMeta<std::int32_t>(*meta, "anchors", path);
+    const double clock = requireMeta<double>(*meta, "clock_s", path);
+    if (s0 != impl_->settings.coarsestSpacing_m || levels != impl_->levels) {
+        throw InputError(path, "lattice (s0 " + std::to_string(s0) + " m, " +
+                                   std::to_string(levels) + " levels) differs from this store's");
+    }
+    if (!std::isfinite(clock) || anchors < 0) throw InputError(path, "bad clock or anchor count");
+
+    auto fresh = std::make_unique<Impl>(impl_->settings);
+    Impl& m = *fresh;
+    m.now = impl_->now;
+    m.fallback = impl_->fallback;
+    m.counters = impl_->counters;
+
+    std::array<openvdb::Vec3SGrid::Ptr, kShCoefficients> current, target, from;
+    for (int k = 0; k < kShCoefficients; ++k) {
+        current[k] = requireGrid<openvdb::Vec3SGrid>(*grids, shGridName("sh_current", k), path);
+        target[k] = requireGrid<openvdb::Vec3SGrid>(*grids, shGridName("sh_target", k), path);
+        from[k] = requireGrid<openvdb::Vec3SGrid>(*grids, shGridName("sh_blend_from", k), path);
+    }
+    auto position = requireGrid<openvdb::Vec3DGrid>(*grids, "captured_position", path);
+    auto age = requireGrid<openvdb::FloatGrid>(*grids, "age_s", path);
+    auto lifetime = requireGrid<openvdb::FloatGrid>(*grids, "lifetime_s", path);
+    auto blendElapsed = requireGrid<openvdb::FloatGrid>(*grids, "blend_elapsed_s", path);
+    auto presence = requireGrid<openvdb::FloatGrid>(*grids, "presence", path);
+    auto sinceBirth = requireGrid<openvdb::FloatGrid>(*grids, "since_birth_s", path);
+    auto tod = requireGrid<openvdb::FloatGrid>(*grids, "capture_time_of_day_h", path);
+    auto flags = requireGrid<openvdb::Int32Grid>(*grids, "flags", path);
+
+    std::vector<std::uint8_t> numberSeen(std::size_t(anchors), 0);
+    for (int L = 0; L < levels; ++L) {
+        const auto levelGrid =
+            requireGrid<openvdb::Int32Grid>(*grids, "anchor_index_L" + std::to_string(L), path);
+        for (auto it = levelGrid->cbeginValueOn(); it; ++it) {
+            const openvdb::Coord c = it.getCoord();
+            const std::int32_t number = *it;
+            const std::string where = "grid '" + levelGrid->getName() + "' voxel " + coordString(c);
+            if (c.y() != 0) throw InputError(path, where + ": y must be 0");
+            const LatticeKey key{L, c.x(), c.z()};
+            if (!m.validKey(key) || m.canonical(key) != key) {
+                throw InputError(path, where + ": not a canonical level-" + std::to_string(L) +
+                                           " lattice point");
+            }
+            if (number < 0 || number >= anchors || numberSeen[number]) {
+                throw InputError(path, where + ": anchor number out of range or repeated");
+            }
+            numberSeen[number] = 1;
+            const openvdb::Coord fine(std::int32_t(std::int64_t(key.i) * m.scale[L]), 0,
+                                      std::int32_t(std::int64_t(key.k) * m.scale[L]));
+            Anchor a;
+            a.key = key;
+            for (int k = 0; k < kShCoefficients; ++k) {
+                const auto cv = requireVoxel(*current[k], fine, path);
+                const auto tv = requireVoxel(*target[k], fine, path);
+                const auto fv = requireVoxel(*from[k], fine, path);
+                a.current.c[k] = {cv.x(), cv.y(), cv.z()};
+                a.target.c[k] = {tv.x(), tv.y(), tv.z()};
+                a.blendFrom.c[k] = {fv.x(), fv.y(), fv.z()};
+            }
+            if (!finiteSh(a.current, kMaxCoefficient) || !finiteSh(a.target, kMaxCoefficient) ||
+                !finiteSh(a.blendFrom, kMaxCoefficient)) {
+                throw InputError(path, where + ": coefficients not finite");
+            }
+            const auto p = requireVoxel(*position, fine, path);
+            a.capturedPosition_m = {p.x(), p.y(), p.z()};
+            const double ageV = requireVoxel(*age, fine, path);
+            const double lifeV = requireVoxel(*lifetime, fine, path);
+            const double blendV = requireVoxel(*blendElapsed, fine, path);
+            const double presV = requireVoxel(*presence, fine, path);
+            const double birthV = requireVoxel(*sinceBirth, fine, path);
+            const double todV = requireVoxel(*tod, fine, path);
+            const int flagV = requireVoxel(*flags, fine, path);
+            if (!std::isfinite(p.x()) || !std::isfinite(p.y()) || !std::isfinite(p.z()) ||
+                !std::isfinite(ageV) || !std::isfinite(lifeV) || !(lifeV > 0.0) ||
+                !std::isfinite(blendV) || blendV < 0.0 || !(presV >= 0.0 && presV <= 1.0) ||
+                !std::isfinite(birthV) || !std::isfinite(todV)) {
+                throw InputError(path, where + ": anchor state out of range");
+            }
+            a.captureTime_s = m.now - ageV;
+            a.birth_s = m.now - birthV;
+            a.lifetime_s = lifeV;
+            a.captureTimeOfDay_h = todV;
+            a.blendStart_s = m.now - blendV;
+            const double blend = m.settings.blendTime_s;
+            a.blendProgress = float(blend > 0.0 ? clamp01(blendV / blend) : 1.0);
+            a.presence = float(presV);
+            a.presenceFrom = a.presence;
+            a.presenceChange_s = m.now;
+            a.regenerationRequested = (flagV & kFlagRegenerate) != 0;
+            a.expired = (flagV & kFlagExpired) != 0;
+            const std::int32_t slot = m.allocate(a);
+            m.grids[L]->tree().setValueOn(openvdb::Coord(key.i, 0, key.k), slot);
+        }
+    }
+    if (m.count != std::size_t(anchors)) {
+        throw InputError(path, "metadata 'anchors' is " + std::to_string(anchors) +
+                                   " but the "
+                                   "level grids hold " +
+                                   std::to_string(m.count));
+    }
+    if (current[0]->activeVoxelCount() != openvdb::Index64(anchors)) {
+        throw InputError(path, "payload grids hold values where no anchor is");
+    }
+    impl_ = std::move(fresh);
+}
+
+}  // namespace amb

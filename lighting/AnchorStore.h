@@ -1,0 +1,241 @@
+// AnchorStore.h — the sparse, hierarchical store of ambience anchors along the ground plane
+// (thesis 7.5, 8.4, 9.3; DESIGN.md "Anchor store"), with blending and four-quadrant
+// interpolation.
+//
+// [SECTION] Lattice        Level L has spacing s_L = s_0 / 3^L (3 x 3 subdivision, the thesis'
+//                          SHGraph restricted to the ground). A level-L point (i, k) lies at
+//                          (i s_L, k s_L) on the XZ plane; it is also level-(L+1) point (3i, 3k)
+//                          (the centre child shares its parent's position and anchor). Every point
+//                          is stored once, under its *canonical* key: the coarsest level holding
+//                          it. All positions are integer multiples of the finest spacing, so keys
+//                          are exact integers however far from the origin (|x|, |z| < 2^31 s_fine).
+// [SECTION] Anchors        One coefficient set per lattice point: current value, target value,
+//                          blend state, presence, capture time, lifetime, captured position.
+// [SECTION] Time           advance(now_s) runs blending, presence fades, regeneration requests
+//                          and expiry on the store's simulation clock (seconds, monotonic; the
+//                          time of day is only recorded, so its wrap at 24 h does not matter).
+// [SECTION] Lifetime       anchorLifetime_s(): how long a capture stays valid while the sun moves.
+// [SECTION] Interpolation  interpolate(x, z): the four-quadrant rule of thesis 9.3.
+// [SECTION] Files          save()/load() as .vdb (OpenVDB grids, inspectable with vdb_print).
+//
+// OpenVDB is used only inside AnchorStore.cpp (one int32 grid per level mapping (i, 0, k) to an
+// index into a contiguous anchor pool with a free list; in memory with smaller tree nodes than
+// the standard Int32Grid, in files as standard Int32Grids); this header does not include it.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "lighting/SH.h"
+
+namespace amb {
+
+inline constexpr int kMaxAnchorLevels = 8;
+
+struct AnchorStoreSettings {
+    // Spacing of the coarsest level, s_0 [m]. Level L has s_L = s_0 / 3^L.
+    double coarsestSpacing_m = 243.0;
+    // Number of levels (1..kMaxAnchorLevels); the finest spacing is s_0 / 3^(levels - 1)
+    // (3 m by default: 243, 81, 27, 9, 3).
+    int levels = 5;
+    // Time over which a refreshed anchor moves from its old to its new coefficients, and over
+    // which a new anchor fades in (or an expired one fades out) of the interpolation [s].
+    double blendTime_s = 2.0;
+    // Lifetime (see anchorLifetime_s): the sun may move this far across the sky before a capture
+    // is considered out of date [rad] (2 degrees).
+    double allowedSunAngle_rad = 0.0349;
+    double minLifetime_s = 5.0;    // lower clamp of the lifetime [s]
+    double maxLifetime_s = 600.0;  // upper clamp (also the lifetime when time stands still) [s]
+    // An anchor asks for regeneration once this fraction of its lifetime has passed.
+    double regenerateFraction = 0.75;
+    // Four-quadrant search: at level L, anchors within searchCells x s_L of the query point.
+    int searchCells = 2;
+};
+
+// A lattice point: level and integer coordinates on that level's lattice.
+struct LatticeKey {
+    int level = 0;
+    std::int32_t i = 0;
+    std::int32_t k = 0;
+    bool operator==(const LatticeKey& o) const { return level == o.level && i == o.i && k == o.k; }
+    bool operator!=(const LatticeKey& o) const { return !(*this == o); }
+};
+
+// One anchor (the thesis' CoefficientAnchor, appendix B). Plain data.
+struct Anchor {
+    ShRgb current;    // what interpolation uses now
+    ShRgb target;     // the latest capture
+    ShRgb blendFrom;  // value of `current` when the blend towards `target` began
+    double blendStart_s = 0.0;
+    float blendProgress = 1.0f;     // [0, 1]; current = lerp(blendFrom, target, blendProgress)
+    float presence = 1.0f;          // [0, 1]; weight in interpolation (fade in / fade out)
+    float presenceFrom = 1.0f;      // fade state: presence at presenceChange_s, from which it
+    double presenceChange_s = 0.0;  // rises (or falls, once expired) by dt / blendTime
+    double birth_s = 0.0;           // store clock at first insertion
+    double captureTime_s = 0.0;     // store clock at the latest capture
+    double captureTimeOfDay_h = 0.0;
+    double lifetime_s = 0.0;             // validity of the latest capture
+    glm::dvec3 capturedPosition_m{0.0};  // where the probe actually was (moved out of solids)
+    LatticeKey key;                      // canonical key
+    bool regenerationRequested = false;  // age >= regenerateFraction x lifetime
+    bool expired = false;                // age >= lifetime: fading out, then removed
+
+    double age_s(double now_s) const { return now_s - captureTime_s; }
+};
+
+// Lifetime of a capture from how fast the lighting changes (thesis 7.5.3: samples expire at a
+// rate set by how fast the light changes; DESIGN.md "Blending"):
+//     lifetime = clamp(allowedSunAngle / (sunSpeed x |timeRate|), minLifetime, maxLifetime)
+// with sunSpeed the sun's angular speed across the sky [rad per hour of day] and timeRate the
+// hours of day that pass per simulated second (1/3600 in real time). Time standing still gives
+// maxLifetime. Example: real time, 45 deg N at the solstice (0.24 rad/h), 2 deg -> 524 s;
+// a one-hour-per-minute time-lapse -> 8.7 s.
+double anchorLifetime_s(const AnchorStoreSettings& settings, double sunSpeed_radPerHour,
+                        double timeRate_hPerS);
+
+// Which anchors the four-quadrant rule chose for a point, for tests and debug overlays.
+struct InterpolationDetail {
+    struct Used {
+        LatticeKey key;
+        int quadrant = 0;  // 0: dx >= 0, dz >= 0; 1: dx < 0, dz >= 0; 2: dx < 0, dz < 0;
+                           // 3: dx >= 0, dz < 0 (dx, dz = anchor - query)
+        double distance_m = 0.0;
+        double weight = 0.0;  // normalised; the weights sum to 1 unless `fallback`
+    };
+    std::vector<Used> used;
+    bool exact = false;     // the query lies on a present anchor, whose value is returned
+    bool fallback = false;  // no anchor in reach: the store's fallback value is returned
+};
+
+struct AnchorStoreStatistics {
+    std::size_t anchors = 0;
+    std::array<std::size_t, kMaxAnchorLevels> anchorsPerLevel{};
+    std::size_t poolBytes = 0;  // anchor pool and free list (capacity, not size)
+    std::size_t gridBytes = 0;  // OpenVDB trees (Grid::memUsage of every level grid)
+    std::size_t bytes() const { return poolBytes + gridBytes; }
+    std::int64_t inserted = 0;   // new anchors
+    std::int64_t refreshed = 0;  // captures that replaced an anchor's target
+    std::int64_t rejected = 0;   // captures refused for NaN/Inf/out-of-range values
+    std::int64_t expired = 0;    // anchors removed at the end of their lifetime
+    std::int64_t prunes = 0;     // tree prunes run after removals
+};
+
+class AnchorStore {
+  public:
+    explicit AnchorStore(const AnchorStoreSettings& settings = {});
+    ~AnchorStore();
+    AnchorStore(AnchorStore&&) noexcept;
+    AnchorStore& operator=(AnchorStore&&) noexcept;
+    AnchorStore(const AnchorStore&) = delete;
+    AnchorStore& operator=(const AnchorStore&) = delete;
+
+    const AnchorStoreSettings& settings() const;
+    int levels() const;
+    int finestLevel() const { return levels() - 1; }
+    double spacing_m(int level) const;
+
+    // ---- Lattice ----
+    // The level-`level` lattice point nearest to (x, z) (ties round up), in canonical form.
+    LatticeKey keyNear(double x_m, double z_m, int level) const;
+    // The same point under its canonical (coarsest) level.
+    LatticeKey canonical(const LatticeKey& key) const;
+    // World XZ position of a lattice point [m] (exact multiple of the finest spacing).
+    double keyX_m(const LatticeKey& key) const;
+    double keyZ_m(const LatticeKey& key) const;
+    // Coordinates on the finest lattice (exact integers).
+    std::int64_t fineI(const LatticeKey& key) const;
+    std::int64_t fineK(const LatticeKey& key) const;
+
+    // ---- Anchors ----
+    // The anchor at a lattice point (any level naming it), or nullptr. The pointer stays valid
+    // until the next insert, remove, advance or load.
+    const Anchor* find(const LatticeKey& key) const;
+    std::size_t size() const;
+    // Calls f for every anchor (unspecified order).
+    void forEach(const std::function<void(const Anchor&)>& f) const;
+
+    enum class InsertResult { Inserted, Refreshed, Rejected };
+    // A capture at lattice point `key` taken from `capturedPosition_m` at the current clock.
+    // New point: the anchor starts from the value the store interpolates there now and blends
+    // to `sh` over blendTime_s while fading into the interpolation (presence 0 -> 1), so the
+    // insertion changes nothing anywhere at this instant (thesis 7.6). Existing point: its
+    // current value blends to `sh` over blendTime_s and its lifetime restarts.
+    // Any coefficient that is NaN, infinite or above kMaxCoefficient, a non-finite position or a
+    // non-positive lifetime rejects the capture (counted in statistics().rejected).
+    InsertResult insert(const LatticeKey& key, const ShRgb& sh,
+                        const glm::dvec3& capturedPosition_m, double lifetime_s,
+                        double timeOfDay_h = 0.0);
+    static constexpr float kMaxCoefficient = 1.0e15f;
+    // Removes an anchor at once (no fade). Returns false if there was none.
+    bool remove(const LatticeKey& key);
+    void clear();
+
+    // Advances the clock to now_s (>= the current clock; earlier times are ignored): blends,
+    // fades presence, flags regeneration, starts fading out anchors whose lifetime is over and
+    // removes those fully faded, pruning the trees after removals. dt = 0 changes nothing; a long
+    // step (a hitch) completes blends and fades at once.
+    void advance(double now_s);
+    double now_s() const;
+    // Shortens every anchor's remaining lifetime to at most `remaining_s` (e.g. after a jump in
+    // the time of day) and flags them for regeneration.
+    void expireAllWithin(double remaining_s);
+    // Keys of anchors that asked for regeneration, most urgent (oldest relative to lifetime)
+    // first.
+    std::vector<LatticeKey> regenerationRequests() const;
+
+    // ---- Interpolation (thesis 9.3) ----
+    // Value used where no anchor is in reach (e.g. the sky-only SH, see AmbienceVolume.h).
+    void setFallback(const ShRgb& sh);
+    const ShRgb& fallback() const;
+    // The four-quadrant rule at ground point (x, z):
+    //  1. For each quadrant around the point (quadrants as in InterpolationDetail), take the
+    //     nearest anchor, searching the finest level first: at level L the candidates are the
+    //     anchors on the level-L lattice (which includes every coarser anchor) within
+    //     searchCells x s_L; a quadrant without a candidate is searched again one level coarser.
+    //  2. Weights are inverse distances, normalised over the 1-4 quadrants that found one.
+    //  3. A query exactly on (within 1e-9 m of) a present anchor returns that anchor's value.
+    //  4. No candidate anywhere returns fallback().
+    //  Fades: an anchor with presence p < 1 takes the share p of its quadrant and passes 1 - p on
+    //  to the next candidate of that quadrant (the next nearest, then coarser levels), so a new
+    //  anchor (p = 0) changes nothing and the pattern moves from old to new as p grows — the
+    //  old-pattern/new-pattern blend proposed in thesis 7.6.
+    //  Where the result may jump (the rule itself changes): when the query crosses the line
+    //  x = const or z = const through a selected anchor (the anchor changes quadrant), when it
+    //  crosses the bisector between two candidates of one quadrant (the nearest changes), and
+    //  when a candidate enters or leaves the search radius of its level. Between such places the
+    //  result is continuous (Lipschitz). The result is always finite.
+    // Safe to call from several threads at once while nothing modifies the store.
+    ShRgb interpolate(double x_m, double z_m, InterpolationDetail* detail = nullptr) const;
+    // interpolate() at `count` points (x_m[i], z_m[i]) into out[i], in parallel (TBB).
+    void interpolateMany(std::size_t count, const double* x_m, const double* z_m, ShRgb* out) const;
+
+    // ---- Memory ----
+    AnchorStoreStatistics statistics() const;
+
+    // ---- Files ----
+    // Writes the store as a .vdb file: per level an Int32Grid "anchor_index_L<n>" (voxel (i, 0, k)
+    // -> anchor number, transform scaled by s_L), and the payload on the finest lattice
+    // (voxel (I, 0, K), transform scaled by the finest spacing): Vec3SGrids "sh_current_<k>",
+    // "sh_target_<k>", "sh_blend_from_<k>" (k = 0..8, RGB), a Vec3DGrid "captured_position",
+    // FloatGrids "age_s", "lifetime_s", "blend_elapsed_s", "presence", "since_birth_s",
+    // "capture_time_of_day_h", Int32Grid "flags". File metadata: format, lattice and clock.
+    // Throws InputError if the file cannot be written.
+    void save(const std::string& path) const;
+    // Replaces the contents by a file written by save(). The file's lattice (s_0, levels) must
+    // equal this store's; ages are kept relative to the current clock. Throws InputError (and
+    // leaves the store unchanged) for a missing, unreadable or inconsistent file.
+    void load(const std::string& path);
+
+  private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace amb

@@ -1,0 +1,58 @@
+// CubeCapture.h — the capture interface: a cube map of the static, coarse scene at a point.
+//
+// Declared here, without GL, so the lighting code (scheduler, anchor store, oracle) can ask for
+// captures; the GL implementation lives in app/ (CubeCaptureGl.cpp). What is drawn (DESIGN.md,
+// "Capture"): the terrain proxy mesh, tree proxies, the road, the sky and the sun — nothing
+// dynamic (thesis 8.2). Face order and texel orientation are those of world/Conventions.h
+// (cubeTexelDirection): face f, texel (column i, row j) looks along cubeTexelDirection(f, i, j, N).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+namespace amb {
+
+// Which faces a call renders: bit f is face f (0 = +X ... 5 = -Z).
+using CubeFaceMask = unsigned;
+inline constexpr CubeFaceMask kAllCubeFaces = 0x3fu;
+inline constexpr CubeFaceMask cubeFaceBit(int face) {
+    return 1u << face;
+}
+
+struct CubeCaptureStats {
+    int faces = 0;              // faces rendered by the call
+    std::size_t triangles = 0;  // triangles submitted per face (capture scene size)
+    double milliseconds = 0.0;  // wall time of the call, read-back included
+    double msPerFace() const { return faces > 0 ? milliseconds / faces : 0.0; }
+};
+
+class CubeCapture {
+  public:
+    virtual ~CubeCapture() = default;
+
+    // Face size N in texels (default 16, as the thesis chose, 9.1).
+    virtual int faceSize() const = 0;
+
+    // Renders the faces in `faces` as seen from `position_m` (world, metres) at `timeOfDay_h`
+    // (hours) into `cube`: linear HDR RGB, 6 N^2 texels, face-major, row-major, 3 floats per
+    // texel. `cube` is resized to 6 N^2 x 3 if it has another size; faces outside the mask are
+    // left as they are, so a cube can be filled over several calls (one face per frame).
+    // The sun disc is added to the texel that holds the sun direction with its whole energy
+    // (radiance x disc solid angle / texel solid angle), unless terrain or trees hide it.
+    virtual CubeCaptureStats capture(const glm::dvec3& position_m, double timeOfDay_h,
+                                     CubeFaceMask faces, std::vector<float>& cube) = 0;
+
+    // All six faces, returned.
+    std::vector<float> captureAll(const glm::dvec3& position_m, double timeOfDay_h,
+                                  CubeCaptureStats* stats = nullptr) {
+        std::vector<float> cube;
+        const CubeCaptureStats s = capture(position_m, timeOfDay_h, kAllCubeFaces, cube);
+        if (stats) *stats = s;
+        return cube;
+    }
+};
+
+}  // namespace amb

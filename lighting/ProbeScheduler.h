@@ -1,0 +1,123 @@
+// ProbeScheduler.h — v1 planner: where to capture the next probe (thesis 8.1, 8.4, appendix B).
+//
+// [SECTION] Motion model   observe(): the camera's position and velocity history; the velocity
+//                          is low-pass filtered (inertia, thesis 8.1: the camera keeps roughly
+//                          its direction for several frames). predictedPath(): samples of the
+//                          future ground track — a straight line along the filtered velocity, or,
+//                          on a road and moving along it, the road ahead. A jump further than the
+//                          motion allows is a teleport: the history and prediction restart there.
+// [SECTION] Resolution     finestLevel(): the finest lattice level worth capturing at the current
+//                          speed. Keeping a corridor `corridorCells` cells wide along the track
+//                          populated at spacing s costs speed x corridorCells / s probes per
+//                          second; the finest level is the finest whose spacing keeps this within
+//                          the probe rate (thesis 8.4: resolution falls as speed rises).
+// [SECTION] Choice         choose(): candidate lattice points around the predicted path (the
+//                          finest level within a narrow corridor, coarser levels further out),
+//                          ranked by cost in seconds, lowest first:
+//                            cost = time until the camera comes nearest the point
+//                                   (min over path samples of tau + distance / max(speed, v_min))
+//                                 - gapBonus_s        if no anchor of its level is near it
+//                                 + staleBias_s x (1 - urgency)  if an anchor is there but asks
+//                                                     for regeneration (urgency 0 when it asks,
+//                                                     1 when it expires)
+//                          Points with a fresh anchor are skipped. When none is left, the
+//                          corridor widens (up to maxWiden doublings), then the scheduler idles.
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "lighting/AnchorStore.h"
+
+namespace amb {
+
+class RoadNetwork;
+
+struct ProbeSchedulerSettings {
+    // Motion model.
+    double velocityTimeConstant_s = 0.3;  // inertia of the velocity filter
+    double horizon_s = 3.0;               // how far ahead the path is predicted
+    double pathStep_s = 0.25;             // spacing of the path samples
+    double historyLength_s = 2.0;         // position history kept
+    double roadSnap_m = 6.0;     // within halfWidth + this of a road's centre the camera is on it
+    double roadAlignment = 0.7;  // |cos| between motion and road direction needed to follow it
+    double teleportDistance_m = 100.0;  // a step longer than this + 3 x speed x dt is a teleport
+    // Resolution against speed.
+    double corridorCells = 2.0;  // width of the finest-level corridor along the path, in cells
+    int maxLevel = kMaxAnchorLevels - 1;  // never capture finer than this level
+    // Candidates and priority.
+    double finestRingCells = 1.0;     // finest-level candidates within this x s_L of the path
+    double coarseRingCells = 2.0;     // coarser-level candidates within this x s_L of the path
+    int maxWiden = 3;                 // doublings of the rings when everything near is fresh
+    double minReachSpeed_mps = 10.0;  // speed assumed for time-to-reach when slower
+    double gapBonus_s = 0.5;
+    double staleBias_s = 1.0;
+};
+
+struct ProbeChoice {
+    LatticeKey key;
+    double cost_s = 0.0;         // see ProbeScheduler.h "Choice"
+    double timeToReach_s = 0.0;  // first term of the cost
+    bool refresh = false;        // an anchor exists there and asked for regeneration
+};
+
+class ProbeScheduler {
+  public:
+    explicit ProbeScheduler(const ProbeSchedulerSettings& settings = {});
+
+    const ProbeSchedulerSettings& settings() const { return settings_; }
+    // Roads to follow when the camera drives on one (may be null; must outlive the scheduler).
+    void setRoads(const RoadNetwork* roads) { roads_ = roads; }
+
+    // Feeds the camera at simulation time now_s. A non-finite velocity is replaced by the one
+    // from the position history. Returns true if a teleport was detected (prediction reset).
+    bool observe(const glm::dvec3& position_m, const glm::dvec3& velocity_mps, double now_s);
+    void reset();
+
+    glm::dvec3 position_m() const { return position_; }
+    glm::dvec3 velocity_mps() const { return velocity_; }  // filtered
+    double speed_mps() const;                              // horizontal, filtered
+    bool onRoad() const { return onRoad_; }
+    std::int64_t teleports() const { return teleports_; }
+
+    // Ground-track samples (y = camera height) at tau = 0, pathStep_s, ..., horizon_s.
+    struct PathSample {
+        double tau_s;
+        glm::dvec3 position_m;
+    };
+    std::vector<PathSample> predictedPath() const;
+    glm::dvec3 predict(double ahead_s) const;
+
+    // Finest level worth capturing at the current speed, given the probe rate (probes per
+    // second the capture budget allows), within [0, min(store levels, maxLevel + 1) - 1].
+    int finestLevel(const AnchorStore& store, double probesPerSecond) const;
+
+    // The best point to capture next, or nothing when every candidate is fresh. `busy` lists
+    // points already being captured.
+    std::optional<ProbeChoice> choose(const AnchorStore& store, double probesPerSecond,
+                                      const std::vector<LatticeKey>& busy = {}) const;
+
+  private:
+    ProbeSchedulerSettings settings_;
+    const RoadNetwork* roads_ = nullptr;
+    struct Observation {
+        double t_s;
+        glm::dvec3 position_m;
+    };
+    std::deque<Observation> history_;
+    glm::dvec3 position_{0.0};
+    glm::dvec3 velocity_{0.0};
+    double now_ = 0.0;
+    bool initialised_ = false;
+    bool onRoad_ = false;
+    int roadIndex_ = -1;
+    double roadAlong_m_ = 0.0;
+    double roadDirection_ = 1.0;  // +1 along increasing arc length, -1 against
+    std::int64_t teleports_ = 0;
+};
+
+}  // namespace amb

@@ -1,0 +1,242 @@
+// AmbienceVolume_test.cpp — the per-frame pipeline with a CPU fake capture: the face budget,
+// anchors equal to the projection of their own captures, NaN/Inf/negative captures never
+// entering the store, insertion changing nothing at its instant, dt = 0, a 10 s hitch, the
+// time-of-day wrap and jumps, the fallback, probe placement in the generated world, JSON settings.
+#include "lighting/AmbienceVolume.h"
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <glm/geometric.hpp>
+
+#include "FakeCubeCapture.h"
+#include "lighting/CubeMapProjector.h"
+#include "world/Error.h"
+
+namespace amb {
+namespace {
+
+using testing_support::FakeCubeCapture;
+using testing_support::FlatProbeEnvironment;
+using testing_support::Poison;
+
+constexpr double kDt = 1.0 / 60.0;
+
+bool allFinite(const ShRgb& sh) {
+    for (const auto& c : sh.c) {
+        if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.z)) return false;
+    }
+    return true;
+}
+
+double maxDiff(const ShRgb& a, const ShRgb& b) {
+    double m = 0.0;
+    for (int k = 0; k < kShCoefficients; ++k) {
+        for (int ch = 0; ch < 3; ++ch) m = std::max(m, std::fabs(double(a.c[k][ch]) - b.c[k][ch]));
+    }
+    return m;
+}
+
+struct Rig {
+    FakeCubeCapture capture;
+    FlatProbeEnvironment environment;
+    AmbienceVolume volume;
+    explicit Rig(const AmbienceVolumeSettings& s = {}, bool skyModel = false)
+        : capture(16, skyModel), volume(capture, environment, s) {}
+    void run(int frames, const glm::dvec3& p, double timeOfDay_h = 12.0, double dt = kDt) {
+        for (int f = 0; f < frames; ++f) volume.update(p, {0, 0, 0}, timeOfDay_h, dt);
+    }
+};
+
+TEST(AmbienceVolume, OneFacePerFrameOneProbePerSixFrames) {
+    Rig rig;
+    rig.run(60, {10.0, 1.7, 20.0});
+    const AmbienceStatistics& s = rig.volume.statistics();
+    EXPECT_EQ(s.facesCaptured, 60);
+    EXPECT_EQ(s.facesThisFrame, 1);
+    EXPECT_EQ(s.probesCompleted, 10);
+    EXPECT_EQ(rig.volume.store().size(), 10u);
+    EXPECT_EQ(rig.capture.calls().size(), 60u);
+    for (const auto& call : rig.capture.calls()) {
+        EXPECT_EQ(__builtin_popcount(call.faces), 1);
+    }
+    // Three faces per frame: a probe every two frames.
+    AmbienceVolumeSettings three;
+    three.facesPerFrame = 3;
+    Rig fast(three);
+    fast.run(20, {10.0, 1.7, 20.0});
+    EXPECT_EQ(fast.volume.statistics().probesCompleted, 10);
+    EXPECT_GT(s.store.bytes(), 0u);
+}
+
+TEST(AmbienceVolume, AnchorsHoldTheProjectionOfTheirOwnCaptures) {
+    // Time of day fixed, so each probe's six faces (captured over six frames) see the same scene:
+    // the anchor's target must equal projecting a whole cube captured at its recorded position.
+    Rig rig;
+    rig.run(90, {-3.0e6, 1.7, 7.0e6});
+    ASSERT_EQ(rig.volume.store().size(), 15u);
+    FakeCubeCapture reference(16, false);
+    double spread = 0.0;
+    ShRgb first;
+    bool haveFirst = false;
+    rig.volume.store().forEach([&](const Anchor& a) {
+        EXPECT_EQ(a.capturedPosition_m.y, 2.0);  // FlatProbeEnvironment: 2 m above y = 0
+        const std::vector<float> cube = reference.captureAll(a.capturedPosition_m, 12.0);
+        const ShRgb expected = toFloat(projectCubeMap(16, cube).sh);
+        EXPECT_LT(maxDiff(a.target, expected), 1e-5 * std::fabs(expected.c[0].x));
+        if (!haveFirst) {
+            first = a.target;
+            haveFirst = true;
+        }
+        spread = std::max(spread, maxDiff(a.target, first));
+    });
+    // The fake's ground colour varies with position: anchors differ.
+    EXPECT_GT(spread, 1e-2 * std::fabs(first.c[0].x));
+}
+
+TEST(AmbienceVolume, NanInfAndNegativeCapturesNeverEnterTheStore) {
+    for (Poison kind : {Poison::NaN, Poison::Inf, Poison::Negative}) {
+        Rig rig;
+        rig.capture.poisonEvery(2, kind, 3);  // every second probe, one texel of face -Y
+        rig.run(120, {0.0, 1.7, 0.0});
+        const AmbienceStatistics& s = rig.volume.statistics();
+        EXPECT_EQ(s.probesCompleted, 20);
+        EXPECT_EQ(rig.capture.poisonedProbes(), 10);
+        EXPECT_EQ(s.rejectedProbes, 10);
+        EXPECT_EQ(rig.volume.store().size(), 10u);
+        rig.volume.store().forEach([&](const Anchor& a) {
+            EXPECT_TRUE(allFinite(a.current));
+            EXPECT_TRUE(allFinite(a.target));
+        });
+        for (double x = -30.0; x <= 30.0; x += 1.7) {
+            EXPECT_TRUE(allFinite(rig.volume.shAt(x, 0.5 * x)));
+        }
+    }
+}
+
+TEST(AmbienceVolume, InsertionChangesNothingAtItsInstant) {
+    // With dt = 0 nothing ages, blends or fades, yet probes keep completing and entering the
+    // store: what any point sees must not change at all.
+    Rig rig;
+    const glm::dvec3 p(50.0, 1.7, 50.0);
+    rig.run(120, p);
+    std::vector<ShRgb> seen;
+    for (double x = 20.0; x <= 80.0; x += 2.5) {
+        for (double z = 20.0; z <= 80.0; z += 2.5) seen.push_back(rig.volume.shAt(x, z));
+    }
+    const std::size_t before = rig.volume.store().size();
+    rig.run(60, p, 12.0, 0.0);
+    EXPECT_EQ(rig.volume.store().size(), before + 10);
+    std::size_t n = 0;
+    for (double x = 20.0; x <= 80.0; x += 2.5) {
+        for (double z = 20.0; z <= 80.0; z += 2.5) {
+            ASSERT_EQ(maxDiff(rig.volume.shAt(x, z), seen[n++]), 0.0) << x << ", " << z;
+        }
+    }
+    // Once time moves again, the new anchors fade in within the blend time (2 s).
+    rig.run(121, p);
+    rig.volume.store().forEach([&](const Anchor& a) {
+        if (a.birth_s <= rig.volume.simulationTime_s() - 2.0) {
+            EXPECT_EQ(a.presence, 1.0f);
+        }
+    });
+}
+
+TEST(AmbienceVolume, TenSecondHitch) {
+    Rig rig;
+    const glm::dvec3 p(0.0, 1.7, 0.0);
+    rig.run(60, p, 12.0);
+    const double t0 = rig.volume.simulationTime_s();
+    rig.volume.update(p, {0, 0, 0}, 12.0 + 10.0 / 3600.0, 10.0);  // real time
+    EXPECT_DOUBLE_EQ(rig.volume.simulationTime_s(), t0 + 10.0);
+    EXPECT_NEAR(rig.volume.timeRate_hPerS(), 1.0 / 3600.0, 1e-12);
+    rig.volume.store().forEach([&](const Anchor& a) {
+        EXPECT_EQ(a.blendProgress, 1.0f);
+        EXPECT_TRUE(allFinite(a.current));
+    });
+    rig.run(30, p, 12.0 + 10.0 / 3600.0);
+    for (double x = -20.0; x <= 20.0; x += 3.3) EXPECT_TRUE(allFinite(rig.volume.shAt(x, x)));
+}
+
+TEST(AmbienceVolume, TimeOfDayWrapAndJump) {
+    // One hour of day per minute, crossing midnight: the rate stays 1/60 h/s, lifetimes follow
+    // anchorLifetime_s (0.0349 rad / (pi/12 rad/h x 1/60 h/s) = 8.0 s), nothing is cut short.
+    Rig rig;
+    const glm::dvec3 p(0.0, 1.7, 0.0);
+    double tod = 23.95;
+    for (int f = 0; f < 600; ++f) {
+        rig.volume.update(p, {0, 0, 0}, tod, kDt);
+        if (f > 0) {
+            ASSERT_NEAR(rig.volume.timeRate_hPerS(), 1.0 / 60.0, 1e-9) << "frame " << f;
+        }
+        tod = std::fmod(tod + kDt / 60.0, 24.0);
+    }
+    const double expected = 0.0349 / (kPi / 12.0 / 60.0);
+    EXPECT_NEAR(rig.volume.currentLifetime_s(), expected, 1e-6);
+    int checked = 0;
+    rig.volume.store().forEach([&](const Anchor& a) {
+        if (a.captureTime_s > 0.1) {  // captured after the rate was first measured
+            EXPECT_NEAR(a.lifetime_s, expected, 1e-6);
+            ++checked;
+        }
+    });
+    EXPECT_GT(checked, 0);
+    // A jump of the time of day (06:00 -> noon) cuts every life to the blend time.
+    const double now = rig.volume.simulationTime_s();
+    rig.volume.update(p, {0, 0, 0}, 12.0, kDt);
+    rig.volume.store().forEach([&](const Anchor& a) {
+        EXPECT_LE(a.captureTime_s + a.lifetime_s, now + kDt + 2.0 + 1e-9);
+        EXPECT_TRUE(a.regenerationRequested || a.captureTime_s > now);
+    });
+}
+
+TEST(AmbienceVolume, FallbackWhereNoAnchorIs) {
+    // FlatProbeEnvironment at noon: 40 above the horizon, 8 below, so
+    // L00 = Y00 x (40 + 8) x 2 pi = 85.07 (the horizon lies on texel edges: exact to rounding).
+    Rig rig;
+    rig.volume.update({0, 1.7, 0}, {0, 0, 0}, 12.0, kDt);
+    const ShRgb far = rig.volume.shAt(5000.0, 5000.0);
+    EXPECT_NEAR(far.c[0].x, kShY00 * 48.0 * 2.0 * kPi, 1e-3);
+    EXPECT_NEAR(far.c[0].z, far.c[0].x, 1e-4);
+    // L10 (z-direction) is 0 by symmetry; L1-1 (y) is positive (brighter above).
+    EXPECT_NEAR(far.c[2].x, 0.0, 1e-3);
+    EXPECT_GT(far.c[1].x, 0.0);
+    // At night the fallback is darker.
+    Rig night;
+    night.volume.update({0, 1.7, 0}, {0, 0, 0}, 0.0, kDt);
+    EXPECT_LT(night.volume.shAt(5000.0, 5000.0).c[0].x, 0.1f * far.c[0].x);
+}
+
+TEST(AmbienceVolume, SaveAndWarmStart) {
+    Rig rig;
+    rig.run(60, {0.0, 1.7, 0.0});
+    const std::string path = std::string(AMBIENCE_BINARY_DIR) + "/AmbienceVolume_warm.vdb";
+    rig.volume.saveAnchors(path);
+    Rig warm;
+    warm.volume.loadAnchors(path);
+    EXPECT_EQ(warm.volume.store().size(), rig.volume.store().size());
+    std::remove(path.c_str());
+}
+
+TEST(AmbienceVolumeSettings, FromJson) {
+    const AmbienceVolumeSettings s = ambienceSettingsFromJson(
+        R"({"facesPerFrame": 2, "store": {"blendTime_s": 0.5, "levels": 4},
+            "scheduler": {"horizon_s": 4.5}})",
+        "test.json");
+    EXPECT_EQ(s.facesPerFrame, 2);
+    EXPECT_EQ(s.store.blendTime_s, 0.5);
+    EXPECT_EQ(s.store.levels, 4);
+    EXPECT_EQ(s.scheduler.horizon_s, 4.5);
+    EXPECT_EQ(s.store.coarsestSpacing_m, AnchorStoreSettings{}.coarsestSpacing_m);
+    EXPECT_THROW(ambienceSettingsFromJson(R"({"facesPerFrames": 2})", "x"), InputError);
+    EXPECT_THROW(ambienceSettingsFromJson(R"({"store": {"levels": 9}})", "x"), InputError);
+    EXPECT_THROW(ambienceSettingsFromJson(R"({"store": {"levels": "4"}})", "x"), InputError);
+    EXPECT_THROW(ambienceSettingsFromJson(R"({"facesPerFrame": 2.5})", "x"), InputError);
+    EXPECT_THROW(ambienceSettingsFromJson(R"([1, 2])", "x"), InputError);
+    EXPECT_THROW(ambienceSettingsFromJson("{", "x"), InputError);
+}
+
+}  // namespace
+}  // namespace amb
