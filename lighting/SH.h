@@ -22,6 +22,7 @@
 #include <glm/vec3.hpp>
 
 #include "world/Conventions.h"
+#include "world/DirectionalLight.h"
 
 namespace amb {
 
@@ -124,11 +125,8 @@ ShWindow shAutoWindow(const ShRgbD& sh);
 
 // ---- Directional lights ----------------------------------------------------------------------
 
-// A distant light (the sun) kept out of the SH and lit exactly: E(n) = irradiance max(0, n.dir).
-struct DirectionalLight {
-    glm::dvec3 direction{0.0, 1.0, 0.0};  // unit vector towards the light
-    glm::dvec3 irradiance{0.0};           // on a surface facing the light (radiance x sr)
-};
+// A distant light (world/DirectionalLight.h) kept out of the SH and lit exactly:
+// E(n) = irradiance max(0, n.dir).
 glm::dvec3 directionalIrradiance(const DirectionalLight& light, const glm::dvec3& normal);
 
 // Adds (scale = +1) or removes (scale = -1) the SH projection of a directional light (a delta of

@@ -236,7 +236,7 @@ DirectionalLight Sky::mainLight(double timeOfDay_h) const {
         luminance(glm::dvec3(sun.irradiance)) >= luminance(glm::dvec3(moon.irradiance)) ? sun
                                                                                         : moon;
     // Never exactly zero (the night-time light must stay usable for exposure and shading).
-    light.irradiance = glm::max(light.irradiance, glm::vec3(1e-9f));
+    light.irradiance = glm::max(light.irradiance, glm::dvec3(1e-9));
     return light;
 }
 

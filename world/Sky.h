@@ -22,15 +22,11 @@
 
 #include <glm/vec3.hpp>
 
+#include "world/DirectionalLight.h"
 #include "world/WorldSettings.h"
 
 namespace amb {
 
-// A distant light: unit direction towards it and its irradiance on a surface facing it.
-struct DirectionalLight {
-    glm::dvec3 direction{0.0, 1.0, 0.0};
-    glm::vec3 irradiance{0.0f};  // W m^-2-like units (same scale as Sky::radiance times sr)
-};
 
 // Everything radiance() needs for one time of day, computed once (cheap per-direction lookups).
 struct SkyState {
