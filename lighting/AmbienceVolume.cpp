@@ -197,8 +197,17 @@ void AmbienceVolume::updateFallback(double timeOfDay_h) {
 
 void AmbienceVolume::update(const glm::dvec3& cameraPosition_m,
                             const glm::dvec3& cameraVelocity_mps, double timeOfDay_h, double dt_s) {
+    predictStage(cameraPosition_m, cameraVelocity_mps, timeOfDay_h, dt_s);
+    captureStage();
+    storeStage();
+}
+
+void AmbienceVolume::predictStage(const glm::dvec3& cameraPosition_m,
+                                  const glm::dvec3& cameraVelocity_mps, double timeOfDay_h,
+                                  double dt_s) {
     stats_.facesThisFrame = 0;
     stats_.predict_s = stats_.capture_s = stats_.project_s = stats_.store_s = 0.0;
+    completed_.clear();
     if (!std::isfinite(dt_s) || dt_s < 0.0) dt_s = 0.0;
     if (!std::isfinite(timeOfDay_h)) timeOfDay_h = haveTime_ ? lastTimeOfDay_h_ : 12.0;
     timeOfDay_h = std::fmod(timeOfDay_h, 24.0);
@@ -217,8 +226,7 @@ void AmbienceVolume::update(const glm::dvec3& cameraPosition_m,
     lastTimeOfDay_h_ = timeOfDay_h;
     if (dt_s > 0.0) frameTime_s_ = std::clamp(dt_s, 1.0 / 240.0, 0.25);
     time_s_ += dt_s;
-    const double probesPerSecond =
-        double(settings_.facesPerFrame) / double(kCubeFaces) / frameTime_s_;
+    probesPerSecond_ = double(settings_.facesPerFrame) / double(kCubeFaces) / frameTime_s_;
 
     // 2. Predict.
     Clock::time_point t0 = Clock::now();
@@ -229,15 +237,14 @@ void AmbienceVolume::update(const glm::dvec3& cameraPosition_m,
             job_.reset();
         }
     }
-    stats_.finestLevel = scheduler_.finestLevel(store_, probesPerSecond);
+    stats_.finestLevel = scheduler_.finestLevel(store_, probesPerSecond_);
     stats_.predict_s += secondsSince(t0);
+}
 
+void AmbienceVolume::captureStage() {
     // 3. Capture this frame's faces, projecting each as it arrives.
-    struct Completed {
-        Job job;
-        ShRgbD sh;
-    };
-    std::vector<Completed> completed;
+    const double timeOfDay_h = lastTimeOfDay_h_;
+    Clock::time_point t0;
     const int n = capture_.faceSize();
     const std::size_t faceFloats = std::size_t(n) * n * 3;
     int budget = settings_.facesPerFrame;
@@ -245,8 +252,8 @@ void AmbienceVolume::update(const glm::dvec3& cameraPosition_m,
         if (!job_) {
             t0 = Clock::now();
             std::vector<LatticeKey> busy;
-            for (const Completed& c : completed) busy.push_back(c.job.key);
-            const auto choice = scheduler_.choose(store_, probesPerSecond, busy);
+            for (const Completed& c : completed_) busy.push_back(c.job.key);
+            const auto choice = scheduler_.choose(store_, probesPerSecond_, busy);
             if (choice) {
                 const double aside =
                     std::min(settings_.asideFraction * store_.spacing_m(choice->key.level),
@@ -287,16 +294,19 @@ void AmbienceVolume::update(const glm::dvec3& cameraPosition_m,
         stats_.facesThisFrame += count;
         stats_.facesCaptured += count;
         if (job_->facesDone == kCubeFaces) {
-            completed.push_back({*job_, projector_->coefficients()});
+            completed_.push_back({*job_, projector_->coefficients()});
             job_.reset();
         }
     }
+}
 
+void AmbienceVolume::storeStage() {
     // 4. Store: advance the clock (blend, fade, expire, prune), then insert completed probes.
-    t0 = Clock::now();
+    const double timeOfDay_h = lastTimeOfDay_h_;
+    const Clock::time_point t0 = Clock::now();
     store_.advance(time_s_);
     const double lifetime = currentLifetime_s();
-    for (const Completed& c : completed) {
+    for (const Completed& c : completed_) {
         ++stats_.probesCompleted;
         if (c.job.bad) {
             ++stats_.rejectedProbes;
@@ -306,6 +316,7 @@ void AmbienceVolume::update(const glm::dvec3& cameraPosition_m,
             store_.insert(c.job.key, toFloat(c.sh), c.job.position_m, lifetime, timeOfDay_h);
         if (result == AnchorStore::InsertResult::Rejected) ++stats_.rejectedProbes;
     }
+    completed_.clear();
     updateFallback(timeOfDay_h);
     stats_.store_s += secondsSince(t0);
     stats_.store = store_.statistics();

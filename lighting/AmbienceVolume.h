@@ -94,6 +94,13 @@ class AmbienceVolume {
     // ages or blends, the budget is still spent. timeOfDay_h in hours, any value (wrapped).
     void update(const glm::dvec3& cameraPosition_m, const glm::dvec3& cameraVelocity_mps,
                 double timeOfDay_h, double dt_s);
+    // The same in the frame's three stages (DESIGN.md "The frame", 2-4), for a frame loop that
+    // times them separately: predict (time, motion model), capture (this frame's faces, each
+    // projected as it arrives), store (advance the clock, insert completed probes).
+    void predictStage(const glm::dvec3& cameraPosition_m, const glm::dvec3& cameraVelocity_mps,
+                      double timeOfDay_h, double dt_s);
+    void captureStage();
+    void storeStage();
 
     // Interpolated SH at ground point (x, z); finite everywhere.
     ShRgb shAt(double x_m, double z_m) const { return store_.interpolate(x_m, z_m); }
@@ -134,6 +141,12 @@ class AmbienceVolume {
         bool bad = false;
     };
     std::optional<Job> job_;
+    struct Completed {
+        Job job;
+        ShRgbD sh;
+    };
+    std::vector<Completed> completed_;  // probes finished this frame, stored by storeStage()
+    double probesPerSecond_ = 0.0;
 
     double time_s_ = 0.0;
     bool haveTime_ = false;
