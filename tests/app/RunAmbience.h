@@ -3,6 +3,7 @@
 #pragma once
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <fstream>
@@ -33,7 +34,9 @@ inline std::string slurp(const std::string& path) {
 // `args` is appended to the command line as is (shell syntax; quote what needs quoting).
 inline CommandResult runAmbience(const std::string& args) {
     static int counter = 0;
-    const std::string base = testing::TempDir() + "ambience_cli_" + std::to_string(++counter);
+    // ctest runs tests as parallel processes: the pid keeps their files apart.
+    const std::string base = testing::TempDir() + "ambience_cli_" + std::to_string(getpid()) +
+                             "_" + std::to_string(++counter);
     const std::string cmd = std::string(AMBIENCE_BINARY_DIR) + "/bin/ambience " + args + " >" +
                             base + ".out 2>" + base + ".err </dev/null";
     const int status = std::system(cmd.c_str());
