@@ -1,0 +1,96 @@
+// FrameLoop.h — the frame, its stages listed once, in order (DESIGN.md, "The frame"):
+//   1. advance      the replay camera (fixed dt) and the time of day
+//   2. predict      the scheduler's motion model picks the next probe position(s)
+//   3. capture      this frame's share of cube faces of the static coarse scene
+//   4. store        insert / refresh anchors; expire, prune; advance blending
+//   5. interpolate  ambient at every terrain-patch corner and every object
+//   6. draw         terrain, vegetation, road, sky; HDR -> tone map
+//   7. measure      stage timings
+// Stages 2-5 belong to an AmbienceStages implementation; FixedAmbienceStages (constant or
+// hemisphere ambient, no probes) fills them until the ambience volume does.
+#pragma once
+
+#include <array>
+#include <memory>
+
+#include "app/Renderer.h"
+#include "world/Replay.h"
+
+namespace amb {
+
+enum class FrameStage : int {
+    Advance = 0,
+    Predict,
+    Capture,
+    Store,
+    Interpolate,
+    Draw,
+    Measure,
+};
+inline constexpr int kFrameStages = 7;
+const char* toString(FrameStage stage);
+
+// What every stage may read about the current frame.
+struct FrameState {
+    int index = 0;        // frame number from 0
+    double time_s = 0.0;  // replay time
+    double timeOfDay_h = 12.0;
+    CameraSample camera;
+    const SkyLighting* sky = nullptr;
+};
+
+// Stages 2-5.
+class AmbienceStages {
+  public:
+    virtual ~AmbienceStages() = default;
+    virtual void predict(const FrameState& frame) = 0;
+    virtual void capture(const FrameState& frame) = 0;
+    virtual void store(const FrameState& frame) = 0;
+    // The ambient the draw stage uses this frame.
+    virtual const AmbientSource& interpolate(const FrameState& frame) = 0;
+};
+
+class FixedAmbienceStages final : public AmbienceStages {
+  public:
+    explicit FixedAmbienceStages(AmbientMode mode) : mode_(mode) {}
+    void predict(const FrameState&) override {}
+    void capture(const FrameState&) override {}
+    void store(const FrameState&) override {}
+    const AmbientSource& interpolate(const FrameState& frame) override;
+
+  private:
+    AmbientMode mode_;
+    std::unique_ptr<FixedAmbient> ambient_;
+    double timeOfDay_h_ = -1.0;
+};
+
+struct FrameRecord {
+    int index = 0;
+    double time_s = 0.0, timeOfDay_h = 0.0;
+    std::array<double, kFrameStages> stageMs{};  // CPU wall time per stage
+    double frameMs = 0.0;                        // all stages
+    RenderStats render;
+};
+
+class FrameLoop {
+  public:
+    // Frames are `stride` replay steps apart (fixed dt = stride * replay.step_s).
+    FrameLoop(const Replay& replay, Renderer& renderer, AmbienceStages& ambience, int stride = 1);
+
+    int frameCount() const { return frameCount_; }
+    double frameStep_s() const { return step_s_; }
+    bool done() const { return next_ >= frameCount_; }
+    // Runs every stage of the next frame, in order. The draw stage waits for the GPU (glFinish),
+    // so its time includes rasterisation.
+    FrameRecord step();
+
+  private:
+    const Replay& replay_;
+    Renderer& renderer_;
+    AmbienceStages& ambience_;
+    double step_s_;
+    int frameCount_;
+    int next_ = 0;
+};
+
+}  // namespace amb

@@ -1,0 +1,92 @@
+// Gl.h — small RAII owners for GL objects, shader programs loaded from shaders/, and read-back.
+// Include this (it includes glad) before any other GL header.
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <glad/gl.h>
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+namespace amb {
+
+// One GL object name with its delete function; movable, not copyable.
+template <void (*Delete)(GLuint)>
+class GlName {
+  public:
+    GlName() = default;
+    explicit GlName(GLuint id) : id_(id) {}
+    GlName(GlName&& o) noexcept : id_(std::exchange(o.id_, 0)) {}
+    GlName& operator=(GlName&& o) noexcept {
+        if (this != &o) {
+            reset();
+            id_ = std::exchange(o.id_, 0);
+        }
+        return *this;
+    }
+    GlName(const GlName&) = delete;
+    GlName& operator=(const GlName&) = delete;
+    ~GlName() { reset(); }
+    void reset() {
+        if (id_) Delete(id_);
+        id_ = 0;
+    }
+    GLuint id() const { return id_; }
+    explicit operator bool() const { return id_ != 0; }
+
+  private:
+    GLuint id_ = 0;
+};
+
+void glDeleteBufferName(GLuint id);
+void glDeleteVertexArrayName(GLuint id);
+void glDeleteTextureName(GLuint id);
+void glDeleteFramebufferName(GLuint id);
+void glDeleteProgramName(GLuint id);
+
+using GlBuffer = GlName<glDeleteBufferName>;
+using GlVertexArray = GlName<glDeleteVertexArrayName>;
+using GlTexture = GlName<glDeleteTextureName>;
+using GlFramebuffer = GlName<glDeleteFramebufferName>;
+
+GlBuffer makeBuffer(const void* data, size_t bytes, GLbitfield flags = 0);
+GlVertexArray makeVertexArray();
+GlTexture makeTexture2D(GLenum internalFormat, int width, int height, int levels = 1);
+
+// The folder the renderer loads GLSL from: $AMBIENCE_SHADER_DIR if set, else
+// <executable dir>/../shaders (the build tree and an install both put them there).
+std::string shaderDirectory();
+void setShaderDirectory(const std::string& dir);  // overrides both (the --shaders option)
+
+// Reads a shader file and resolves `#include "name"` lines against the shader folder (the same
+// GL_GOOGLE_include_directive syntax glslangValidator checks at build time).
+std::string loadShaderSource(const std::string& file);
+
+// A linked program built from shader files in shaderDirectory(); throws std::runtime_error with
+// the GL info log on a compile or link error.
+class GlProgram {
+  public:
+    GlProgram() = default;
+    GlProgram(const std::string& vertexFile, const std::string& fragmentFile);
+    GLuint id() const { return program_.id(); }
+    GLint uniform(const char* name) const { return glGetUniformLocation(program_.id(), name); }
+    void use() const { glUseProgram(program_.id()); }
+    void set(const char* name, float v) const { glProgramUniform1f(id(), uniform(name), v); }
+    void set(const char* name, int v) const { glProgramUniform1i(id(), uniform(name), v); }
+    void set(const char* name, const glm::vec3& v) const;
+    void set(const char* name, const glm::vec4& v) const;
+    void set(const char* name, const glm::mat4& m) const;
+
+  private:
+    GlName<glDeleteProgramName> program_;
+};
+
+// Reads the RGBA8 colour attachment 0 of `framebuffer` (rows bottom-up in GL) into top-down RGB.
+std::vector<unsigned char> readPixelsRgb8(GLuint framebuffer, int width, int height);
+// Reads an RGBA32F attachment into float RGB, rows in GL order (row 0 = first row, bottom).
+std::vector<float> readPixelsRgb32f(GLuint framebuffer, int x, int y, int width, int height);
+
+}  // namespace amb

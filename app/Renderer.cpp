@@ -1,0 +1,160 @@
+// Renderer.cpp — ambient sources and one frame of the main view.
+#include "app/Renderer.h"
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/matrix.hpp>
+
+#include "app/RendererLighting.h"
+#include "world/Error.h"
+#include "world/World.h"
+
+namespace amb {
+
+// ---- Ambient ---------------------------------------------------------------------------------
+
+AmbientMode parseAmbientMode(const std::string& text, const std::string& where) {
+    if (text == "constant") return AmbientMode::Constant;
+    if (text == "hemisphere") return AmbientMode::Hemisphere;
+    throw InputError(where, "unknown ambient '" + text + "' (expected constant or hemisphere)");
+}
+
+const char* toString(AmbientMode mode) {
+    return mode == AmbientMode::Constant ? "constant" : "hemisphere";
+}
+
+FixedAmbient::FixedAmbient(AmbientMode mode, const SkyLighting& sky) {
+    if (mode == AmbientMode::Constant) {
+        sky_ = ground_ = 0.5f * (sky.skyMean + sky.groundMean);
+    } else {
+        sky_ = sky.skyMean;
+        ground_ = sky.groundMean;
+    }
+    const auto m = hemisphereIrradianceMatrices(sky_, ground_);
+    set_ = {m[0], m[1], m[2]};
+}
+
+glm::vec3 FixedAmbient::cornerIrradiance(const glm::dvec3&, const glm::dvec3& normal) const {
+    return hemisphereIrradiance(sky_, ground_, glm::vec3(normal));
+}
+
+std::uint32_t FixedAmbient::objectSet(const glm::dvec3&, std::vector<AmbientSet>& sets) const {
+    if (sets.empty()) sets.push_back(set_);
+    return 0;
+}
+
+// ---- Renderer --------------------------------------------------------------------------------
+
+static GlFramebuffer makeFramebuffer(GLuint colour, GLuint depth) {
+    GLuint fbo = 0;
+    glCreateFramebuffers(1, &fbo);
+    glNamedFramebufferTexture(fbo, GL_COLOR_ATTACHMENT0, colour, 0);
+    if (depth) glNamedFramebufferTexture(fbo, GL_DEPTH_ATTACHMENT, depth, 0);
+    if (glCheckNamedFramebufferStatus(fbo, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
+        glDeleteFramebuffers(1, &fbo);
+        throw std::runtime_error("renderer: incomplete framebuffer");
+    }
+    return GlFramebuffer(fbo);
+}
+
+Renderer::Renderer(const World& world, const RenderSettings& settings)
+    : world_(world), settings_(settings) {
+    if (settings.width <= 0 || settings.height <= 0 || settings.width > 16384 ||
+        settings.height > 16384) {
+        throw InputError("--size", "image size must be between 1x1 and 16384x16384");
+    }
+    GLint maxSize = 0;
+    glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &maxSize);
+    if (settings.width > maxSize || settings.height > maxSize) {
+        throw InputError(
+            "--size", "image size exceeds the GL limit of " + std::to_string(maxSize) + " pixels");
+    }
+    drawer_ = std::make_unique<SceneDrawer>();
+    RendererSceneSettings scene = settings.scene;
+    scene.pixelsPerRadian = settings.height / settings.fovY_rad;
+    scene_ = std::make_unique<RendererScene>(world, scene);
+    hdr_ = makeTexture2D(GL_RGBA16F, settings.width, settings.height);
+    depth_ = makeTexture2D(GL_DEPTH_COMPONENT32F, settings.width, settings.height);
+    ldr_ = makeTexture2D(GL_RGBA8, settings.width, settings.height);
+    hdrFbo_ = makeFramebuffer(hdr_.id(), depth_.id());
+    ldrFbo_ = makeFramebuffer(ldr_.id(), 0);
+    glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+    noon_ = evaluateSky(world.sky(), 12.0);
+}
+
+Renderer::~Renderer() = default;
+
+const SkyLighting& Renderer::setTimeOfDay(double timeOfDay_h) {
+    if (timeOfDay_h != sky_.timeOfDay_h) {
+        sky_ = evaluateSky(world_.sky(), timeOfDay_h);
+        drawer_->setSky(sky_);
+    }
+    return sky_;
+}
+
+RenderStats Renderer::render(const CameraSample& camera, const AmbientSource& ambient) {
+    using Clock = std::chrono::steady_clock;
+    RenderStats stats;
+    const auto t0 = Clock::now();
+    // Camera-relative view: the eye at the origin, so only rotation in the view matrix.
+    const glm::vec3 f = glm::normalize(glm::vec3(camera.forward));
+    const glm::vec3 up = glm::normalize(glm::vec3(camera.up));
+    const glm::mat4 view = glm::lookAt(glm::vec3(0.0f), f, up);
+    const float aspect = float(settings_.width) / float(settings_.height);
+    const glm::mat4 proj =
+        reversedInfinitePerspective(settings_.fovY_rad, aspect, settings_.near_m);
+    FrameConstants fc;
+    fc.viewProj = proj * view;
+    fc.invViewProj = glm::inverse(fc.viewProj);
+    sky_.fill(fc);
+    fc.fog = glm::vec4(settings_.fogExtinction_perM, 0.0f, 0.0f, 0.0f);
+
+    SceneStats ss;
+    scene_->buildView(camera.position_m, fc.viewProj, ambient, list_, &ss);
+    const auto t1 = Clock::now();
+
+    glBindFramebuffer(GL_FRAMEBUFFER, hdrFbo_.id());
+    glViewport(0, 0, settings_.width, settings_.height);
+    const float black[4] = {0, 0, 0, 0};
+    const float far = 0.0f;
+    glClearNamedFramebufferfv(hdrFbo_.id(), GL_COLOR, 0, black);
+    glClearNamedFramebufferfv(hdrFbo_.id(), GL_DEPTH, 0, &far);
+    stats.triangles = drawer_->draw(list_, fc, true, false);
+
+    glBindFramebuffer(GL_FRAMEBUFFER, ldrFbo_.id());
+    drawer_->drawTonemap(hdr_.id(), exposureFor(sky_, noon_));
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    const auto t2 = Clock::now();
+
+    stats.terrainPatches = ss.terrainPatches;
+    stats.terrainPatchesDrawn = ss.terrainPatchesDrawn;
+    stats.objectsDrawn = ss.objectsDrawn;
+    stats.terrainRebuilt = ss.terrainRebuilt;
+    stats.sceneMs = std::chrono::duration<double, std::milli>(t1 - t0).count();
+    stats.drawMs = std::chrono::duration<double, std::milli>(t2 - t1).count();
+    return stats;
+}
+
+std::vector<unsigned char> Renderer::readRgb8() {
+    return readPixelsRgb8(ldrFbo_.id(), settings_.width, settings_.height);
+}
+
+std::vector<float> Renderer::readHdr() {
+    const int w = settings_.width, h = settings_.height;
+    std::vector<float> gl = readPixelsRgb32f(hdrFbo_.id(), 0, 0, w, h);
+    std::vector<float> out(gl.size());
+    for (int y = 0; y < h; ++y) {
+        std::copy_n(&gl[size_t(h - 1 - y) * w * 3], size_t(w) * 3, &out[size_t(y) * w * 3]);
+    }
+    return out;
+}
+
+void Renderer::blitToWindow(int windowWidth, int windowHeight) {
+    glBlitNamedFramebuffer(ldrFbo_.id(), 0, 0, 0, settings_.width, settings_.height, 0, 0,
+                           windowWidth, windowHeight, GL_COLOR_BUFFER_BIT, GL_LINEAR);
+}
+
+}  // namespace amb

@@ -1,0 +1,98 @@
+// Renderer.h — the main view: linear HDR into a float target, then exposure and tone mapping
+// (shaders/tonemap.frag: ACES filmic fit, sRGB) into an 8-bit target that is read back (offscreen)
+// or blitted to the window. Shadows: none (the direct light is unshadowed; DESIGN.md leaves them
+// optional).
+//
+// [SECTION] Ambient    FixedAmbient: constant or sky/ground hemisphere ambient (--ambient)
+// [SECTION] Renderer   one frame of the main view
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "app/RendererCore.h"
+#include "app/RendererScene.h"
+#include "world/Replay.h"
+
+namespace amb {
+
+class World;
+
+// ---- Ambient ---------------------------------------------------------------------------------
+enum class AmbientMode { Constant, Hemisphere };
+AmbientMode parseAmbientMode(const std::string& text, const std::string& where);
+const char* toString(AmbientMode mode);
+
+// The ambient before the ambience volume: the same everywhere.
+//   constant:   the mean radiance of the whole sphere (sky above, distant ground below) from
+//               every direction: E(n) = pi * mean.
+//   hemisphere: the sky mean over the upper hemisphere, the ground mean over the lower one:
+//               E(n) = pi/2 ((s + g) + (s - g) n.y) (its exact SH has bands 0 and 1 only).
+class FixedAmbient final : public AmbientSource {
+  public:
+    FixedAmbient(AmbientMode mode, const SkyLighting& sky);
+    glm::vec3 cornerIrradiance(const glm::dvec3& position_m,
+                               const glm::dvec3& normal) const override;
+    std::uint32_t objectSet(const glm::dvec3& position_m,
+                            std::vector<AmbientSet>& sets) const override;
+
+  private:
+    glm::vec3 sky_, ground_;
+    AmbientSet set_;
+};
+
+// ---- Renderer --------------------------------------------------------------------------------
+struct RenderSettings {
+    int width = 640, height = 360;
+    float fovY_rad = 1.0471976f;  // 60 degrees
+    float near_m = 0.3f;
+    float fogExtinction_perM = 1.0f / 4000.0f;
+    RendererSceneSettings scene{};
+};
+
+struct RenderStats {
+    std::size_t triangles = 0;
+    std::size_t terrainPatches = 0, terrainPatchesDrawn = 0, objectsDrawn = 0;
+    bool terrainRebuilt = false;
+    double sceneMs = 0.0;  // building the draw list (CPU)
+    double drawMs = 0.0;   // submitting GL commands (CPU)
+};
+
+class Renderer {
+  public:
+    Renderer(const World& world, const RenderSettings& settings);
+    ~Renderer();
+
+    // The sky for a time of day (re-evaluated only when the time changes).
+    const SkyLighting& setTimeOfDay(double timeOfDay_h);
+    const SkyLighting& skyLighting() const { return sky_; }
+
+    // Renders the view from `camera` with `ambient` into the HDR target and tone maps it.
+    RenderStats render(const CameraSample& camera, const AmbientSource& ambient);
+    // The tone-mapped image, top row first, RGB 8-bit (waits for the GPU).
+    std::vector<unsigned char> readRgb8();
+    // The linear HDR image, top row first, RGB float.
+    std::vector<float> readHdr();
+    // Copies the tone-mapped image to the window's default framebuffer of the given size.
+    void blitToWindow(int windowWidth, int windowHeight);
+
+    int width() const { return settings_.width; }
+    int height() const { return settings_.height; }
+    SceneDrawer& drawer() { return *drawer_; }
+    RendererScene& scene() { return *scene_; }
+    const World& world() const { return world_; }
+
+  private:
+    const World& world_;
+    RenderSettings settings_;
+    std::unique_ptr<SceneDrawer> drawer_;
+    std::unique_ptr<RendererScene> scene_;
+    SkyLighting sky_, noon_;
+    GlTexture hdr_, depth_, ldr_;
+    GlFramebuffer hdrFbo_, ldrFbo_;
+    DrawList list_;
+};
+
+}  // namespace amb

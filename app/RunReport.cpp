@@ -1,0 +1,213 @@
+// RunReport.cpp — size parsing, ffmpeg pipe, progress bar, report.
+#include "app/RunReport.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <OpenImageIO/imageio.h>
+#include <nlohmann/json.hpp>
+
+#include "world/Error.h"
+
+namespace amb {
+
+Size parseSize(const std::string& text, const std::string& where) {
+    Size s;
+    char x = 0;
+    std::istringstream in(text);
+    if (!(in >> s.width >> x >> s.height) || (x != 'x' && x != 'X') || !(in >> std::ws).eof()) {
+        throw InputError(where, "expected WxH (e.g. 640x360), got '" + text + "'");
+    }
+    if (s.width < 1 || s.height < 1 || s.width > 16384 || s.height > 16384) {
+        throw InputError(where, "size " + text + " out of range (1x1 to 16384x16384)");
+    }
+    return s;
+}
+
+void writeImageRgb8(const std::string& path, int w, int h, const std::vector<unsigned char>& rgb) {
+    auto out = OIIO::ImageOutput::create(path);
+    if (!out || !out->open(path, OIIO::ImageSpec(w, h, 3, OIIO::TypeDesc::UINT8)) ||
+        !out->write_image(OIIO::TypeDesc::UINT8, rgb.data()) || !out->close()) {
+        throw InputError(path, "cannot write image");
+    }
+}
+
+// ---- VideoPipe -------------------------------------------------------------------------------
+
+static bool haveFfmpeg() {
+    return std::system("command -v ffmpeg >/dev/null 2>&1") == 0;
+}
+
+VideoPipe::VideoPipe(const std::string& path, int width, int height, double fps)
+    : path_(path), frameBytes_(size_t(width) * height * 3) {
+    if (!haveFfmpeg()) {
+        throw InputError("--video",
+                         "ffmpeg not found on PATH (install the 'ffmpeg' package, or "
+                         "pass --no-video)");
+    }
+    std::signal(SIGPIPE, SIG_IGN);
+    char cmd[1024];
+    // One encoder thread and a fast preset: the renderer shares the CPU with the encoder.
+    std::snprintf(cmd, sizeof(cmd),
+                  "ffmpeg -loglevel error -y -f rawvideo -pix_fmt rgb24 -s %dx%d -r %.6f -i - "
+                  "-c:v libx264 -preset ultrafast -crf 20 -threads 1 -pix_fmt yuv420p '%s'",
+                  width, height, fps, path.c_str());
+    pipe_ = popen(cmd, "w");
+    if (!pipe_) throw InputError(path, "cannot start ffmpeg");
+}
+
+VideoPipe::~VideoPipe() {
+    if (pipe_) pclose(pipe_);
+}
+
+void VideoPipe::write(const std::vector<unsigned char>& rgb) {
+    if (!pipe_ || rgb.size() != frameBytes_) return;
+    if (std::fwrite(rgb.data(), 1, rgb.size(), pipe_) != rgb.size()) {
+        pclose(pipe_);
+        pipe_ = nullptr;
+        throw InputError(path_, "ffmpeg stopped accepting frames (see its message above)");
+    }
+}
+
+void VideoPipe::close() {
+    if (!pipe_) return;
+    const int status = pclose(pipe_);
+    pipe_ = nullptr;
+    if (status != 0) throw InputError(path_, "ffmpeg failed to write the video");
+}
+
+// ---- ProgressBar -----------------------------------------------------------------------------
+
+static double nowSeconds() {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+}
+
+ProgressBar::ProgressBar(int total)
+    : total_(total), enabled_(isatty(STDERR_FILENO) != 0), started_s_(nowSeconds()) {}
+
+void ProgressBar::update(int done, double) {
+    if (!enabled_ || total_ <= 0) return;
+    const double elapsed = nowSeconds() - started_s_;
+    const double fps = done / std::max(elapsed, 1e-9);
+    const double eta = (total_ - done) / std::max(fps, 1e-9);
+    const int width = 30, filled = int(width * double(done) / total_);
+    std::fprintf(stderr, "\r[%s%s] %d/%d  %.1f fps  ETA %.0f s   ",
+                 std::string(size_t(filled), '#').c_str(),
+                 std::string(size_t(width - filled), '.').c_str(), done, total_, fps, eta);
+    std::fflush(stderr);
+}
+
+void ProgressBar::finish() {
+    if (enabled_) std::fprintf(stderr, "\n");
+}
+
+// ---- Report ----------------------------------------------------------------------------------
+
+TimingStats timingStats(std::vector<double> v) {
+    TimingStats s;
+    if (v.empty()) return s;
+    std::sort(v.begin(), v.end());
+    auto quantile = [&](double q) {
+        const double pos = q * double(v.size() - 1);
+        const size_t i = size_t(pos);
+        const double t = pos - double(i);
+        return i + 1 < v.size() ? v[i] * (1.0 - t) + v[i + 1] * t : v[i];
+    };
+    s.median = quantile(0.5);
+    s.p95 = quantile(0.95);
+    s.max = v.back();
+    double sum = 0.0;
+    for (double x : v) sum += x;
+    s.mean = sum / double(v.size());
+    return s;
+}
+
+RunReport::Summary RunReport::summary() const {
+    std::vector<double> ms, tris;
+    for (const FrameRecord& f : frames) {
+        ms.push_back(f.frameMs);
+        tris.push_back(double(f.render.triangles));
+    }
+    return {timingStats(ms).median, timingStats(ms).p95, timingStats(tris).median};
+}
+
+void RunReport::write(const std::string& path) const {
+    using nlohmann::json;
+    auto statsJson = [](const std::vector<double>& v) {
+        const TimingStats s = timingStats(v);
+        return json{{"median", s.median}, {"p95", s.p95}, {"max", s.max}, {"mean", s.mean}};
+    };
+    json j;
+    j["replay"] = replay;
+    j["backend"] = backend;
+    j["GL_VERSION"] = glVersion;
+    j["GL_RENDERER"] = glRenderer;
+    j["size"] = {{"width", width}, {"height", height}};
+    j["ambient"] = ambient;
+    j["frameStep_s"] = frameStep_s;
+    j["frameCount"] = frames.size();
+    j["wall_s"] = wall_s;
+    j["shadows"] = "none";
+    j["toneMapping"] = "exposure (white Lambertian at 0.6), ACES filmic fit (Narkowicz 2015), sRGB";
+    json stages = json::object();
+    for (int s = 0; s < kFrameStages; ++s) {
+        std::vector<double> v;
+        for (const FrameRecord& f : frames) v.push_back(f.stageMs[s]);
+        stages[toString(FrameStage(s))] = statsJson(v);
+    }
+    std::vector<double> frameMs, sceneMs, tris;
+    for (const FrameRecord& f : frames) {
+        frameMs.push_back(f.frameMs);
+        sceneMs.push_back(f.render.sceneMs);
+        tris.push_back(double(f.render.triangles));
+    }
+    j["stages_ms"] = stages;
+    j["frame_ms"] = statsJson(frameMs);
+    j["drawListBuild_ms"] = statsJson(sceneMs);
+    j["triangles"] = statsJson(tris);
+    const double median = timingStats(frameMs).median;
+    j["fps_median"] = median > 0 ? 1000.0 / median : 0.0;
+    json rows = json::array();
+    for (const FrameRecord& f : frames) {
+        json r{{"frame", f.index},
+               {"time_s", f.time_s},
+               {"timeOfDay_h", f.timeOfDay_h},
+               {"frame_ms", f.frameMs},
+               {"triangles", f.render.triangles},
+               {"terrainPatches", f.render.terrainPatches},
+               {"terrainPatchesDrawn", f.render.terrainPatchesDrawn},
+               {"objectsDrawn", f.render.objectsDrawn},
+               {"terrainRebuilt", f.render.terrainRebuilt}};
+        for (int s = 0; s < kFrameStages; ++s)
+            r[std::string(toString(FrameStage(s))) + "_ms"] = f.stageMs[s];
+        rows.push_back(r);
+    }
+    j["frames"] = rows;
+    std::ofstream out(path);
+    if (!out) throw InputError(path, "cannot write the report");
+    out << j.dump(1) << "\n";
+
+    const std::string csvPath = std::filesystem::path(path).replace_extension(".csv").string();
+    std::ofstream csv(csvPath);
+    if (!csv) throw InputError(csvPath, "cannot write the report CSV");
+    csv << "frame,time_s,timeOfDay_h,frame_ms";
+    for (int s = 0; s < kFrameStages; ++s) csv << "," << toString(FrameStage(s)) << "_ms";
+    csv << ",triangles,terrainPatches,terrainPatchesDrawn,objectsDrawn,terrainRebuilt\n";
+    for (const FrameRecord& f : frames) {
+        csv << f.index << "," << f.time_s << "," << f.timeOfDay_h << "," << f.frameMs;
+        for (int s = 0; s < kFrameStages; ++s) csv << "," << f.stageMs[s];
+        csv << "," << f.render.triangles << "," << f.render.terrainPatches << ","
+            << f.render.terrainPatchesDrawn << "," << f.render.objectsDrawn << ","
+            << (f.render.terrainRebuilt ? 1 : 0) << "\n";
+    }
+}
+
+}  // namespace amb

@@ -1,0 +1,71 @@
+// RunReport.h — what `ambience run` (and `view`) share: image size parsing, the ffmpeg video
+// pipe, the progress bar, and the report (JSON with timing statistics, per-frame rows, CSV).
+#pragma once
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "app/FrameLoop.h"
+
+namespace amb {
+
+struct Size {
+    int width = 0, height = 0;
+};
+// "WxH" with 1 <= W, H <= 16384; throws InputError naming `where`.
+Size parseSize(const std::string& text, const std::string& where);
+
+// Writes top-down 8-bit RGB as an image (format from the extension) with OpenImageIO.
+void writeImageRgb8(const std::string& path, int width, int height,
+                    const std::vector<unsigned char>& rgb);
+
+// Raw RGB frames piped to the ffmpeg command-line tool (H.264 in MP4). Throws InputError with a
+// clear message when ffmpeg is not installed.
+class VideoPipe {
+  public:
+    VideoPipe(const std::string& path, int width, int height, double fps);
+    ~VideoPipe();
+    void write(const std::vector<unsigned char>& rgb);
+    void close();
+
+  private:
+    std::string path_;
+    std::FILE* pipe_ = nullptr;
+    size_t frameBytes_;
+};
+
+// Frames, fps and ETA on stderr, only when stderr is a terminal.
+class ProgressBar {
+  public:
+    explicit ProgressBar(int total);
+    void update(int done, double frameMs);
+    void finish();
+
+  private:
+    int total_;
+    bool enabled_;
+    double started_s_;
+};
+
+struct TimingStats {
+    double median = 0.0, p95 = 0.0, max = 0.0, mean = 0.0;
+};
+TimingStats timingStats(std::vector<double> values);
+
+struct RunReport {
+    std::string replay, backend, glVersion, glRenderer, ambient;
+    int width = 0, height = 0;
+    double frameStep_s = 0.0;
+    double wall_s = 0.0;
+    std::vector<FrameRecord> frames;
+
+    struct Summary {
+        double frameMedianMs = 0.0, frameP95Ms = 0.0, trianglesMedian = 0.0;
+    };
+    Summary summary() const;
+    // Writes `path` (JSON) and the per-frame rows as CSV beside it (same name, .csv).
+    void write(const std::string& path) const;
+};
+
+}  // namespace amb

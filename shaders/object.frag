@@ -1,0 +1,19 @@
+#version 450 core
+#extension GL_GOOGLE_include_directive : require
+// object.frag — per-pixel SH ambient with the world normal (thesis 7.7, 9.4) plus the main light.
+#include "common.glsl"
+#include "ambient.glsl"
+
+in vec3 vNormal;
+in vec3 vAlbedo;
+in vec4 vFog;
+flat in uint vAmbientSet;
+
+layout(location = 0) out vec4 oColor;
+
+void main() {
+    vec3 n = normalize(vNormal);
+    if (!gl_FrontFacing) n = -n;  // thin crowns and leaves are seen from both sides
+    vec3 ambient = ambientIrradiance(vAmbientSet, n);
+    oColor = vec4(applyFog(shadeLambert(vAlbedo, n, ambient), vFog), 0.0);
+}

@@ -1,0 +1,25 @@
+#version 450 core
+#extension GL_GOOGLE_include_directive : require
+// terrain.vert — one terrain patch (or road piece): vertices relative to the patch origin.
+#include "common.glsl"
+
+layout(location = 0) in vec3 aPosition;  // metres, relative to the patch origin
+layout(location = 1) in vec3 aNormal;
+layout(location = 2) in vec3 aAlbedo;
+
+uniform vec3 uOrigin;     // patch origin, camera-relative [m]
+uniform vec4 uPatchRect;  // xy: corner (x0, z0) relative to the origin [m]; zw: 1 / size [1/m]
+
+out vec3 vNormal;
+out vec3 vAlbedo;
+out vec2 vPatchUv;  // bilinear weights of the four patch corners
+out vec4 vFog;
+
+void main() {
+    vec3 relPos = uOrigin + aPosition;
+    vNormal = aNormal;
+    vAlbedo = aAlbedo;
+    vPatchUv = clamp((aPosition.xz - uPatchRect.xy) * uPatchRect.zw, 0.0, 1.0);
+    vFog = fogAt(relPos);
+    gl_Position = uViewProj * vec4(relPos, 1.0);
+}
