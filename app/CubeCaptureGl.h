@@ -31,6 +31,9 @@ class CubeCaptureGl final : public CubeCapture {
     CubeCaptureStats capture(const glm::dvec3& position_m, double timeOfDay_h, CubeFaceMask faces,
                              std::vector<float>& cube) override;
 
+    // Statistics of the last capture() call that rendered faces (triangles per face, time).
+    const CubeCaptureStats& lastStats() const { return lastStats_; }
+
     // The camera-relative view-projection of face f (exposed for tests).
     static glm::mat4 faceViewProj(int face, float near_m);
 
@@ -46,6 +49,7 @@ class CubeCaptureGl final : public CubeCapture {
     GlFramebuffer fbo_;
     DrawList list_;
     std::vector<float> rgba_;
+    CubeCaptureStats lastStats_;
 };
 
 }  // namespace amb

@@ -70,6 +70,16 @@ struct FrameRecord {
     std::array<double, kFrameStages> stageMs{};  // CPU wall time per stage
     double frameMs = 0.0;                        // all stages
     RenderStats render;
+    // Ambience volume (only with --ambient volume): state after the frame.
+    struct Ambience {
+        bool active = false;
+        std::size_t anchors = 0, bytes = 0;
+        int faces = 0;            // cube faces captured this frame
+        int finestLevel = 0;      // the scheduler's finest lattice level this frame
+        std::size_t lookups = 0;  // ambient lookups answered for the draw
+        double lookupMs = 0.0;    // CPU time of those lookups (inside the draw stage)
+        double captureMs = 0.0;   // of which GL capture (inside the capture stage)
+    } ambience;
 };
 
 class FrameLoop {

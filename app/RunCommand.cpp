@@ -23,6 +23,8 @@
 #include "app/Gl.h"
 #include "app/Platform.h"
 #include "app/RunReport.h"
+#include "app/VolumeAmbience.h"
+#include "app/CubeCaptureGl.h"
 #include "world/Error.h"
 #include "world/World.h"
 
@@ -43,7 +45,10 @@ struct RunOptions {
     std::string report;
     int maxFrames = 0;
     int stride = 2;
-    std::string ambient = "hemisphere";
+    std::string ambient = "volume";
+    std::string ambienceConfig, saveAnchors, loadAnchors;
+    int facesPerFrame = 1;
+    int faceSize = 16;
     std::string out;
     bool noVideo = false;
 };
@@ -77,7 +82,24 @@ void runReplay(RunOptions o) {
     const Backend backend = parseBackend(o.backend, "--backend");
     if (backend == Backend::Glfw)
         throw InputError("--backend", "run is headless: auto, egl or osmesa");
-    const AmbientMode ambientMode = parseAmbientMode(o.ambient, "--ambient");
+    // "volume" is the dynamic ambience volume; the fixed modes are the baselines.
+    const bool useVolume = o.ambient == "volume";
+    const AmbientMode ambientMode =
+        useVolume ? AmbientMode::Hemisphere : parseAmbientMode(o.ambient, "--ambient");
+    AmbienceVolumeSettings volumeSettings;
+    if (!o.ambienceConfig.empty()) {
+        std::ifstream in(o.ambienceConfig);
+        if (!in) throw InputError(o.ambienceConfig, "cannot open the ambience settings file");
+        std::ostringstream text;
+        text << in.rdbuf();
+        volumeSettings = ambienceSettingsFromJson(text.str(), o.ambienceConfig);
+    }
+    if (o.facesPerFrame < 1 || o.facesPerFrame > 6)
+        throw InputError("--faces-per-frame", "expected 1 to 6");
+    volumeSettings.facesPerFrame = o.facesPerFrame;
+    if (o.faceSize < 1 || o.faceSize > 256) throw InputError("--face-size", "expected 1 to 256");
+    if (!useVolume && (!o.saveAnchors.empty() || !o.loadAnchors.empty()))
+        throw InputError("--save-anchors/--load-anchors", "need --ambient volume");
     const Size size = parseSize(o.size, "--size");
     if (o.every < 1) throw InputError("--every", "must be at least 1");
     if (o.stride < 1) throw InputError("--stride", "must be at least 1");
@@ -97,8 +119,17 @@ void runReplay(RunOptions o) {
     rs.width = size.width;
     rs.height = size.height;
     Renderer renderer(world, rs);
-    FixedAmbienceStages ambience(ambientMode);
-    FrameLoop loop(replay, renderer, ambience, o.stride);
+    std::unique_ptr<AmbienceStages> ambience;
+    VolumeAmbienceStages* volume = nullptr;
+    if (useVolume) {
+        auto v = std::make_unique<VolumeAmbienceStages>(renderer, volumeSettings, o.faceSize);
+        volume = v.get();
+        if (!o.loadAnchors.empty()) volume->volume().loadAnchors(o.loadAnchors);
+        ambience = std::move(v);
+    } else {
+        ambience = std::make_unique<FixedAmbienceStages>(ambientMode);
+    }
+    FrameLoop loop(replay, renderer, *ambience, o.stride);
     const int frames =
         o.maxFrames > 0 ? std::min(o.maxFrames, loop.frameCount()) : loop.frameCount();
 
@@ -109,7 +140,7 @@ void runReplay(RunOptions o) {
     report.glRenderer = platform->glRenderer();
     report.width = size.width;
     report.height = size.height;
-    report.ambient = toString(ambientMode);
+    report.ambient = useVolume ? "volume" : toString(ambientMode);
     report.frameStep_s = loop.frameStep_s();
 
     std::unique_ptr<VideoPipe> video;
@@ -125,6 +156,17 @@ void runReplay(RunOptions o) {
     const auto start = std::chrono::steady_clock::now();
     for (int i = 0; i < frames; ++i) {
         FrameRecord rec = loop.step();
+        if (volume) {
+            const AmbienceStatistics& st = volume->volume().statistics();
+            rec.ambience.active = true;
+            rec.ambience.anchors = st.store.anchors;
+            rec.ambience.bytes = st.store.bytes();
+            rec.ambience.faces = st.facesThisFrame;
+            rec.ambience.finestLevel = st.finestLevel;
+            rec.ambience.lookups = volume->ambient().lookups();
+            rec.ambience.lookupMs = volume->ambient().lookupMs();
+            rec.ambience.captureMs = st.capture_s * 1e3;
+        }
         const bool writeFrame = o.frames != "none" && rec.index % o.every == 0;
         if (writeFrame || video) {
             const auto pixels = renderer.readRgb8();
@@ -141,6 +183,19 @@ void runReplay(RunOptions o) {
     progress.finish();
     report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (video) video->close();
+    if (volume) {
+        const AmbienceStatistics& st = volume->volume().statistics();
+        auto& t = report.ambienceTotals;
+        t.facesCaptured = st.facesCaptured;
+        t.probesCompleted = st.probesCompleted;
+        t.rejectedProbes = st.rejectedProbes;
+        t.teleports = st.teleports;
+        t.inserted = st.store.inserted;
+        t.refreshed = st.store.refreshed;
+        t.expired = st.store.expired;
+        t.captureTriangles = volume->cubeCapture().lastStats().triangles;
+        if (!o.saveAnchors.empty()) volume->volume().saveAnchors(o.saveAnchors);
+    }
 
     // (4) report
     report.write(o.report);
@@ -150,6 +205,16 @@ void runReplay(RunOptions o) {
     std::printf("frame time median %.1f ms (%.1f fps), p95 %.1f ms; triangles median %.0f\n",
                 summary.frameMedianMs, 1000.0 / summary.frameMedianMs, summary.frameP95Ms,
                 summary.trianglesMedian);
+    if (volume) {
+        const AmbienceStatistics& st = volume->volume().statistics();
+        std::printf("ambience: %zu anchors, %.1f kB (%.0f B/anchor), %lld faces captured, "
+                    "%lld probes (%lld rejected)\n",
+                    st.store.anchors, st.store.bytes() / 1024.0,
+                    st.store.anchors ? double(st.store.bytes()) / double(st.store.anchors) : 0.0,
+                    (long long)st.facesCaptured, (long long)st.probesCompleted,
+                    (long long)st.rejectedProbes);
+        if (!o.saveAnchors.empty()) std::printf("  anchors saved: %s\n", o.saveAnchors.c_str());
+    }
     std::printf("output: %s\n", fs::weakly_canonical(o.out).string().c_str());
     if (o.frames != "none") std::printf("  frames: %s (every %d)\n", o.frames.c_str(), o.every);
     if (video) std::printf("  video:  %s\n", o.video.c_str());
@@ -176,7 +241,15 @@ void addRunCommand(CLI::App& app) {
     cmd->add_option("--max-frames", o->maxFrames, "stop after N frames (default: whole replay)");
     cmd->add_option("--stride", o->stride,
                     "replay steps per frame (default 2: 30 frames/s of a 60 Hz replay)");
-    cmd->add_option("--ambient", o->ambient, "constant or hemisphere (default hemisphere)");
+    cmd->add_option("--ambient", o->ambient,
+                    "volume (the dynamic ambience volume), constant or hemisphere (default volume)");
+    cmd->add_option("--ambience-config", o->ambienceConfig,
+                    "JSON file of ambience volume settings (AmbienceVolumeSettings fields)");
+    cmd->add_option("--faces-per-frame", o->facesPerFrame,
+                    "capture budget: cube faces per frame (default 1, as in the thesis)");
+    cmd->add_option("--face-size", o->faceSize, "capture face size N (default 16)");
+    cmd->add_option("--save-anchors", o->saveAnchors, "write the anchor store at the end (.vdb)");
+    cmd->add_option("--load-anchors", o->loadAnchors, "warm-start from an anchor store (.vdb)");
     cmd->add_option("--shaders", o->shaders,
                     "GLSL folder (default <exe>/../shaders or $AMBIENCE_SHADER_DIR)");
     cmd->callback([o] {

@@ -175,6 +175,48 @@ void RunReport::write(const std::string& path) const {
     j["triangles"] = statsJson(tris);
     const double median = timingStats(frameMs).median;
     j["fps_median"] = median > 0 ? 1000.0 / median : 0.0;
+    const bool volume = !frames.empty() && frames.front().ambience.active;
+    if (volume) {
+        // The ambience's share of frame time: stages 2-5 plus the lookups the draw makes
+        // (terrain corners and objects ask the volume while the draw list is built).
+        double ambienceMs = 0.0, captureMs = 0.0, totalMs = 0.0;
+        std::vector<double> anchors, bytes, lookupMs;
+        std::size_t maxAnchors = 0, maxBytes = 0;
+        for (const FrameRecord& f : frames) {
+            ambienceMs += f.stageMs[int(FrameStage::Predict)] + f.stageMs[int(FrameStage::Capture)] +
+                          f.stageMs[int(FrameStage::Store)] +
+                          f.stageMs[int(FrameStage::Interpolate)] + f.ambience.lookupMs;
+            captureMs += f.stageMs[int(FrameStage::Capture)];
+            totalMs += f.frameMs;
+            anchors.push_back(double(f.ambience.anchors));
+            bytes.push_back(double(f.ambience.bytes));
+            lookupMs.push_back(f.ambience.lookupMs);
+            maxAnchors = std::max(maxAnchors, f.ambience.anchors);
+            maxBytes = std::max(maxBytes, f.ambience.bytes);
+        }
+        const FrameRecord& last = frames.back();
+        const auto& t = ambienceTotals;
+        j["ambience"] = {
+            {"anchorsEnd", last.ambience.anchors},
+            {"anchorsMax", maxAnchors},
+            {"anchors", statsJson(anchors)},
+            {"bytesEnd", last.ambience.bytes},
+            {"bytesMax", maxBytes},
+            {"bytesPerAnchorEnd",
+             last.ambience.anchors ? double(last.ambience.bytes) / double(last.ambience.anchors) : 0.0},
+            {"facesCaptured", t.facesCaptured},
+            {"probesCompleted", t.probesCompleted},
+            {"rejectedProbes", t.rejectedProbes},
+            {"teleports", t.teleports},
+            {"anchorsInserted", t.inserted},
+            {"anchorsRefreshed", t.refreshed},
+            {"anchorsExpired", t.expired},
+            {"captureTrianglesPerFace", t.captureTriangles},
+            {"lookup_ms", statsJson(lookupMs)},
+            {"shareOfFrameTime", totalMs > 0 ? ambienceMs / totalMs : 0.0},
+            {"captureShareOfFrameTime", totalMs > 0 ? captureMs / totalMs : 0.0},
+        };
+    }
     json rows = json::array();
     for (const FrameRecord& f : frames) {
         json r{{"frame", f.index},
@@ -188,6 +230,14 @@ void RunReport::write(const std::string& path) const {
                {"terrainRebuilt", f.render.terrainRebuilt}};
         for (int s = 0; s < kFrameStages; ++s)
             r[std::string(toString(FrameStage(s))) + "_ms"] = f.stageMs[s];
+        if (volume) {
+            r["anchors"] = f.ambience.anchors;
+            r["anchorBytes"] = f.ambience.bytes;
+            r["facesCaptured"] = f.ambience.faces;
+            r["finestLevel"] = f.ambience.finestLevel;
+            r["ambientLookups"] = f.ambience.lookups;
+            r["ambientLookup_ms"] = f.ambience.lookupMs;
+        }
         rows.push_back(r);
     }
     j["frames"] = rows;
@@ -200,13 +250,21 @@ void RunReport::write(const std::string& path) const {
     if (!csv) throw InputError(csvPath, "cannot write the report CSV");
     csv << "frame,time_s,timeOfDay_h,frame_ms";
     for (int s = 0; s < kFrameStages; ++s) csv << "," << toString(FrameStage(s)) << "_ms";
-    csv << ",triangles,terrainPatches,terrainPatchesDrawn,objectsDrawn,terrainRebuilt\n";
+    csv << ",triangles,terrainPatches,terrainPatchesDrawn,objectsDrawn,terrainRebuilt";
+    if (volume) csv << ",anchors,anchorBytes,facesCaptured,finestLevel,ambientLookups,ambientLookup_ms";
+    csv << "\n";
     for (const FrameRecord& f : frames) {
         csv << f.index << "," << f.time_s << "," << f.timeOfDay_h << "," << f.frameMs;
         for (int s = 0; s < kFrameStages; ++s) csv << "," << f.stageMs[s];
         csv << "," << f.render.triangles << "," << f.render.terrainPatches << ","
             << f.render.terrainPatchesDrawn << "," << f.render.objectsDrawn << ","
-            << (f.render.terrainRebuilt ? 1 : 0) << "\n";
+            << (f.render.terrainRebuilt ? 1 : 0);
+        if (volume) {
+            csv << "," << f.ambience.anchors << "," << f.ambience.bytes << "," << f.ambience.faces
+                << "," << f.ambience.finestLevel << "," << f.ambience.lookups << ","
+                << f.ambience.lookupMs;
+        }
+        csv << "\n";
     }
 }
 

@@ -2,6 +2,7 @@
 // pipe, the progress bar, and the report (JSON with timing statistics, per-frame rows, CSV).
 #pragma once
 
+#include <cstdint>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -59,6 +60,12 @@ struct RunReport {
     double frameStep_s = 0.0;
     double wall_s = 0.0;
     std::vector<FrameRecord> frames;
+    // Ambience volume totals (--ambient volume).
+    struct AmbienceTotals {
+        std::int64_t facesCaptured = 0, probesCompleted = 0, rejectedProbes = 0, teleports = 0;
+        std::size_t captureTriangles = 0;  // triangles per capture face
+        std::int64_t inserted = 0, refreshed = 0, expired = 0;
+    } ambienceTotals;
 
     struct Summary {
         double frameMedianMs = 0.0, frameP95Ms = 0.0, trianglesMedian = 0.0;

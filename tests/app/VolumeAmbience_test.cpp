@@ -1,0 +1,91 @@
+// VolumeAmbience_test.cpp — `ambience run` with the dynamic ambience volume: probes are
+// captured at the budget, anchors enter the store, the report accounts for them, the store
+// saves to .vdb and warm-starts a later run, and bad volume options are input errors.
+#include <cmath>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "RunAmbience.h"
+
+namespace amb {
+namespace {
+
+using test::runAmbience;
+using test::sourcePath;
+
+nlohmann::json readJson(const std::string& path) {
+    std::ifstream in(path);
+    return nlohmann::json::parse(in);
+}
+
+const std::string kReplay = sourcePath("replays/highway-drive.json");
+
+TEST(VolumeRun, CapturesStoresAndReports) {
+    const std::string dir = testing::TempDir() + "volume_run";
+    const std::string vdb = dir + "/anchors.vdb";
+    // 60 frames at one face per frame: 10 complete probes.
+    const test::CommandResult r =
+        runAmbience("run --replay " + kReplay + " --ambient volume --max-frames 60 --size 160x90"
+                    " --frames none --no-video --out " + dir + " --save-anchors " + vdb);
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const auto report = readJson(dir + "/report.json");
+    EXPECT_EQ(report["ambient"], "volume");
+    const auto& a = report["ambience"];
+    EXPECT_EQ(a["facesCaptured"].get<int>(), 60);
+    EXPECT_EQ(a["probesCompleted"].get<int>(), 10);
+    EXPECT_EQ(a["rejectedProbes"].get<int>(), 0);
+    EXPECT_EQ(a["anchorsEnd"].get<int>(), 10);  // nothing expires within 2 s at time rate 1
+    EXPECT_GT(a["bytesEnd"].get<double>(), 0.0);
+    EXPECT_GT(a["captureTrianglesPerFace"].get<int>(), 0);
+    const double share = a["shareOfFrameTime"].get<double>();
+    EXPECT_GT(share, 0.0);
+    EXPECT_LT(share, 1.0);
+    // Per frame: one face each, anchors never decrease on this short drive, all finite.
+    std::size_t previous = 0;
+    for (const auto& row : report["frames"]) {
+        EXPECT_EQ(row["facesCaptured"].get<int>(), 1);
+        const std::size_t anchors = row["anchors"].get<std::size_t>();
+        EXPECT_GE(anchors, previous);
+        previous = anchors;
+        EXPECT_TRUE(std::isfinite(row["frame_ms"].get<double>()));
+    }
+    std::ifstream file(vdb, std::ios::binary);
+    ASSERT_TRUE(file.good()) << "no anchor file " << vdb;
+    char magic[4] = {};
+    file.read(magic, 4);
+    EXPECT_EQ(static_cast<unsigned char>(magic[0]), 0x20);  // OpenVDB's magic number 0x56444220
+    EXPECT_EQ(std::string(magic + 1, 3), "BDV");
+
+    // Warm start: the loaded anchors are there from the first frame.
+    const std::string dir2 = testing::TempDir() + "volume_run_warm";
+    const test::CommandResult w =
+        runAmbience("run --replay " + kReplay + " --max-frames 2 --size 160x90 --frames none"
+                    " --no-video --out " + dir2 + " --load-anchors " + vdb);
+    ASSERT_EQ(w.exitCode, 0) << w.err;
+    const auto warm = readJson(dir2 + "/report.json");
+    EXPECT_GE(warm["frames"][0]["anchors"].get<int>(), 10);
+}
+
+TEST(VolumeRun, BadVolumeOptionsAreInputErrors) {
+    const std::string dir = testing::TempDir() + "volume_bad";
+    auto expect2 = [&](const std::string& args, const char* fragment) {
+        const test::CommandResult r = runAmbience("run --replay " + kReplay +
+                                                  " --max-frames 1 --frames none --no-video --out " +
+                                                  dir + " " + args);
+        EXPECT_EQ(r.exitCode, 2) << args << "\n" << r.err;
+        EXPECT_EQ(r.errLines(), 1) << r.err;
+        EXPECT_NE(r.err.find(fragment), std::string::npos) << r.err;
+    };
+    expect2("--load-anchors /nonexistent/a.vdb", "/nonexistent/a.vdb");
+    expect2("--faces-per-frame 9", "--faces-per-frame");
+    const std::string config = testing::TempDir() + "volume_bad_config.json";
+    std::ofstream(config) << "{\"facesPerFrame\": 1, \"noSuchSetting\": 3}";
+    expect2("--ambience-config " + config, "noSuchSetting");
+    expect2("--ambient hemisphere --save-anchors x.vdb", "--ambient volume");
+}
+
+}  // namespace
+}  // namespace amb
