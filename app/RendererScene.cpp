@@ -299,6 +299,9 @@ void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewP
                                    float(z0 + Vegetation::kTile_m + 4 - centre_m.z));
                 if (!boxVisible(frustum, lo, hi)) continue;
             }
+            // Far plants (a few pixels tall) share one ambient set per tile, asked for at the
+            // tile's centre: ambience LOD, so distant forests cost one lookup per tile.
+            std::int64_t tileSet = -1;
             for (const Plant& p : *plants) {
                 const int kind = int(p.kind);
                 const bool small = p.kind == PlantKind::Bush || p.kind == PlantKind::Rock;
@@ -318,8 +321,17 @@ void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewP
                 ObjectInstance inst;
                 const glm::dvec3 rel = p.position_m - centre_m;
                 inst.positionScale = glm::vec4(float(rel.x), float(rel.y), float(rel.z), p.scale);
-                inst.rotationSet = glm::vec2(
-                    p.rotation_rad, float(ambient.objectSet(p.position_m, out.ambientSets)));
+                std::uint32_t set;
+                if (lod == 2) {
+                    if (tileSet < 0) {
+                        const double h = 0.5 * Vegetation::kTile_m;
+                        tileSet = ambient.objectSet({x0 + h, p.position_m.y, z0 + h}, out.ambientSets);
+                    }
+                    set = std::uint32_t(tileSet);
+                } else {
+                    set = ambient.objectSet(p.position_m, out.ambientSets);
+                }
+                inst.rotationSet = glm::vec2(p.rotation_rad, float(set));
                 out.objects[base + lod * kPlantKinds + kind].instances.push_back(inst);
                 ++count;
             }
