@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -17,11 +18,7 @@ namespace amb::test {
 struct CommandResult {
     int exitCode = -1;
     std::string out, err;
-    int errLines() const {
-        int n = 0;
-        for (char c : err) n += c == '\n';
-        return n;
-    }
+    int errLines() const;
 };
 
 inline std::string slurp(const std::string& path) {
@@ -31,13 +28,31 @@ inline std::string slurp(const std::string& path) {
     return s.str();
 }
 
-// `args` is appended to the command line as is (shell syntax; quote what needs quoting).
-inline CommandResult runAmbience(const std::string& args) {
+inline int lineCount(const std::string& s) {
+    int n = 0;
+    for (char c : s) n += c == '\n';
+    return n;
+}
+
+inline int CommandResult::errLines() const { return lineCount(err); }
+
+// A fresh, empty scratch folder for one test.
+inline std::filesystem::path scratchDir(const std::string& name) {
+    const auto dir = std::filesystem::temp_directory_path() / ("ambience-test-" + name);
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    return dir;
+}
+
+// Runs `prefix ambience args`: `args` is appended to the command line as is (shell syntax;
+// quote what needs quoting); `prefix` is a wrapper such as xvfb-run.
+inline CommandResult runAmbience(const std::string& args, const std::string& prefix = "") {
     static int counter = 0;
     // ctest runs tests as parallel processes: the pid keeps their files apart.
     const std::string base = testing::TempDir() + "ambience_cli_" + std::to_string(getpid()) +
                              "_" + std::to_string(++counter);
-    const std::string cmd = std::string(AMBIENCE_BINARY_DIR) + "/bin/ambience " + args + " >" +
+    const std::string cmd = prefix + " " + std::string(AMBIENCE_BINARY_DIR) + "/bin/ambience " +
+                            args + " >" +
                             base + ".out 2>" + base + ".err </dev/null";
     const int status = std::system(cmd.c_str());
     CommandResult r;

@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "CliTestUtil.h"
+#include "RunAmbience.h"
 #include "GlTestContext.h"
 #include "lighting/CubeMapFile.h"
 

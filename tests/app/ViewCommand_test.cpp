@@ -6,7 +6,7 @@
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
-#include "CliTestUtil.h"
+#include "RunAmbience.h"
 
 namespace amb {
 namespace {

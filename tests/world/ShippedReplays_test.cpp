@@ -2,6 +2,7 @@
 // they were recorded in (a change to the terrain or road code that moves the ground under a
 // shipped replay fails here; regenerate with replays/make-replays.sh).
 #include <cmath>
+#include <ostream>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -24,6 +25,9 @@ struct Expect {
     double minDuration_s;
     int cuts;
 };
+
+// Names the case in test listings (instead of a byte dump).
+void PrintTo(const Expect& e, std::ostream* os) { *os << e.name; }
 
 class ShippedReplay : public testing::TestWithParam<Expect> {};
 
