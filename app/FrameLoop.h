@@ -12,6 +12,7 @@
 
 #include <array>
 #include <memory>
+#include <vector>
 
 #include "app/Renderer.h"
 #include "world/Replay.h"
@@ -79,6 +80,9 @@ struct FrameRecord {
         std::size_t lookups = 0;  // ambient lookups answered for the draw
         double lookupMs = 0.0;    // CPU time of those lookups (inside the draw stage)
         double captureMs = 0.0;   // of which GL capture (inside the capture stage)
+        // The volume's own timings of its stages [ms] (project = SH projection of the faces).
+        double predictMs = 0.0, projectMs = 0.0, storeMs = 0.0;
+        std::vector<std::size_t> anchorsPerLevel;  // alive, coarsest level first
     } ambience;
 };
 

@@ -95,19 +95,21 @@ const SkyLighting& Renderer::setTimeOfDay(double timeOfDay_h) {
     return sky_;
 }
 
-RenderStats Renderer::render(const CameraSample& camera, const AmbientSource& ambient) {
-    using Clock = std::chrono::steady_clock;
-    RenderStats stats;
-    const auto t0 = Clock::now();
+glm::mat4 Renderer::viewProjection(const CameraSample& camera) const {
     // Camera-relative view: the eye at the origin, so only rotation in the view matrix.
     const glm::vec3 f = glm::normalize(glm::vec3(camera.forward));
     const glm::vec3 up = glm::normalize(glm::vec3(camera.up));
     const glm::mat4 view = glm::lookAt(glm::vec3(0.0f), f, up);
     const float aspect = float(settings_.width) / float(settings_.height);
-    const glm::mat4 proj =
-        reversedInfinitePerspective(settings_.fovY_rad, aspect, settings_.near_m);
+    return reversedInfinitePerspective(settings_.fovY_rad, aspect, settings_.near_m) * view;
+}
+
+RenderStats Renderer::render(const CameraSample& camera, const AmbientSource& ambient) {
+    using Clock = std::chrono::steady_clock;
+    RenderStats stats;
+    const auto t0 = Clock::now();
     FrameConstants fc;
-    fc.viewProj = proj * view;
+    fc.viewProj = viewProjection(camera);
     fc.invViewProj = glm::inverse(fc.viewProj);
     sky_.fill(fc);
     fc.fog = glm::vec4(settings_.fogExtinction_perM, 0.0f, 0.0f, 0.0f);

@@ -69,6 +69,8 @@ class Renderer {
     const SkyLighting& setTimeOfDay(double timeOfDay_h);
     const SkyLighting& skyLighting() const { return sky_; }
 
+    // Maps camera-relative positions (world - camera.position_m) to clip space.
+    glm::mat4 viewProjection(const CameraSample& camera) const;
     // Renders the view from `camera` with `ambient` into the HDR target and tone maps it.
     RenderStats render(const CameraSample& camera, const AmbientSource& ambient);
     // The tone-mapped image, top row first, RGB 8-bit (waits for the GPU).

@@ -25,6 +25,7 @@
 #include "app/RunReport.h"
 #include "app/VolumeAmbience.h"
 #include "app/CubeCaptureGl.h"
+#include "app/DebugOverlay.h"
 #include "world/Error.h"
 #include "world/World.h"
 
@@ -48,6 +49,7 @@ struct RunOptions {
     std::string ambient = "volume";
     std::string ambienceConfig, saveAnchors, loadAnchors;
     int facesPerFrame = 1;
+    bool debugOverlay = false;
     int faceSize = 16;
     std::string out;
     bool noVideo = false;
@@ -98,6 +100,7 @@ void runReplay(RunOptions o) {
         throw InputError("--faces-per-frame", "expected 1 to 6");
     volumeSettings.facesPerFrame = o.facesPerFrame;
     if (o.faceSize < 1 || o.faceSize > 256) throw InputError("--face-size", "expected 1 to 256");
+    if (!useVolume && o.debugOverlay) throw InputError("--debug-overlay", "needs --ambient volume");
     if (!useVolume && (!o.saveAnchors.empty() || !o.loadAnchors.empty()))
         throw InputError("--save-anchors/--load-anchors", "need --ambient volume");
     const Size size = parseSize(o.size, "--size");
@@ -166,10 +169,22 @@ void runReplay(RunOptions o) {
             rec.ambience.lookups = volume->ambient().lookups();
             rec.ambience.lookupMs = volume->ambient().lookupMs();
             rec.ambience.captureMs = st.capture_s * 1e3;
+            rec.ambience.predictMs = st.predict_s * 1e3;
+            rec.ambience.projectMs = st.project_s * 1e3;
+            rec.ambience.storeMs = st.store_s * 1e3;
+            const int levels = volume->volume().store().levels();
+            rec.ambience.anchorsPerLevel.assign(st.store.anchorsPerLevel.begin(),
+                                                st.store.anchorsPerLevel.begin() + levels);
         }
         const bool writeFrame = o.frames != "none" && rec.index % o.every == 0;
         if (writeFrame || video) {
-            const auto pixels = renderer.readRgb8();
+            auto pixels = renderer.readRgb8();
+            if (o.debugOverlay && volume) {
+                const CameraSample camera = replay.sampleAt(rec.time_s);
+                drawAnchorOverlay(pixels, size.width, size.height,
+                                  renderer.viewProjection(camera), camera.position_m,
+                                  volume->volume());
+            }
             if (writeFrame) {
                 char file[64];
                 std::snprintf(file, sizeof(file), "/frame-%05d.png", rec.index);
@@ -243,13 +258,17 @@ void addRunCommand(CLI::App& app) {
                     "replay steps per frame (default 2: 30 frames/s of a 60 Hz replay)");
     cmd->add_option("--ambient", o->ambient,
                     "volume (the dynamic ambience volume), constant or hemisphere (default volume)");
-    cmd->add_option("--ambience-config", o->ambienceConfig,
-                    "JSON file of ambience volume settings (AmbienceVolumeSettings fields)");
+    cmd->add_option("--config,--ambience-config", o->ambienceConfig,
+                    "JSON file of ambience volume settings (AmbienceVolumeSettings fields, "
+                    "lighting/AmbienceVolume.h)");
     cmd->add_option("--faces-per-frame", o->facesPerFrame,
                     "capture budget: cube faces per frame (default 1, as in the thesis)");
     cmd->add_option("--face-size", o->faceSize, "capture face size N (default 16)");
     cmd->add_option("--save-anchors", o->saveAnchors, "write the anchor store at the end (.vdb)");
     cmd->add_option("--load-anchors", o->loadAnchors, "warm-start from an anchor store (.vdb)");
+    cmd->add_flag("--debug-overlay", o->debugOverlay,
+                  "draw anchors (colour = level, darker = older) and the probe being captured "
+                  "over frames and video");
     cmd->add_option("--shaders", o->shaders,
                     "GLSL folder (default <exe>/../shaders or $AMBIENCE_SHADER_DIR)");
     cmd->callback([o] {

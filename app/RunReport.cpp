@@ -237,6 +237,11 @@ void RunReport::write(const std::string& path) const {
             r["finestLevel"] = f.ambience.finestLevel;
             r["ambientLookups"] = f.ambience.lookups;
             r["ambientLookup_ms"] = f.ambience.lookupMs;
+            r["volumePredict_ms"] = f.ambience.predictMs;
+            r["volumeCapture_ms"] = f.ambience.captureMs;
+            r["volumeProject_ms"] = f.ambience.projectMs;
+            r["volumeStore_ms"] = f.ambience.storeMs;
+            r["anchorsPerLevel"] = f.ambience.anchorsPerLevel;
         }
         rows.push_back(r);
     }
@@ -251,7 +256,12 @@ void RunReport::write(const std::string& path) const {
     csv << "frame,time_s,timeOfDay_h,frame_ms";
     for (int s = 0; s < kFrameStages; ++s) csv << "," << toString(FrameStage(s)) << "_ms";
     csv << ",triangles,terrainPatches,terrainPatchesDrawn,objectsDrawn,terrainRebuilt";
-    if (volume) csv << ",anchors,anchorBytes,facesCaptured,finestLevel,ambientLookups,ambientLookup_ms";
+    const std::size_t csvLevels = volume ? frames.front().ambience.anchorsPerLevel.size() : 0;
+    if (volume) {
+        csv << ",anchors,anchorBytes,facesCaptured,finestLevel,ambientLookups,ambientLookup_ms"
+               ",volumePredict_ms,volumeCapture_ms,volumeProject_ms,volumeStore_ms";
+        for (std::size_t l = 0; l < csvLevels; ++l) csv << ",anchorsLevel" << l;
+    }
     csv << "\n";
     for (const FrameRecord& f : frames) {
         csv << f.index << "," << f.time_s << "," << f.timeOfDay_h << "," << f.frameMs;
@@ -262,7 +272,11 @@ void RunReport::write(const std::string& path) const {
         if (volume) {
             csv << "," << f.ambience.anchors << "," << f.ambience.bytes << "," << f.ambience.faces
                 << "," << f.ambience.finestLevel << "," << f.ambience.lookups << ","
-                << f.ambience.lookupMs;
+                << f.ambience.lookupMs << "," << f.ambience.predictMs << ","
+                << f.ambience.captureMs << "," << f.ambience.projectMs << ","
+                << f.ambience.storeMs;
+            for (std::size_t l = 0; l < csvLevels; ++l)
+                csv << "," << (l < f.ambience.anchorsPerLevel.size() ? f.ambience.anchorsPerLevel[l] : 0);
         }
         csv << "\n";
     }

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <string>
 
+#include <OpenImageIO/imagebuf.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -43,7 +44,8 @@ TEST(VolumeRun, CapturesStoresAndReports) {
     const double share = a["shareOfFrameTime"].get<double>();
     EXPECT_GT(share, 0.0);
     EXPECT_LT(share, 1.0);
-    // Per frame: one face each, anchors never decrease on this short drive, all finite.
+    // Per frame: one face each, anchors never decrease on this short drive, all finite; the
+    // anchors per level add up to the anchors held.
     std::size_t previous = 0;
     for (const auto& row : report["frames"]) {
         EXPECT_EQ(row["facesCaptured"].get<int>(), 1);
@@ -51,6 +53,10 @@ TEST(VolumeRun, CapturesStoresAndReports) {
         EXPECT_GE(anchors, previous);
         previous = anchors;
         EXPECT_TRUE(std::isfinite(row["frame_ms"].get<double>()));
+        std::size_t sum = 0;
+        for (const auto& n : row["anchorsPerLevel"]) sum += n.get<std::size_t>();
+        EXPECT_EQ(sum, anchors);
+        EXPECT_GE(row["volumeProject_ms"].get<double>(), 0.0);
     }
     std::ifstream file(vdb, std::ios::binary);
     ASSERT_TRUE(file.good()) << "no anchor file " << vdb;
@@ -67,6 +73,33 @@ TEST(VolumeRun, CapturesStoresAndReports) {
     ASSERT_EQ(w.exitCode, 0) << w.err;
     const auto warm = readJson(dir2 + "/report.json");
     EXPECT_GE(warm["frames"][0]["anchors"].get<int>(), 10);
+}
+
+// The overlay marks anchors on the frame and changes nothing else: the same run with and
+// without it differs only in a small share of pixels.
+TEST(VolumeRun, DebugOverlayMarksAnchors) {
+    auto frame = [&](const std::string& name, const std::string& extra) {
+        const std::string dir = testing::TempDir() + name;
+        const test::CommandResult r = runAmbience(
+            "run --replay " + kReplay + " --max-frames 61 --every 60 --size 320x180 --no-video"
+            " --out " + dir + " " + extra);
+        EXPECT_EQ(r.exitCode, 0) << r.err;
+        OIIO::ImageBuf image(dir + "/frames/frame-00060.png");
+        std::vector<unsigned char> px(320 * 180 * 3);
+        EXPECT_TRUE(image.get_pixels(OIIO::ROI(0, 320, 0, 180, 0, 1, 0, 3), OIIO::TypeDesc::UINT8,
+                                     px.data()))
+            << dir;
+        return px;
+    };
+    const auto plain = frame("overlay_off", "");
+    const auto marked = frame("overlay_on", "--debug-overlay");
+    int differing = 0;
+    for (std::size_t p = 0; p < plain.size(); p += 3) {
+        differing += plain[p] != marked[p] || plain[p + 1] != marked[p + 1] ||
+                     plain[p + 2] != marked[p + 2];
+    }
+    EXPECT_GT(differing, 9);               // at least one marker (3 x 3 px or more)
+    EXPECT_LT(differing, 320 * 180 / 20);  // markers, not a different picture
 }
 
 TEST(VolumeRun, BadVolumeOptionsAreInputErrors) {
