@@ -70,6 +70,13 @@ class JsonFields {
         }
         field = int(x);
     }
+    void boolean(const char* key, bool& field) {
+        known_.push_back(key);
+        if (!object_.contains(key)) return;
+        const auto& v = object_.at(key);
+        if (!v.is_boolean()) throw InputError(where_, std::string("'") + key + "' must be true or false");
+        field = v.get<bool>();
+    }
     void object(const char* key, const std::function<void(JsonFields&)>& read) {
         known_.push_back(key);
         if (!object_.contains(key)) return;
@@ -142,6 +149,7 @@ AmbienceVolumeSettings ambienceSettingsFromJson(const std::string& jsonText,
     f.number("fallbackRefresh_h", s.fallbackRefresh_h, 0.0, 24.0);
     f.number("asideFraction", s.asideFraction, 0.0, 10.0);
     f.number("maxAside_m", s.maxAside_m, 0.0, 1000.0);
+    f.boolean("relightBySkyLevel", s.relightBySkyLevel);
     f.finish();
     if (s.store.minLifetime_s > s.store.maxLifetime_s) {
         throw InputError(where, "'store': minLifetime_s exceeds maxLifetime_s");
@@ -191,6 +199,25 @@ void AmbienceVolume::updateFallback(double timeOfDay_h) {
     store_.setFallback(toFloat(p.sh));
     haveFallback_ = true;
     fallbackTimeOfDay_h_ = timeOfDay_h;
+}
+
+double AmbienceVolume::skyLevel(double timeOfDay_h) const {
+    // Cached per minute of the day: the level changes slowly and anchors share capture minutes.
+    const int minute = int(std::floor(std::fmod(std::fmod(timeOfDay_h, 24.0) + 24.0, 24.0) * 60.0)) % 1440;
+    if (auto it = skyLevels_.find(minute); it != skyLevels_.end()) return it->second;
+    // Mean luminance of the fallback scene (sky over lit flat ground) on a small cube, texels
+    // clamped at the sun threshold so the disc (lit separately by the renderer) does not count.
+    constexpr int kN = 8;
+    std::vector<float> cube;
+    environment_.fallbackCubeMap((minute + 0.5) / 60.0, kN, cube);
+    double sum = 0.0;
+    for (std::size_t t = 0; t + 2 < cube.size(); t += 3) {
+        const double lum = 0.2126 * cube[t] + 0.7152 * cube[t + 1] + 0.0722 * cube[t + 2];
+        sum += std::min(std::isfinite(lum) ? std::max(lum, 0.0) : 0.0, settings_.sunThreshold);
+    }
+    const double level = std::max(sum / double(cube.size() / 3), 1e-12);
+    skyLevels_.emplace(minute, level);
+    return level;
 }
 
 // ---- update() -----------------------------------------------------------------------------------
@@ -318,6 +345,13 @@ void AmbienceVolume::storeStage() {
     }
     completed_.clear();
     updateFallback(timeOfDay_h);
+    if (settings_.relightBySkyLevel) {
+        // Stale anchors follow the sky's overall level since their capture (see the header).
+        const double now = skyLevel(timeOfDay_h);
+        store_.relight([&](const Anchor& a) {
+            return float(std::clamp(now / skyLevel(a.captureTimeOfDay_h), 1e-3, 1e3));
+        });
+    }
     stats_.store_s += secondsSince(t0);
     stats_.store = store_.statistics();
 }

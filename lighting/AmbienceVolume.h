@@ -25,6 +25,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -53,6 +54,12 @@ struct AmbienceVolumeSettings {
     double fallbackRefresh_h = 1.0 / 60.0;  // recompute the fallback after this much day time
     double asideFraction = 0.5;  // a probe may move aside up to this x its level's spacing
     double maxAside_m = 4.0;     // ... and at most this far [m]
+    // Relighting of stale anchors (an extension of the thesis' expiry, 7.5.3): every anchor is
+    // read scaled by skyLevel(now) / skyLevel(its capture's time of day), skyLevel being the
+    // mean luminance of the sky-model fallback scene. While the day changes slowly the factor
+    // is ~1; through a fast sunset or a time-lapse, anchors older than the capture budget can
+    // refresh no longer carry daylight into the dusk.
+    bool relightBySkyLevel = true;
 };
 
 // Parses settings from JSON text: an object whose keys are the field names above (nested
@@ -125,6 +132,7 @@ class AmbienceVolume {
 
   private:
     void updateFallback(double timeOfDay_h);
+    double skyLevel(double timeOfDay_h) const;
 
     CubeCapture& capture_;
     const ProbeEnvironment& environment_;
@@ -156,6 +164,7 @@ class AmbienceVolume {
     bool haveFallback_ = false;
     double fallbackTimeOfDay_h_ = 0.0;
     AmbienceStatistics stats_;
+    mutable std::unordered_map<int, double> skyLevels_;  // minute of the day -> sky level
 };
 
 }  // namespace amb

@@ -254,7 +254,10 @@ AnchorStore::InsertResult AnchorStore::insert(const LatticeKey& key, const ShRgb
         Anchor& a = m.pool[index];
         a.presence = Impl::presenceAt(a, m.now, m.settings.blendTime_s);
         m.setFadeDirection(a, false);
-        a.blendFrom = a.current;
+        // Blend from what interpolation showed (relight included), so a refresh is no pop.
+        a.blendFrom = a.relight == 1.0f ? a.current : a.current * a.relight;
+        a.current = a.blendFrom;
+        a.relight = 1.0f;
         a.target = sh;
         a.blendStart_s = m.now;
         a.blendProgress = instant ? 1.0f : 0.0f;
@@ -454,7 +457,7 @@ ShRgb AnchorStore::Impl::interpolate(double qx, double qz, InterpolationDetail* 
                         detail->used = {{a.key, 0, d, 1.0}};
                         detail->exact = true;
                     }
-                    return a.current;
+                    return a.relight == 1.0f ? a.current : a.current * a.relight;
                 }
                 const int q = dx >= 0.0 ? (dz >= 0.0 ? 0 : 3) : (dz >= 0.0 ? 1 : 2);
                 candidates.push_back({index, d, q});
@@ -478,9 +481,10 @@ ShRgb AnchorStore::Impl::interpolate(double qx, double qz, InterpolationDetail* 
             const double share = a.presence >= 1.0f ? rest : rest * double(a.presence);
             rest = a.presence >= 1.0f ? 0.0 : rest - share;
             const double w = share / cand.d;
+            const double wr = w * double(a.relight);
             for (int k = 0; k < kShCoefficients; ++k) {
                 for (int ch = 0; ch < 3; ++ch)
-                    numerator[3 * k + ch] += w * double(a.current.c[k][ch]);
+                    numerator[3 * k + ch] += wr * double(a.current.c[k][ch]);
             }
             denominator += w;
             if (detail) detail->used.push_back({a.key, cand.quadrant, cand.d, w});
@@ -501,6 +505,15 @@ ShRgb AnchorStore::Impl::interpolate(double qx, double qz, InterpolationDetail* 
         for (auto& u : detail->used) u.weight /= denominator;
     }
     return out;
+}
+
+void AnchorStore::relight(const std::function<float(const Anchor&)>& factor) {
+    Impl& m = *impl_;
+    for (std::size_t n = 0; n < m.pool.size(); ++n) {
+        if (!m.alive[n]) continue;
+        const float f = factor(m.pool[n]);
+        m.pool[n].relight = std::isfinite(f) && f > 0.0f ? f : 1.0f;
+    }
 }
 
 ShRgb AnchorStore::interpolate(double x_m, double z_m, InterpolationDetail* detail) const {

@@ -86,6 +86,7 @@ struct Anchor {
     LatticeKey key;                      // canonical key
     bool regenerationRequested = false;  // age >= regenerateFraction x lifetime
     bool expired = false;                // age >= lifetime: fading out, then removed
+    float relight = 1.0f;                // read as current x relight (AnchorStore::relight)
 
     double age_s(double now_s) const { return now_s - captureTime_s; }
 };
@@ -173,6 +174,9 @@ class AnchorStore {
                         const glm::dvec3& capturedPosition_m, double lifetime_s,
                         double timeOfDay_h = 0.0);
     static constexpr float kMaxCoefficient = 1.0e15f;
+    // Sets every anchor's relight factor (finite, > 0; anything else counts as 1): interpolation
+    // reads an anchor as current x relight. A refresh bakes the factor into the blend's start.
+    void relight(const std::function<float(const Anchor&)>& factor);
     // Removes an anchor at once (no fade). Returns false if there was none.
     bool remove(const LatticeKey& key);
     void clear();
