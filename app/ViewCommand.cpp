@@ -14,6 +14,8 @@
 #include <glm/geometric.hpp>
 
 #include "app/Commands.h"
+#include "app/DebugOverlay.h"
+#include "app/VolumeAmbience.h"
 #include "app/FrameLoop.h"
 #include "app/Gl.h"
 #include "app/Platform.h"
@@ -33,7 +35,8 @@ struct ViewOptions {
     int frames = 0;
     std::string screenshot;
     std::string record = "recorded.json";
-    std::string ambient = "hemisphere";
+    std::string ambient = "volume";
+    bool debugOverlay = false;
     std::string shaders;
     double time_h = -1.0;
 };
@@ -69,7 +72,9 @@ void runView(const ViewOptions& o) {
     const bool haveReplay = !o.replay.empty();
     if (haveReplay) replay = readReplay(o.replay);
     const Size size = parseSize(o.size, "--size");
-    const AmbientMode ambientMode = parseAmbientMode(o.ambient, "--ambient");
+    const bool useVolume = o.ambient == "volume";
+    const AmbientMode ambientMode =
+        useVolume ? AmbientMode::Hemisphere : parseAmbientMode(o.ambient, "--ambient");
     if (o.frames < 0) throw InputError("--frames", "must be >= 0");
     if (!o.screenshot.empty() && o.frames == 0) {
         throw InputError("--screenshot", "needs --frames N (the frame to save)");
@@ -82,7 +87,17 @@ void runView(const ViewOptions& o) {
     rs.width = size.width;
     rs.height = size.height;
     Renderer renderer(world, rs);
-    FixedAmbienceStages ambience(ambientMode);
+    std::unique_ptr<AmbienceStages> stages;
+    VolumeAmbienceStages* volume = nullptr;
+    if (useVolume) {
+        auto v = std::make_unique<VolumeAmbienceStages>(renderer, AmbienceVolumeSettings{});
+        volume = v.get();
+        stages = std::move(v);
+    } else {
+        stages = std::make_unique<FixedAmbienceStages>(ambientMode);
+    }
+    AmbienceStages& ambience = *stages;
+    double simulation_s = 0.0;  // the volume's clock: fixed steps, stops while paused
 
     double replayTime_s = 0.0;
     double timeOfDay_h = o.time_h >= 0.0 ? o.time_h : replay.timeOfDayStart_h;
@@ -186,7 +201,8 @@ void runView(const ViewOptions& o) {
         // Stages 2-5 and the draw (the frame of FrameLoop, driven by the keyboard).
         FrameState state;
         state.index = frame;
-        state.time_s = replayTime_s;
+        if (!paused) simulation_s += kStep_s;
+        state.time_s = simulation_s;
         state.timeOfDay_h = timeOfDay_h;
         state.camera = cam;
         state.sky = &renderer.setTimeOfDay(timeOfDay_h);
@@ -201,7 +217,12 @@ void runView(const ViewOptions& o) {
             char name[64];
             std::snprintf(name, sizeof(name), "screenshot-%03d.png", screenshots++);
             const std::string path = last && !o.screenshot.empty() ? o.screenshot : name;
-            writeImageRgb8(path, size.width, size.height, renderer.readRgb8());
+            auto pixels = renderer.readRgb8();
+            if (o.debugOverlay && volume) {
+                drawAnchorOverlay(pixels, size.width, size.height, renderer.viewProjection(cam),
+                                  cam.position_m, volume->volume());
+            }
+            writeImageRgb8(path, size.width, size.height, pixels);
             std::fprintf(stderr, "view: screenshot %s\n", path.c_str());
         }
         platform->swapBuffers();
@@ -218,7 +239,10 @@ void addViewCommand(CLI::App& app) {
     cmd->add_option("--replay", o->replay, "replay to follow (its world is shown)");
     cmd->add_option("--size", o->size, "window size WxH (default 960x540)");
     cmd->add_option("--time", o->time_h, "fixed time of day [hours] (default: the replay's)");
-    cmd->add_option("--ambient", o->ambient, "constant or hemisphere (default hemisphere)");
+    cmd->add_option("--ambient", o->ambient,
+                    "volume (the dynamic ambience volume), constant or hemisphere (default volume)");
+    cmd->add_flag("--debug-overlay", o->debugOverlay,
+                  "mark anchors and the probe being captured on screenshots");
     cmd->add_option("--record", o->record, "file the R key records to (default recorded.json)");
     cmd->add_option("--frames", o->frames, "render N frames, then exit (non-interactive)");
     cmd->add_option("--screenshot", o->screenshot, "with --frames: save the last frame here");
