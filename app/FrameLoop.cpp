@@ -45,6 +45,16 @@ FrameRecord FrameLoop::step() {
     frame.time_s = frame.index * step_s_;
     frame.timeOfDay_h = replay_.timeOfDayAt_h(frame.time_s);
     frame.camera = replay_.sampleAt(frame.time_s);
+    {
+        // A cut anywhere since the previous frame is this frame's cut (frames may be several
+        // replay steps apart, and interpolation never lands on the cut sample itself).
+        const auto& samples = replay_.samples;
+        const double t0 = samples.front().time_s;
+        const long last = long(std::floor((frame.time_s - t0) / replay_.step_s + 1e-6));
+        for (long j = std::max(lastSample_ + 1, 1L); j <= last && j < long(samples.size()); ++j)
+            if (samples[std::size_t(j)].cut) frame.camera.cut = true;
+        lastSample_ = last;
+    }
     frame.sky = &renderer_.setTimeOfDay(frame.timeOfDay_h);
     lap(FrameStage::Advance);
     // 2. predict

@@ -105,6 +105,7 @@ class FrameLoop {
     double step_s_;
     int frameCount_;
     int next_ = 0;
+    long lastSample_ = 0;  // replay sample index of the previous frame
 };
 
 }  // namespace amb

@@ -102,6 +102,19 @@ TEST(VolumeRun, DebugOverlayMarksAnchors) {
     EXPECT_LT(differing, 320 * 180 / 20);  // markers, not a different picture
 }
 
+// The stress flight's camera cut (at 37.37 s) lies between two frames when frames are 30 replay
+// steps apart; the volume must still see it as a teleport, and stay finite through it.
+TEST(VolumeRun, CutBetweenFramesIsATeleport) {
+    const std::string dir = testing::TempDir() + "volume_cut";
+    const test::CommandResult r = runAmbience(
+        "run --replay " + sourcePath("replays/stress-flight.json") +
+        " --stride 30 --max-frames 80 --size 160x90 --frames none --no-video --out " + dir);
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const auto report = readJson(dir + "/report.json");
+    EXPECT_EQ(report["ambience"]["teleports"].get<int>(), 1);
+    EXPECT_EQ(report["ambience"]["rejectedProbes"].get<int>(), 0);
+}
+
 TEST(VolumeRun, BadVolumeOptionsAreInputErrors) {
     const std::string dir = testing::TempDir() + "volume_bad";
     auto expect2 = [&](const std::string& args, const char* fragment) {
