@@ -108,6 +108,14 @@ RenderStats Renderer::render(const CameraSample& camera, const AmbientSource& am
     using Clock = std::chrono::steady_clock;
     RenderStats stats;
     const auto t0 = Clock::now();
+    if (settings_.drawVehicle) {
+        const glm::dvec3 f = camera.forward;
+        scene_->setVehicle(VehiclePose{
+            camera.position_m - glm::dvec3(0.0, settings_.vehicleEyeHeight_m, 0.0),
+            std::atan2(f.x, f.z)});
+    } else {
+        scene_->setVehicle(std::nullopt);
+    }
     FrameConstants fc;
     fc.viewProj = viewProjection(camera);
     fc.invViewProj = glm::inverse(fc.viewProj);

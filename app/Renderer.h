@@ -50,6 +50,9 @@ struct RenderSettings {
     float near_m = 0.3f;
     float fogExtinction_perM = 1.0f / 4000.0f;
     RendererSceneSettings scene{};
+    // Draw the camera's own car under the eye (drives): eye 1.5 m above the car's ground point.
+    bool drawVehicle = false;
+    double vehicleEyeHeight_m = 1.5;
 };
 
 struct RenderStats {

@@ -13,6 +13,7 @@
 #include <glm/geometric.hpp>
 
 #include "world/Vegetation.h"
+#include "world/Vehicle.h"
 #include "world/World.h"
 
 namespace amb {
@@ -153,6 +154,7 @@ RendererScene::RendererScene(const World& world, const RendererSceneSettings& se
             top = std::max(top, full.positions[i]);
         plantHeight_m_[k] = top;
     }
+    vehicleMesh_ = uploadMesh(makeVehicleMesh());
 }
 
 RendererScene::~RendererScene() = default;
@@ -223,6 +225,16 @@ void RendererScene::buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj
     addRoads(eye_m, &viewProj, settings_.terrain.viewRadius_m, ambient, out);
     std::size_t objects = 0;
     addPlants(eye_m, &viewProj, false, ambient, out, &objects);
+    if (vehicle_) {
+        // The camera's own car (DESIGN.md "draw": vegetation and vehicle get per-pixel SH).
+        ObjectInstance inst;
+        const glm::dvec3 rel = vehicle_->position_m - eye_m;
+        inst.positionScale = glm::vec4(float(rel.x), float(rel.y), float(rel.z), 1.0f);
+        inst.rotationSet = glm::vec2(float(vehicle_->heading_rad),
+                                     float(ambient.objectSet(vehicle_->position_m, out.ambientSets)));
+        out.objects.push_back({&vehicleMesh_, {inst}});
+        ++objects;
+    }
     if (stats) {
         stats->terrainPatches = terrainMesh_.patches.size();
         stats->terrainPatchesDrawn = drawnPatches;

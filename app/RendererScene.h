@@ -9,6 +9,7 @@
 #include <array>
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include <glm/mat4x4.hpp>
@@ -52,6 +53,12 @@ struct RendererSceneSettings {
     double roadLift_m = 0.12;           // road ribbons float this far above the terrain
 };
 
+// The camera's own car (drives): where it stands this frame.
+struct VehiclePose {
+    glm::dvec3 position_m{0.0};  // ground point under the driver's eye
+    double heading_rad = 0.0;    // rotation about +Y taking the car's +Z to its forward
+};
+
 struct SceneStats {
     std::size_t terrainPatches = 0, terrainPatchesDrawn = 0;
     std::size_t objectsDrawn = 0;
@@ -66,6 +73,8 @@ class RendererScene {
     // Main view: `viewProj` maps camera-relative positions (world - eye) to clip space.
     void buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj, const AmbientSource& ambient,
                    DrawList& out, SceneStats* stats = nullptr);
+    // The car drawn by the next buildView calls (lit like any object: its own SH set), or none.
+    void setVehicle(const std::optional<VehiclePose>& pose) { vehicle_ = pose; }
     // Capture scene around a probe (no culling: all six faces share it). Positions relative to
     // `probe_m`.
     void buildCapture(const glm::dvec3& probe_m, const AmbientSource& ambient, DrawList& out);
@@ -96,6 +105,8 @@ class RendererScene {
     std::vector<RoadChunk> roads_;
     std::array<GlMesh, 4> plantMeshes_, plantProxies_, plantFar_;
     std::array<float, 4> plantHeight_m_{};
+    GlMesh vehicleMesh_;
+    std::optional<VehiclePose> vehicle_;
 };
 
 }  // namespace amb

@@ -50,6 +50,7 @@ struct RunOptions {
     std::string ambienceConfig, saveAnchors, loadAnchors;
     int facesPerFrame = 1;
     bool debugOverlay = false;
+    bool noVehicle = false;
     int faceSize = 16;
     std::string out;
     bool noVideo = false;
@@ -121,6 +122,7 @@ void runReplay(RunOptions o) {
     RenderSettings rs;
     rs.width = size.width;
     rs.height = size.height;
+    rs.drawVehicle = replay.mode == ReplayMode::Drive && !o.noVehicle;
     Renderer renderer(world, rs);
     std::unique_ptr<AmbienceStages> ambience;
     VolumeAmbienceStages* volume = nullptr;
@@ -266,6 +268,7 @@ void addRunCommand(CLI::App& app) {
     cmd->add_option("--face-size", o->faceSize, "capture face size N (default 16)");
     cmd->add_option("--save-anchors", o->saveAnchors, "write the anchor store at the end (.vdb)");
     cmd->add_option("--load-anchors", o->loadAnchors, "warm-start from an anchor store (.vdb)");
+    cmd->add_flag("--no-vehicle", o->noVehicle, "do not draw the car on drive replays");
     cmd->add_flag("--debug-overlay", o->debugOverlay,
                   "draw anchors (colour = level, darker = older) and the probe being captured "
                   "over frames and video");

@@ -6,6 +6,7 @@
 #include <string>
 
 #include <OpenImageIO/imagebuf.h>
+#include <glm/vec3.hpp>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -75,24 +76,42 @@ TEST(VolumeRun, CapturesStoresAndReports) {
     EXPECT_GE(warm["frames"][0]["anchors"].get<int>(), 10);
 }
 
+// Reads frame 60 of a short drive at 320x180 (RGB, top row first).
+std::vector<unsigned char> driveFrame(const std::string& name, const std::string& extra) {
+    const std::string dir = testing::TempDir() + name;
+    const test::CommandResult r = runAmbience(
+        "run --replay " + kReplay + " --max-frames 61 --every 60 --size 320x180 --no-video"
+        " --out " + dir + " " + extra);
+    EXPECT_EQ(r.exitCode, 0) << r.err;
+    OIIO::ImageBuf image(dir + "/frames/frame-00060.png");
+    std::vector<unsigned char> px(320 * 180 * 3);
+    EXPECT_TRUE(image.get_pixels(OIIO::ROI(0, 320, 0, 180, 0, 1, 0, 3), OIIO::TypeDesc::UINT8,
+                                 px.data()))
+        << dir;
+    return px;
+}
+
+// On a drive the camera's own red car shows at the bottom centre, lit by the volume (not black,
+// not saturated); without it the road is there.
+TEST(VolumeRun, DriveShowsTheLitVehicle) {
+    auto bottomCentre = [](const std::vector<unsigned char>& px) {
+        const std::size_t i = (std::size_t(172) * 320 + 160) * 3;
+        return glm::ivec3(px[i], px[i + 1], px[i + 2]);
+    };
+    const glm::ivec3 car = bottomCentre(driveFrame("vehicle_on", ""));
+    const glm::ivec3 road = bottomCentre(driveFrame("vehicle_off", "--no-vehicle"));
+    EXPECT_GT(car.r, 2 * car.g) << car.r << "," << car.g << "," << car.b;
+    EXPECT_GT(car.r, 2 * car.b);
+    EXPECT_GT(car.r, 30);
+    EXPECT_LT(car.r, 255);
+    EXPECT_LT(std::abs(road.r - road.g), 30) << road.r << "," << road.g << "," << road.b;  // grey
+}
+
 // The overlay marks anchors on the frame and changes nothing else: the same run with and
 // without it differs only in a small share of pixels.
 TEST(VolumeRun, DebugOverlayMarksAnchors) {
-    auto frame = [&](const std::string& name, const std::string& extra) {
-        const std::string dir = testing::TempDir() + name;
-        const test::CommandResult r = runAmbience(
-            "run --replay " + kReplay + " --max-frames 61 --every 60 --size 320x180 --no-video"
-            " --out " + dir + " " + extra);
-        EXPECT_EQ(r.exitCode, 0) << r.err;
-        OIIO::ImageBuf image(dir + "/frames/frame-00060.png");
-        std::vector<unsigned char> px(320 * 180 * 3);
-        EXPECT_TRUE(image.get_pixels(OIIO::ROI(0, 320, 0, 180, 0, 1, 0, 3), OIIO::TypeDesc::UINT8,
-                                     px.data()))
-            << dir;
-        return px;
-    };
-    const auto plain = frame("overlay_off", "");
-    const auto marked = frame("overlay_on", "--debug-overlay");
+    const auto plain = driveFrame("overlay_off", "");
+    const auto marked = driveFrame("overlay_on", "--debug-overlay");
     int differing = 0;
     for (std::size_t p = 0; p < plain.size(); p += 3) {
         differing += plain[p] != marked[p] || plain[p + 1] != marked[p + 1] ||
