@@ -162,6 +162,18 @@ std::vector<float> Renderer::readHdr() {
     return out;
 }
 
+void Renderer::replaceLdr(const std::vector<unsigned char>& rgb) {
+    // rgb is top row first; GL rows start at the bottom.
+    const std::size_t row = std::size_t(settings_.width) * 3;
+    if (rgb.size() != row * std::size_t(settings_.height)) return;
+    std::vector<unsigned char> flipped(rgb.size());
+    for (int y = 0; y < settings_.height; ++y)
+        std::copy_n(&rgb[std::size_t(settings_.height - 1 - y) * row], row, &flipped[std::size_t(y) * row]);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTextureSubImage2D(ldr_.id(), 0, 0, 0, settings_.width, settings_.height, GL_RGB,
+                        GL_UNSIGNED_BYTE, flipped.data());
+}
+
 void Renderer::blitToWindow(int windowWidth, int windowHeight) {
     glBlitNamedFramebuffer(ldrFbo_.id(), 0, 0, 0, settings_.width, settings_.height, 0, 0,
                            windowWidth, windowHeight, GL_COLOR_BUFFER_BIT, GL_LINEAR);

@@ -80,6 +80,9 @@ class Renderer {
     std::vector<unsigned char> readRgb8();
     // The linear HDR image, top row first, RGB float.
     std::vector<float> readHdr();
+    // Replaces the tone-mapped image by `rgb` (top row first, as readRgb8 gives it), e.g. with
+    // a debug overlay drawn on it, before blitToWindow.
+    void replaceLdr(const std::vector<unsigned char>& rgb);
     // Copies the tone-mapped image to the window's default framebuffer of the given size.
     void blitToWindow(int windowWidth, int windowHeight);
 

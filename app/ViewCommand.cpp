@@ -210,6 +210,12 @@ void runView(const ViewOptions& o) {
         ambience.capture(state);
         ambience.store(state);
         renderer.render(cam, ambience.interpolate(state));
+        if (o.debugOverlay && volume) {
+            auto pixels = renderer.readRgb8();
+            drawAnchorOverlay(pixels, size.width, size.height, renderer.viewProjection(cam),
+                              cam.position_m, volume->volume());
+            renderer.replaceLdr(pixels);
+        }
         renderer.blitToWindow(platform->width(), platform->height());
 
         const bool last = o.frames > 0 && frame + 1 >= o.frames;
@@ -217,12 +223,7 @@ void runView(const ViewOptions& o) {
             char name[64];
             std::snprintf(name, sizeof(name), "screenshot-%03d.png", screenshots++);
             const std::string path = last && !o.screenshot.empty() ? o.screenshot : name;
-            auto pixels = renderer.readRgb8();
-            if (o.debugOverlay && volume) {
-                drawAnchorOverlay(pixels, size.width, size.height, renderer.viewProjection(cam),
-                                  cam.position_m, volume->volume());
-            }
-            writeImageRgb8(path, size.width, size.height, pixels);
+            writeImageRgb8(path, size.width, size.height, renderer.readRgb8());
             std::fprintf(stderr, "view: screenshot %s\n", path.c_str());
         }
         platform->swapBuffers();
@@ -242,7 +243,7 @@ void addViewCommand(CLI::App& app) {
     cmd->add_option("--ambient", o->ambient,
                     "volume (the dynamic ambience volume), constant or hemisphere (default volume)");
     cmd->add_flag("--debug-overlay", o->debugOverlay,
-                  "mark anchors and the probe being captured on screenshots");
+                  "mark anchors and the probe being captured on screen and on screenshots");
     cmd->add_option("--record", o->record, "file the R key records to (default recorded.json)");
     cmd->add_option("--frames", o->frames, "render N frames, then exit (non-interactive)");
     cmd->add_option("--screenshot", o->screenshot, "with --frames: save the last frame here");
