@@ -15,7 +15,7 @@
 #include <glm/geometric.hpp>
 
 #include "app/Renderer.h"
-#include "app/RendererLighting.h"
+#include "lighting/CubeMapProjector.h"
 #include "world/Conventions.h"
 #include "world/Error.h"
 #include "world/World.h"
@@ -148,7 +148,7 @@ CubeCaptureStats CubeCaptureGl::capture(const glm::dvec3& position_m, double tim
         const int j = std::min(n_ - 1, int((v + 1.0f) * 0.5f * n_));
         const size_t t = size_t(j) * n_ + i;
         if (src[4 * t + 3] < 0.5f) continue;  // hidden by terrain or a tree
-        const float scale = float(sunSolidAngle / cubeTexelSolidAngle_sr(i, j, n_));
+        const float scale = float(sunSolidAngle / cubeTexelSolidAngle(i, j, n_));
         for (int c = 0; c < 3; ++c) dst[3 * t + c] += sky_.sunDiscRadiance[c] * scale;
     }
     stats.milliseconds = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();

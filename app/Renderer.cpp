@@ -8,7 +8,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/matrix.hpp>
 
-#include "app/RendererLighting.h"
+#include "lighting/SH.h"
 #include "world/Error.h"
 #include "world/World.h"
 
@@ -26,19 +26,30 @@ const char* toString(AmbientMode mode) {
     return mode == AmbientMode::Constant ? "constant" : "hemisphere";
 }
 
+namespace {
+
+// SH of a radiance that is `sky` over the upper hemisphere (y > 0) and `ground` below. The step
+// has bands 0 and 1 only: L00 = Y00 4 pi (s + g) / 2, L1-1 = Y1 (s - g)/2 * 2 integral_{y>0} y dw
+// = Y1 pi (s - g).
+ShRgb hemisphereSh(const glm::vec3& sky, const glm::vec3& ground) {
+    ShRgb sh;
+    sh.c[0] = glm::vec3(float(kShY00 * 2.0 * kPi)) * (sky + ground);
+    sh.c[1] = glm::vec3(float(kShY1 * kPi)) * (sky - ground);
+    return sh;
+}
+
+}  // namespace
+
 FixedAmbient::FixedAmbient(AmbientMode mode, const SkyLighting& sky) {
-    if (mode == AmbientMode::Constant) {
-        sky_ = ground_ = 0.5f * (sky.skyMean + sky.groundMean);
-    } else {
-        sky_ = sky.skyMean;
-        ground_ = sky.groundMean;
-    }
-    const auto m = hemisphereIrradianceMatrices(sky_, ground_);
-    set_ = {m[0], m[1], m[2]};
+    const glm::vec3 mean = 0.5f * (sky.skyMean + sky.groundMean);
+    sh_ = mode == AmbientMode::Constant ? hemisphereSh(mean, mean)
+                                        : hemisphereSh(sky.skyMean, sky.groundMean);
+    const ShIrradianceMatrices m = shIrradianceMatrices(sh_);
+    set_ = {m.r, m.g, m.b};
 }
 
 glm::vec3 FixedAmbient::cornerIrradiance(const glm::dvec3&, const glm::dvec3& normal) const {
-    return hemisphereIrradiance(sky_, ground_, glm::vec3(normal));
+    return shIrradiance(sh_, glm::vec3(normal));
 }
 
 std::uint32_t FixedAmbient::objectSet(const glm::dvec3&, std::vector<AmbientSet>& sets) const {

@@ -14,6 +14,7 @@
 
 #include "app/RendererCore.h"
 #include "app/RendererScene.h"
+#include "lighting/SH.h"
 #include "world/Replay.h"
 
 namespace amb {
@@ -39,7 +40,7 @@ class FixedAmbient final : public AmbientSource {
                             std::vector<AmbientSet>& sets) const override;
 
   private:
-    glm::vec3 sky_, ground_;
+    ShRgb sh_;
     AmbientSet set_;
 };
 

@@ -11,7 +11,7 @@
 #include <glm/geometric.hpp>
 
 #include "GlTestContext.h"
-#include "app/RendererLighting.h"
+#include "lighting/CubeMapProjector.h"
 #include "world/Conventions.h"
 #include "world/World.h"
 
@@ -111,7 +111,7 @@ TEST_F(CubeCaptureTest, UpIsBrightSkyDownIsGroundAndTheSunFaceIsBrightest) {
     const double discSolidAngle =
         2.0 * kPi * (1.0 - std::cos(world_->sky().sunAngularRadius_rad()));
     const glm::vec3 sunRadiance = world_->sky().sunRadiance(12.0);
-    const double expected = sunRadiance.g * discSolidAngle / cubeTexelSolidAngle_sr(i, j, kN);
+    const double expected = sunRadiance.g * discSolidAngle / cubeTexelSolidAngle(i, j, kN);
     EXPECT_NEAR(t[1], expected, 0.01 * expected);
 }
 
