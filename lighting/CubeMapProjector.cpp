@@ -189,7 +189,9 @@ __attribute__((target("avx2,fma"))) void multiplyAddAvx2(const float* weights, i
 // v -> -v, and each local function is even or odd in u and in v, so the four mirror images of a
 // quadrant texel fold into four sums (even-even, odd-even, even-odd, odd-odd) and each local
 // function needs only a quadrant-sized dot product: a quarter of the multiply-adds, with one
-// small table shared by all six faces.
+// small table shared by all six faces. A clean face (the common case) is de-interleaved, checked
+// and folded in registers straight from its RGB texels; only a face that needs cleaning goes
+// through the planes first.
 
 // Parity class of each local function: 0 even-even, 1 odd in u, 2 odd in v, 3 odd in both.
 constexpr int kLocalParity[kShCoefficients] = {1, 2, 0, 3, 1, 2, 0, 0, 0};
@@ -198,46 +200,74 @@ std::array<double, kShCoefficients> localFunctions(const glm::dvec3& p) {
     return {p.x, p.y, p.z, p.x * p.y, p.x * p.z, p.y * p.z, p.x * p.x, p.y * p.y, p.z * p.z};
 }
 
-// out[f][c] = sum_q w[f][q] d[f][c][q] over `count` floats (a multiple of 8), NF functions at once,
-// float lanes flushed into double every kChunkBlocks vectors.
-template <int NF>
-__attribute__((target("avx2,fma"), always_inline)) inline void dotGroupAvx2(
-    const float* const (&w)[NF], const float* const (&d)[NF][3], int count, double (&out)[NF][3]) {
-    __m256d total[NF][3];
-    for (auto& a : total)
-        for (auto& v : a) v = _mm256_setzero_pd();
-    for (int c0 = 0; c0 < count; c0 += kChunkBlocks * kLanes) {
-        const int end = std::min(count, c0 + kChunkBlocks * kLanes);
-        __m256 acc[NF][3];
-        for (auto& a : acc)
-            for (auto& v : a) v = _mm256_setzero_ps();
-        for (int t = c0; t < end; t += kLanes) {
-            for (int f = 0; f < NF; ++f) {
-                const __m256 wt = _mm256_loadu_ps(w[f] + t);
-                for (int c = 0; c < 3; ++c)
-                    acc[f][c] = _mm256_fmadd_ps(wt, _mm256_loadu_ps(d[f][c] + t), acc[f][c]);
-            }
-        }
-        for (int f = 0; f < NF; ++f)
-            for (int c = 0; c < 3; ++c) {
-                total[f][c] =
-                    _mm256_add_pd(total[f][c], _mm256_cvtps_pd(_mm256_castps256_ps128(acc[f][c])));
-                total[f][c] = _mm256_add_pd(total[f][c],
-                                            _mm256_cvtps_pd(_mm256_extractf128_ps(acc[f][c], 1)));
-            }
-    }
-    for (int f = 0; f < NF; ++f)
-        for (int c = 0; c < 3; ++c) {
-            double lanes[4];
-            _mm256_storeu_pd(lanes, total[f][c]);
-            out[f][c] = (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
-        }
+// Lane i of the result is the sum of the eight lanes of v[i].
+__attribute__((target("avx2,fma"), always_inline)) inline __m256 laneSums8(const __m256 (&v)[8]) {
+    const __m256 t0 = _mm256_hadd_ps(v[0], v[1]), t1 = _mm256_hadd_ps(v[2], v[3]);
+    const __m256 t2 = _mm256_hadd_ps(v[4], v[5]), t3 = _mm256_hadd_ps(v[6], v[7]);
+    const __m256 u0 = _mm256_hadd_ps(t0, t1), u1 = _mm256_hadd_ps(t2, t3);
+    return _mm256_add_ps(_mm256_permute2f128_ps(u0, u1, 0x20),
+                         _mm256_permute2f128_ps(u0, u1, 0x31));
 }
 
-// Folds the N x N planes into fold[parity][channel][quarter texel], then the nine local sums.
-__attribute__((target("avx2,fma"))) void projectFoldedAvx2(const float* const planes[3], int n,
-                                                           const float* local, float* fold,
-                                                           double sums[kShCoefficients][3]) {
+// out[s][f][c] = sum_q w[s][f][q] d[s][c][q] over `count` floats (a multiple of 8): D data sets
+// of three channels, F functions per set, so each data vector is loaded once for F products.
+// Float lanes are summed over at most kChunkBlocks vectors, reduced across lanes in float and
+// then added in double.
+template <int D, int F>
+__attribute__((target("avx2,fma"), always_inline)) inline void dotSharedAvx2(
+    const float* const (&w)[D][F], const float* const (&d)[D][3], int count,
+    double (&out)[D][F][3]) {
+    constexpr int kOut = D * F * 3, kGroups = (kOut + 7) / 8;
+    double total[kGroups * 8] = {};
+    for (int c0 = 0; c0 < count; c0 += kChunkBlocks * kLanes) {
+        const int end = std::min(count, c0 + kChunkBlocks * kLanes);
+        __m256 acc[kGroups * 8];
+        for (auto& v : acc) v = _mm256_setzero_ps();
+        for (int t = c0; t < end; t += kLanes) {
+            for (int s = 0; s < D; ++s) {
+                const __m256 data[3] = {_mm256_loadu_ps(d[s][0] + t), _mm256_loadu_ps(d[s][1] + t),
+                                        _mm256_loadu_ps(d[s][2] + t)};
+                for (int f = 0; f < F; ++f) {
+                    const __m256 wt = _mm256_loadu_ps(w[s][f] + t);
+                    for (int c = 0; c < 3; ++c) {
+                        __m256& a = acc[(s * F + f) * 3 + c];
+                        a = _mm256_fmadd_ps(wt, data[c], a);
+                    }
+                }
+            }
+        }
+        for (int g = 0; g < kGroups; ++g) {
+            __m256 v[8];
+            for (int i = 0; i < 8; ++i) v[i] = acc[g * 8 + i];
+            const __m256 sums = laneSums8(v);
+            _mm256_storeu_pd(total + g * 8,
+                             _mm256_add_pd(_mm256_loadu_pd(total + g * 8),
+                                           _mm256_cvtps_pd(_mm256_castps256_ps128(sums))));
+            _mm256_storeu_pd(total + g * 8 + 4,
+                             _mm256_add_pd(_mm256_loadu_pd(total + g * 8 + 4),
+                                           _mm256_cvtps_pd(_mm256_extractf128_ps(sums, 1))));
+        }
+    }
+    for (int s = 0; s < D; ++s)
+        for (int f = 0; f < F; ++f)
+            for (int c = 0; c < 3; ++c) out[s][f][c] = total[(s * F + f) * 3 + c];
+}
+
+// The four mirror sums of one quadrant block (8 texels of rows jj and n-1-jj; a, cc the blocks
+// at columns i0, b, d the mirrored blocks already reversed) into fold[parity][channel].
+__attribute__((target("avx2,fma"), always_inline)) inline void storeMirrorSums(
+    __m256 a, __m256 b, __m256 cc, __m256 d, float* p0, float* p1, float* p2, float* p3) {
+    const __m256 s1 = _mm256_add_ps(a, b), d1 = _mm256_sub_ps(a, b);
+    const __m256 s2 = _mm256_add_ps(cc, d), d2 = _mm256_sub_ps(cc, d);
+    _mm256_storeu_ps(p0, _mm256_add_ps(s1, s2));
+    _mm256_storeu_ps(p1, _mm256_add_ps(d1, d2));
+    _mm256_storeu_ps(p2, _mm256_sub_ps(s1, s2));
+    _mm256_storeu_ps(p3, _mm256_sub_ps(d1, d2));
+}
+
+// Folds de-interleaved N x N planes into fold[parity][channel][quarter texel].
+__attribute__((target("avx2,fma"))) void foldPlanesAvx2(const float* const planes[3], int n,
+                                                        float* fold) {
     const int half = n / 2, quarter = half * half;
     const __m256i reverse = _mm256_setr_epi32(7, 6, 5, 4, 3, 2, 1, 0);
     auto at = [&](int parity, int c) { return fold + (std::size_t(parity) * 3 + c) * quarter; };
@@ -246,53 +276,104 @@ __attribute__((target("avx2,fma"))) void projectFoldedAvx2(const float* const pl
             const float* rowA = planes[c] + std::size_t(jj) * n;
             const float* rowC = planes[c] + std::size_t(n - 1 - jj) * n;
             for (int i0 = 0; i0 < half; i0 += kLanes) {
-                const __m256 a = _mm256_loadu_ps(rowA + i0);
-                const __m256 cc = _mm256_loadu_ps(rowC + i0);
                 const __m256 b =
                     _mm256_permutevar8x32_ps(_mm256_loadu_ps(rowA + n - kLanes - i0), reverse);
                 const __m256 d =
                     _mm256_permutevar8x32_ps(_mm256_loadu_ps(rowC + n - kLanes - i0), reverse);
-                const __m256 s1 = _mm256_add_ps(a, b), d1 = _mm256_sub_ps(a, b);
-                const __m256 s2 = _mm256_add_ps(cc, d), d2 = _mm256_sub_ps(cc, d);
                 const std::size_t q = std::size_t(jj) * half + i0;
-                _mm256_storeu_ps(at(0, c) + q, _mm256_add_ps(s1, s2));
-                _mm256_storeu_ps(at(1, c) + q, _mm256_add_ps(d1, d2));
-                _mm256_storeu_ps(at(2, c) + q, _mm256_sub_ps(s1, s2));
-                _mm256_storeu_ps(at(3, c) + q, _mm256_sub_ps(d1, d2));
+                storeMirrorSums(_mm256_loadu_ps(rowA + i0), b, _mm256_loadu_ps(rowC + i0), d,
+                                at(0, c) + q, at(1, c) + q, at(2, c) + q, at(3, c) + q);
             }
         }
     }
-    auto w = [&](int j) { return local + std::size_t(j) * quarter; };
-    {  // even-even: w', u'^2, v'^2, w'^2
-        const int ids[4] = {2, 6, 7, 8};
-        const float* const ws[4] = {w(2), w(6), w(7), w(8)};
-        const float* const ds[4][3] = {{at(0, 0), at(0, 1), at(0, 2)},
-                                       {at(0, 0), at(0, 1), at(0, 2)},
-                                       {at(0, 0), at(0, 1), at(0, 2)},
-                                       {at(0, 0), at(0, 1), at(0, 2)}};
-        double out[4][3];
-        dotGroupAvx2<4>(ws, ds, quarter, out);
-        for (int f = 0; f < 4; ++f)
-            for (int c = 0; c < 3; ++c) sums[ids[f]][c] = out[f][c];
+}
+
+// De-interleaves the 8 texels at p (24 floats) into r, g, b in texel order, or in reversed
+// order when `reversed`, and folds the raw bits into `highest` (see deinterleaveAvx2).
+__attribute__((target("avx2,fma"), always_inline)) inline void loadBlockAvx2(
+    const float* p, bool reversed, __m256i& highest, __m256& r, __m256& g, __m256& b) {
+    const __m256 a0 = _mm256_loadu_ps(p), a1 = _mm256_loadu_ps(p + 8), a2 = _mm256_loadu_ps(p + 16);
+    highest = _mm256_max_epu32(highest, _mm256_castps_si256(a0));
+    highest = _mm256_max_epu32(highest, _mm256_castps_si256(a1));
+    highest = _mm256_max_epu32(highest, _mm256_castps_si256(a2));
+    const __m256 rb = _mm256_blend_ps(_mm256_blend_ps(a0, a1, 0x92), a2, 0x24);
+    const __m256 gb = _mm256_blend_ps(_mm256_blend_ps(a0, a1, 0x24), a2, 0x49);
+    const __m256 bb = _mm256_blend_ps(_mm256_blend_ps(a0, a1, 0x49), a2, 0x92);
+    if (reversed) {
+        r = _mm256_permutevar8x32_ps(rb, _mm256_setr_epi32(5, 2, 7, 4, 1, 6, 3, 0));
+        g = _mm256_permutevar8x32_ps(gb, _mm256_setr_epi32(6, 3, 0, 5, 2, 7, 4, 1));
+        b = _mm256_permutevar8x32_ps(bb, _mm256_setr_epi32(7, 4, 1, 6, 3, 0, 5, 2));
+    } else {
+        r = _mm256_permutevar8x32_ps(rb, _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5));
+        g = _mm256_permutevar8x32_ps(gb, _mm256_setr_epi32(1, 4, 7, 2, 5, 0, 3, 6));
+        b = _mm256_permutevar8x32_ps(bb, _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7));
     }
-    {  // odd in one of u, v: u', u'w' and v', v'w'
-        const int ids[4] = {0, 4, 1, 5};
-        const float* const ws[4] = {w(0), w(4), w(1), w(5)};
-        const float* const ds[4][3] = {{at(1, 0), at(1, 1), at(1, 2)},
-                                       {at(1, 0), at(1, 1), at(1, 2)},
-                                       {at(2, 0), at(2, 1), at(2, 2)},
-                                       {at(2, 0), at(2, 1), at(2, 2)}};
-        double out[4][3];
-        dotGroupAvx2<4>(ws, ds, quarter, out);
-        for (int f = 0; f < 4; ++f)
-            for (int c = 0; c < 3; ++c) sums[ids[f]][c] = out[f][c];
+}
+
+// The same fold read straight from the interleaved face: de-interleave, mirror and check in
+// registers, so the planes are never written. True when every value is in [+0, limit] (the
+// check of deinterleaveAvx2); otherwise the caller takes the planes path, which cleans.
+__attribute__((target("avx2,fma"))) bool foldInterleavedAvx2(const float* rgb, int n, float limit,
+                                                             float* fold) {
+    const int half = n / 2, quarter = half * half;
+    __m256i highest = _mm256_setzero_si256();
+    auto at = [&](int parity, int c) { return fold + (std::size_t(parity) * 3 + c) * quarter; };
+    for (int jj = 0; jj < half; ++jj) {
+        const float* rowA = rgb + 3 * std::size_t(jj) * n;
+        const float* rowC = rgb + 3 * std::size_t(n - 1 - jj) * n;
+        for (int i0 = 0; i0 < half; i0 += kLanes) {
+            __m256 a[3], b[3], cc[3], d[3];
+            loadBlockAvx2(rowA + 3 * i0, false, highest, a[0], a[1], a[2]);
+            loadBlockAvx2(rowA + 3 * (n - kLanes - i0), true, highest, b[0], b[1], b[2]);
+            loadBlockAvx2(rowC + 3 * i0, false, highest, cc[0], cc[1], cc[2]);
+            loadBlockAvx2(rowC + 3 * (n - kLanes - i0), true, highest, d[0], d[1], d[2]);
+            const std::size_t q = std::size_t(jj) * half + i0;
+            for (int c = 0; c < 3; ++c)
+                storeMirrorSums(a[c], b[c], cc[c], d[c], at(0, c) + q, at(1, c) + q, at(2, c) + q,
+                                at(3, c) + q);
+        }
+    }
+    std::uint32_t limitBits;
+    std::memcpy(&limitBits, &limit, sizeof limitBits);
+    const __m256i top = _mm256_set1_epi32(int(limitBits));
+    return _mm256_movemask_epi8(_mm256_cmpeq_epi32(_mm256_max_epu32(highest, top), top)) == -1;
+}
+
+// The nine local sums from the folded quarters (see "Folded projection").
+__attribute__((target("avx2,fma"))) void localSumsAvx2(int n, const float* local, const float* fold,
+                                                       double sums[kShCoefficients][3]) {
+    const int half = n / 2, quarter = half * half;
+    auto at = [&](int parity, int c) { return fold + (std::size_t(parity) * 3 + c) * quarter; };
+    auto w = [&](int j) { return local + std::size_t(j) * quarter; };
+    auto planes = [&](int parity) {
+        return std::array<const float*, 3>{at(parity, 0), at(parity, 1), at(parity, 2)};
+    };
+    auto keep = [&](int id, const double(&v)[3]) {
+        for (int c = 0; c < 3; ++c) sums[id][c] = v[c];
+    };
+    {  // even-even: w', u'^2, v'^2, w'^2
+        const auto p = planes(0);
+        const float* const ws[1][4] = {{w(2), w(6), w(7), w(8)}};
+        const float* const ds[1][3] = {{p[0], p[1], p[2]}};
+        double out[1][4][3];
+        dotSharedAvx2<1, 4>(ws, ds, quarter, out);
+        keep(2, out[0][0]), keep(6, out[0][1]), keep(7, out[0][2]), keep(8, out[0][3]);
+    }
+    {  // odd in u: u', u'w'; odd in v: v', v'w'
+        const auto pu = planes(1), pv = planes(2);
+        const float* const ws[2][2] = {{w(0), w(4)}, {w(1), w(5)}};
+        const float* const ds[2][3] = {{pu[0], pu[1], pu[2]}, {pv[0], pv[1], pv[2]}};
+        double out[2][2][3];
+        dotSharedAvx2<2, 2>(ws, ds, quarter, out);
+        keep(0, out[0][0]), keep(4, out[0][1]), keep(1, out[1][0]), keep(5, out[1][1]);
     }
     {  // odd-odd: u'v'
-        const float* const ws[1] = {w(3)};
-        const float* const ds[1][3] = {{at(3, 0), at(3, 1), at(3, 2)}};
-        double out[1][3];
-        dotGroupAvx2<1>(ws, ds, quarter, out);
-        for (int c = 0; c < 3; ++c) sums[3][c] = out[0][c];
+        const auto p = planes(3);
+        const float* const ws[1][1] = {{w(3)}};
+        const float* const ds[1][3] = {{p[0], p[1], p[2]}};
+        double out[1][1][3];
+        dotSharedAvx2<1, 1>(ws, ds, quarter, out);
+        keep(3, out[0][0]);
     }
 }
 
@@ -345,11 +426,14 @@ struct CubeMapProjector::Table {
     bool foldable = false;
     std::vector<float> local;
     std::array<std::array<std::array<double, kShCoefficients>, kShCoefficients>, kCubeFaces> mix{};
-    struct MixTerm {  // the non-zero entries of mix (a signed permutation, mixed for m = 0, 2)
-        int k, f;
-        double weight;
+    // The non-zero entries of mix per coefficient: a signed permutation, with two or three
+    // terms for the m = 0 and m = 2 functions of bands 0 and 2.
+    struct MixRow {
+        int count = 0;
+        std::array<int, 3> f{};
+        std::array<double, 3> weight{};
     };
-    std::array<std::vector<MixTerm>, kCubeFaces> mixTerms;
+    std::array<std::array<MixRow, kShCoefficients>, kCubeFaces> mixRows{};
 
     explicit Table(int faceSize) : n(faceSize), padded(paddedTexels(faceSize)) {
         buildFull();
@@ -422,7 +506,11 @@ struct CubeMapProjector::Table {
                 for (int k = 0; k < kShCoefficients; ++k) {
                     const double v = rhs[f][k] / a[f][f];
                     mix[face][k][f] = std::abs(v) < 1e-12 ? 0.0 : v;  // exact zeros stay zero
-                    if (mix[face][k][f] != 0.0) mixTerms[face].push_back({k, f, v});
+                    if (mix[face][k][f] == 0.0) continue;
+                    MixRow& row = mixRows[face][k];
+                    AMB_CHECK(row.count < 3);
+                    row.f[row.count] = f;
+                    row.weight[row.count++] = v;
                 }
         }
     }
@@ -444,9 +532,10 @@ CubeMapProjector::CubeMapProjector(int faceSize, const Options& options)
     AMB_CHECK(faceSize >= 1);
     if (faceSize <= kTableMaxFaceSize) {
         table_ = Table::get(faceSize);
-        // Three planes (zero padding stays zero), then the folded sums (4 x 3 quarters).
-        scratch_.assign(3 * std::size_t(table_->padded) + 3 * std::size_t(faceSize) * faceSize,
-                        0.0f);
+        // Three planes (zero padding stays zero), then the folded sums (4 x 3 quarters), plus
+        // one block of slack so that the planes start on a 32-byte boundary.
+        scratch_.assign(
+            3 * std::size_t(table_->padded) + 3 * std::size_t(faceSize) * faceSize + kLanes, 0.0f);
     }
 }
 
@@ -454,14 +543,17 @@ CubeMapProjector::CubeMapProjector(int faceSize, const Options& options)
 
 void CubeMapProjector::addFace(int face, const float* rgb) {
     AMB_CHECK(face >= 0 && face < kCubeFaces);
-    FaceSum sum;
+    // Filled in place: each path sets every coefficient, the sun sums and counts start at zero.
+    FaceSum& sum = faces_[face];
+    sum.sunIrradiance = {};
+    sum.sunDirection = {};
+    sum.bad = 0;
     if (table_) {
         projectTable(face, rgb, sum);
     } else {
         projectStreaming(face, rgb, sum);
     }
     sum.present = true;
-    faces_[face] = sum;
 }
 
 void CubeMapProjector::addCubeMap(const float* rgb) {
@@ -486,11 +578,20 @@ void CubeMapProjector::projectTable(int face, const float* rgb, FaceSum& sum) {
     const int m = n_ * n_;
     const int padded = table_->padded;
     float* r = scratch_.data();
+    r += (kLanes - (reinterpret_cast<std::uintptr_t>(r) / sizeof(float)) % kLanes) % kLanes;
     float* g = r + padded;
     float* b = g + padded;
     const float limit =
         options_.sunThreshold < double(FLT_MAX) ? float(options_.sunThreshold) : FLT_MAX;
-    if (!deinterleave(options_.allowAvx2, rgb, m, limit, r, g, b)) {
+#ifdef AMB_PROJECTOR_AVX2
+    const bool folded = table_->foldable && options_.allowAvx2 && cpuHasAvx2Fma();
+    float* fold = b + padded;
+    // Clean faces (the common case) fold straight from the interleaved texels.
+    const bool cleanFolded = folded && foldInterleavedAvx2(rgb, n_, limit, fold);
+#else
+    const bool folded = false, cleanFolded = false;
+#endif
+    if (!cleanFolded && !deinterleave(options_.allowAvx2, rgb, m, limit, r, g, b)) {
         for (int t = 0; t < m; ++t) {
             if (!(usable(r[t]) && usable(g[t]) && usable(b[t]))) {
                 ++sum.bad;
@@ -502,17 +603,24 @@ void CubeMapProjector::projectTable(int face, const float* rgb, FaceSum& sum) {
         }
     }
     const float* const planes[3] = {r, g, b};
-    Sums out;
 #ifdef AMB_PROJECTOR_AVX2
-    if (table_->foldable && options_.allowAvx2 && cpuHasAvx2Fma()) {
+    if (folded) {
+        if (!cleanFolded) foldPlanesAvx2(planes, n_, fold);
         double local[kShCoefficients][3];
-        projectFoldedAvx2(planes, n_, table_->local.data(), b + padded, local);
-        for (const Table::MixTerm& term : table_->mixTerms[face]) {
-            for (int c = 0; c < 3; ++c) sum.sh[term.k][c] += term.weight * local[term.f][c];
+        localSumsAvx2(n_, table_->local.data(), fold, local);
+        for (int k = 0; k < kShCoefficients; ++k) {
+            const Table::MixRow& row = table_->mixRows[face][k];
+            for (int c = 0; c < 3; ++c) {
+                double v = 0.0;
+                for (int t = 0; t < row.count; ++t) v += row.weight[t] * local[row.f[t]][c];
+                sum.sh[k][c] = v;
+            }
         }
         return;
     }
 #endif
+    (void)folded;
+    Sums out;
     const float* weights = table_->weights.data() + std::size_t(face) * kShCoefficients * padded;
     multiplyAdd(options_.allowAvx2, weights, padded, planes, out);
     for (int k = 0; k < kShCoefficients; ++k) sum.sh[k] = {out[k][0], out[k][1], out[k][2]};
@@ -522,6 +630,7 @@ void CubeMapProjector::projectTable(int face, const float* rgb, FaceSum& sum) {
 // basis and products in double, one double row sum added to the face sum per row.
 void CubeMapProjector::projectStreaming(int face, const float* rgb, FaceSum& sum) {
     const int n = n_;
+    sum.sh = {};
     std::vector<double> below(n + 1), above(n + 1);  // area terms at corner rows j and j + 1
     for (int a = 0; a <= n; ++a) below[a] = areaTerm(faceCoordinate(a, n), faceCoordinate(0, n));
     for (int j = 0; j < n; ++j) {

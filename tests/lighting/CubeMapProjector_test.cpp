@@ -238,7 +238,7 @@ TEST(CubeMapProjector, AccumulationOverWideRange) {
 // The AVX2 and portable table kernels agree (1e-6 of the condition scale, see above) for sizes
 // with and without a partial block, with clean data and with bad and sun texels.
 TEST(CubeMapProjector, VectorAndPortableKernelsAgree) {
-    for (int n : {1, 3, 16, 17, 64}) {
+    for (int n : {1, 3, 16, 17, 32, 64}) {
         std::mt19937 rng(n);
         std::uniform_real_distribution<float> u(0.0f, 4.0f);
         std::vector<float> rgb(std::size_t(6) * n * n * 3);
