@@ -2,6 +2,8 @@
 // its callback does the work and throws amb::InputError for bad input (exit code 2).
 #pragma once
 
+#include <string>
+
 namespace CLI {
 class App;
 }
@@ -14,5 +16,9 @@ void addRunCommand(CLI::App& app);     // render a replay to frames, video and r
 void addViewCommand(CLI::App& app);    // interactive window
 void addProbeCommand(CLI::App& app);   // capture one cube map
 void addShCommand(CLI::App& app);      // SH tools: project
+void addBenchCommand(CLI::App& app);   // replays x methods x parameter points: speed vs error
+
+// The folder of the shipped replays (beside the executable's tree, or ./replays); "" if none.
+std::string shippedReplayDir();
 
 }  // namespace amb

@@ -70,8 +70,10 @@ FrameRecord FrameLoop::step() {
     const AmbientSource& ambient = ambience_.interpolate(frame);
     lap(FrameStage::Interpolate);
     // 6. draw
-    rec.render = renderer_.render(frame.camera, ambient);
-    glFinish();
+    if (drawMainView_) {
+        rec.render = renderer_.render(frame.camera, ambient);
+        glFinish();
+    }
     lap(FrameStage::Draw);
     // 7. measure
     rec.index = frame.index;

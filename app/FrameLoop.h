@@ -97,6 +97,9 @@ class FrameLoop {
     // Runs every stage of the next frame, in order. The draw stage waits for the GPU (glFinish),
     // so its time includes rasterisation.
     FrameRecord step();
+    // Without the main view the draw stage renders nothing (captures still render); for runs
+    // that measure the ambience alone.
+    void setDrawMainView(bool draw) { drawMainView_ = draw; }
 
   private:
     const Replay& replay_;
@@ -106,6 +109,7 @@ class FrameLoop {
     int frameCount_;
     int next_ = 0;
     long lastSample_ = 0;  // replay sample index of the previous frame
+    bool drawMainView_ = true;
 };
 
 }  // namespace amb

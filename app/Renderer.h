@@ -38,6 +38,7 @@ class FixedAmbient final : public AmbientSource {
                                const glm::dvec3& normal) const override;
     std::uint32_t objectSet(const glm::dvec3& position_m,
                             std::vector<AmbientSet>& sets) const override;
+    const ShRgb& sh() const { return sh_; }
 
   private:
     ShRgb sh_;

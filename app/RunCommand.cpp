@@ -19,13 +19,15 @@
 #include <nlohmann/json.hpp>
 
 #include "app/Commands.h"
+#include "app/CubeCaptureGl.h"
+#include "app/DebugOverlay.h"
 #include "app/FrameLoop.h"
 #include "app/Gl.h"
 #include "app/Platform.h"
 #include "app/RunReport.h"
 #include "app/VolumeAmbience.h"
-#include "app/CubeCaptureGl.h"
-#include "app/DebugOverlay.h"
+#include "lighting/Baselines.h"
+#include "lighting/Metrics.h"
 #include "world/Error.h"
 #include "world/World.h"
 
@@ -54,20 +56,46 @@ struct RunOptions {
     int faceSize = 16;
     std::string out;
     bool noVideo = false;
+    std::string baselineConfig;
+    bool noFrames = false;
+    int measureEvery = 0;
+    std::string oracle;
 };
 
-std::string defaultReplayPath() {
-    // Beside the executable's tree (<exe>/../../replays) or the current directory.
-    char exe[4096] = {};
-    const ssize_t n = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
-    if (n > 0) {
-        const fs::path p = fs::path(std::string(exe, size_t(n))).parent_path();
-        for (const fs::path& c :
-             {p / "../../replays/highway-drive.json", p / "../replays/highway-drive.json"}) {
-            if (fs::exists(c)) return fs::weakly_canonical(c).string();
+std::string readTextFile(const std::string& path, const char* what) {
+    std::ifstream in(path);
+    if (!in) throw InputError(path, std::string("cannot open the ") + what);
+    std::ostringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+
+// Where the draw would look up ambience, for a run without the main view: patch corners (the
+// 32 m lattice) within 48 m all around the camera and within 240 m in a 60-degree half-angle
+// cone ahead, on the ground plane. The reactive baseline creates its probes from these.
+void drawLookupStandIn(const CameraSample& camera, std::vector<double>& x, std::vector<double>& z) {
+    x.clear(), z.clear();
+    constexpr double kSpacing = 32.0, kNear = 48.0, kFar = 240.0, kCosCone = 0.5;
+    glm::dvec2 ahead(camera.forward.x, camera.forward.z);
+    const double len = glm::length(ahead);
+    ahead = len > 1e-6 ? ahead / len : glm::dvec2(0.0);
+    const double i0 = std::floor(camera.position_m.x / kSpacing);
+    const double k0 = std::floor(camera.position_m.z / kSpacing);
+    const int reach = int(kFar / kSpacing) + 1;
+    for (int di = -reach; di <= reach; ++di)
+        for (int dk = -reach; dk <= reach; ++dk) {
+            const double px = (i0 + di) * kSpacing, pz = (k0 + dk) * kSpacing;
+            const glm::dvec2 d(px - camera.position_m.x, pz - camera.position_m.z);
+            const double r = glm::length(d);
+            const bool near = r <= kNear;
+            const bool inCone = r <= kFar && len > 1e-6 && glm::dot(d, ahead) >= kCosCone * r;
+            if (near || inCone) x.push_back(px), z.push_back(pz);
         }
-    }
-    return "replays/highway-drive.json";
+}
+
+std::string defaultReplayPath() {
+    const std::string dir = shippedReplayDir();
+    return (dir.empty() ? std::string("replays") : dir) + "/highway-drive.json";
 }
 
 void ensureDirectory(const std::string& dir, const std::string& option) {
@@ -85,21 +113,31 @@ void runReplay(RunOptions o) {
     const Backend backend = parseBackend(o.backend, "--backend");
     if (backend == Backend::Glfw)
         throw InputError("--backend", "run is headless: auto, egl or osmesa");
-    // "volume" is the dynamic ambience volume; the fixed modes are the baselines.
+    // "volume" is the dynamic ambience volume; the others are the baselines (VolumeAmbience.h).
+    checkAmbienceMethod(o.ambient, "--ambient");
     const bool useVolume = o.ambient == "volume";
-    const AmbientMode ambientMode =
-        useVolume ? AmbientMode::Hemisphere : parseAmbientMode(o.ambient, "--ambient");
     AmbienceVolumeSettings volumeSettings;
     if (!o.ambienceConfig.empty()) {
-        std::ifstream in(o.ambienceConfig);
-        if (!in) throw InputError(o.ambienceConfig, "cannot open the ambience settings file");
-        std::ostringstream text;
-        text << in.rdbuf();
-        volumeSettings = ambienceSettingsFromJson(text.str(), o.ambienceConfig);
+        volumeSettings = ambienceSettingsFromJson(
+            readTextFile(o.ambienceConfig, "ambience settings file"), o.ambienceConfig);
+    }
+    BaselineSettings baselines;
+    if (!o.baselineConfig.empty()) {
+        baselines = baselineSettingsFromJson(
+            readTextFile(o.baselineConfig, "baseline settings file"), o.baselineConfig);
     }
     if (o.facesPerFrame < 1 || o.facesPerFrame > 6)
         throw InputError("--faces-per-frame", "expected 1 to 6");
-    volumeSettings.facesPerFrame = o.facesPerFrame;
+    // One capture budget for every method.
+    volumeSettings.facesPerFrame = baselines.facesPerFrame = o.facesPerFrame;
+    if (o.measureEvery < 0) throw InputError("--measure-every", "must be >= 0");
+    if (!o.oracle.empty() && o.measureEvery == 0)
+        throw InputError("--oracle", "needs --measure-every K");
+    if (o.noFrames) {
+        if (!o.video.empty()) throw InputError("--video", "--no-frames draws no main view");
+        o.frames = "none";
+        o.noVideo = true;
+    }
     if (o.faceSize < 1 || o.faceSize > 256) throw InputError("--face-size", "expected 1 to 256");
     if (!useVolume && o.debugOverlay) throw InputError("--debug-overlay", "needs --ambient volume");
     if (!useVolume && (!o.saveAnchors.empty() || !o.loadAnchors.empty()))
@@ -124,17 +162,30 @@ void runReplay(RunOptions o) {
     rs.height = size.height;
     rs.drawVehicle = replay.mode == ReplayMode::Drive && !o.noVehicle;
     Renderer renderer(world, rs);
-    std::unique_ptr<AmbienceStages> ambience;
-    VolumeAmbienceStages* volume = nullptr;
-    if (useVolume) {
-        auto v = std::make_unique<VolumeAmbienceStages>(renderer, volumeSettings, o.faceSize);
-        volume = v.get();
-        if (!o.loadAnchors.empty()) volume->volume().loadAnchors(o.loadAnchors);
-        ambience = std::move(v);
-    } else {
-        ambience = std::make_unique<FixedAmbienceStages>(ambientMode);
+    auto stages = std::make_unique<MethodAmbienceStages>(renderer, o.ambient, volumeSettings,
+                                                         baselines, o.faceSize);
+    AmbienceVolume* volume = stages->volume();
+    if (volume && !o.loadAnchors.empty()) volume->loadAnchors(o.loadAnchors);
+    FrameLoop loop(replay, renderer, *stages, o.stride);
+    loop.setDrawMainView(!o.noFrames);
+
+    // The error measurement: the oracle's captures use the same capture as the method.
+    std::unique_ptr<ErrorMeter> meter;
+    MeasureSettings measureSettings;
+    measureSettings.every = o.measureEvery;
+    measureSettings.sunThreshold = volumeSettings.sunThreshold;
+    // The oracle depends on the replay, the frames measured and the capture settings only.
+    const std::string oracleSignature =
+        fs::path(o.replay).filename().string() + " stride=" + std::to_string(o.stride) +
+        " every=" + std::to_string(o.measureEvery) + " face=" + std::to_string(o.faceSize) +
+        " sunThreshold=" + std::to_string(measureSettings.sunThreshold) +
+        " frames=" + std::to_string(o.maxFrames);
+    if (o.measureEvery > 0) {
+        meter = std::make_unique<ErrorMeter>(stages->cubeCapture(), stages->environment(),
+                                             measureSettings);
+        if (!o.oracle.empty() && fs::exists(o.oracle)) meter->loadOracle(o.oracle, oracleSignature);
     }
-    FrameLoop loop(replay, renderer, *ambience, o.stride);
+    std::vector<double> standInX, standInZ;
     const int frames =
         o.maxFrames > 0 ? std::min(o.maxFrames, loop.frameCount()) : loop.frameCount();
 
@@ -145,7 +196,7 @@ void runReplay(RunOptions o) {
     report.glRenderer = platform->glRenderer();
     report.width = size.width;
     report.height = size.height;
-    report.ambient = useVolume ? "volume" : toString(ambientMode);
+    report.ambient = o.ambient;
     report.frameStep_s = loop.frameStep_s();
 
     std::unique_ptr<VideoPipe> video;
@@ -161,31 +212,41 @@ void runReplay(RunOptions o) {
     const auto start = std::chrono::steady_clock::now();
     for (int i = 0; i < frames; ++i) {
         FrameRecord rec = loop.step();
-        if (volume) {
-            const AmbienceStatistics& st = volume->volume().statistics();
+        {
+            const MethodStatistics st = stages->method().methodStatistics();
             rec.ambience.active = true;
-            rec.ambience.anchors = st.store.anchors;
-            rec.ambience.bytes = st.store.bytes();
+            rec.ambience.anchors = st.probes;
+            rec.ambience.bytes = st.bytes;
             rec.ambience.faces = st.facesThisFrame;
-            rec.ambience.finestLevel = st.finestLevel;
-            rec.ambience.lookups = volume->ambient().lookups();
-            rec.ambience.lookupMs = volume->ambient().lookupMs();
+            rec.ambience.lookups = stages->ambient().lookups();
+            rec.ambience.lookupMs = stages->ambient().lookupMs();
             rec.ambience.captureMs = st.capture_s * 1e3;
             rec.ambience.predictMs = st.predict_s * 1e3;
             rec.ambience.projectMs = st.project_s * 1e3;
             rec.ambience.storeMs = st.store_s * 1e3;
-            const int levels = volume->volume().store().levels();
+        }
+        if (volume) {
+            const AmbienceStatistics& st = volume->statistics();
+            rec.ambience.finestLevel = st.finestLevel;
+            const int levels = volume->store().levels();
             rec.ambience.anchorsPerLevel.assign(st.store.anchorsPerLevel.begin(),
                                                 st.store.anchorsPerLevel.begin() + levels);
+        }
+        const CameraSample camera = replay.sampleAt(rec.time_s);
+        if (meter) {
+            meter->frame(rec.index, rec.time_s, rec.timeOfDay_h, camera.position_m,
+                         glm::length(stages->velocity()), stages->method());
+        }
+        if (o.noFrames) {
+            drawLookupStandIn(camera, standInX, standInZ);
+            stages->addLookups(standInX, standInZ);
         }
         const bool writeFrame = o.frames != "none" && rec.index % o.every == 0;
         if (writeFrame || video) {
             auto pixels = renderer.readRgb8();
             if (o.debugOverlay && volume) {
-                const CameraSample camera = replay.sampleAt(rec.time_s);
-                drawAnchorOverlay(pixels, size.width, size.height,
-                                  renderer.viewProjection(camera), camera.position_m,
-                                  volume->volume());
+                drawAnchorOverlay(pixels, size.width, size.height, renderer.viewProjection(camera),
+                                  camera.position_m, *volume);
             }
             if (writeFrame) {
                 char file[64];
@@ -200,8 +261,16 @@ void runReplay(RunOptions o) {
     progress.finish();
     report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (video) video->close();
+    {
+        const MethodStatistics st = stages->method().methodStatistics();
+        auto& t = report.ambienceTotals;
+        t.facesCaptured = st.facesCaptured;
+        t.rejectedProbes = st.rejectedProbes;
+        t.teleports = st.teleports;
+        t.captureTriangles = stages->cubeCapture().lastStats().triangles;
+    }
     if (volume) {
-        const AmbienceStatistics& st = volume->volume().statistics();
+        const AmbienceStatistics& st = volume->statistics();
         auto& t = report.ambienceTotals;
         t.facesCaptured = st.facesCaptured;
         t.probesCompleted = st.probesCompleted;
@@ -210,8 +279,13 @@ void runReplay(RunOptions o) {
         t.inserted = st.store.inserted;
         t.refreshed = st.store.refreshed;
         t.expired = st.store.expired;
-        t.captureTriangles = volume->cubeCapture().lastStats().triangles;
-        if (!o.saveAnchors.empty()) volume->volume().saveAnchors(o.saveAnchors);
+        if (!o.saveAnchors.empty()) volume->saveAnchors(o.saveAnchors);
+    }
+    if (meter) {
+        report.measurementJson = measurementJson(*meter);
+        writeMeasureCsv(*meter, fs::path(o.report).replace_extension(".measure.csv").string());
+        if (!o.oracle.empty() && meter->oracleCaptures() > 0)
+            meter->saveOracle(o.oracle, oracleSignature);
     }
 
     // (4) report
@@ -222,14 +296,23 @@ void runReplay(RunOptions o) {
     std::printf("frame time median %.1f ms (%.1f fps), p95 %.1f ms; triangles median %.0f\n",
                 summary.frameMedianMs, 1000.0 / summary.frameMedianMs, summary.frameP95Ms,
                 summary.trianglesMedian);
+    if (meter) {
+        const Summary e = summarize(meter->errors()), p = summarize(meter->pops());
+        std::printf(
+            "error vs oracle: mean %.4f, p95 %.4f, max %.4f over %zu witnesses; "
+            "pop p99 %.5f, max %.5f (oracle %.1f s, %lld captures, %lld from cache)\n",
+            e.mean, e.p95, e.max, e.count, p.p99, p.max, meter->oracleSeconds(),
+            (long long)meter->oracleCaptures(), (long long)meter->oracleCacheHits());
+    }
     if (volume) {
-        const AmbienceStatistics& st = volume->volume().statistics();
-        std::printf("ambience: %zu anchors, %.1f kB (%.0f B/anchor), %lld faces captured, "
-                    "%lld probes (%lld rejected)\n",
-                    st.store.anchors, st.store.bytes() / 1024.0,
-                    st.store.anchors ? double(st.store.bytes()) / double(st.store.anchors) : 0.0,
-                    (long long)st.facesCaptured, (long long)st.probesCompleted,
-                    (long long)st.rejectedProbes);
+        const AmbienceStatistics& st = volume->statistics();
+        std::printf(
+            "ambience: %zu anchors, %.1f kB (%.0f B/anchor), %lld faces captured, "
+            "%lld probes (%lld rejected)\n",
+            st.store.anchors, st.store.bytes() / 1024.0,
+            st.store.anchors ? double(st.store.bytes()) / double(st.store.anchors) : 0.0,
+            (long long)st.facesCaptured, (long long)st.probesCompleted,
+            (long long)st.rejectedProbes);
         if (!o.saveAnchors.empty()) std::printf("  anchors saved: %s\n", o.saveAnchors.c_str());
     }
     std::printf("output: %s\n", fs::weakly_canonical(o.out).string().c_str());
@@ -239,6 +322,20 @@ void runReplay(RunOptions o) {
 }
 
 }  // namespace
+
+std::string shippedReplayDir() {
+    // Beside the executable's tree (<exe>/../../replays) or the current directory.
+    char exe[4096] = {};
+    const ssize_t n = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
+    if (n > 0) {
+        const fs::path p = fs::path(std::string(exe, size_t(n))).parent_path();
+        for (const fs::path& c : {p / "../../replays", p / "../replays"}) {
+            if (fs::exists(c / "highway-drive.json")) return fs::weakly_canonical(c).string();
+        }
+    }
+    if (fs::exists("replays/highway-drive.json")) return fs::weakly_canonical("replays").string();
+    return "";
+}
 
 void addRunCommand(CLI::App& app) {
     auto* cmd =
@@ -258,8 +355,16 @@ void addRunCommand(CLI::App& app) {
     cmd->add_option("--max-frames", o->maxFrames, "stop after N frames (default: whole replay)");
     cmd->add_option("--stride", o->stride,
                     "replay steps per frame (default 2: 30 frames/s of a 60 Hz replay)");
-    cmd->add_option("--ambient", o->ambient,
-                    "volume (the dynamic ambience volume), constant or hemisphere (default volume)");
+    cmd->add_option("--ambient", o->ambient, ambienceMethodHelp());
+    cmd->add_option("--baseline-config", o->baselineConfig,
+                    "JSON file of baseline settings (BaselineSettings fields, "
+                    "lighting/Baselines.h)");
+    cmd->add_flag("--no-frames", o->noFrames,
+                  "do not render the main view (captures still render): no frames, no video");
+    cmd->add_option("--measure-every", o->measureEvery,
+                    "measure the error against the oracle every K-th frame (default 0: off)");
+    cmd->add_option("--oracle", o->oracle,
+                    "oracle cache (JSON): read if it exists and matches, else written");
     cmd->add_option("--config,--ambience-config", o->ambienceConfig,
                     "JSON file of ambience volume settings (AmbienceVolumeSettings fields, "
                     "lighting/AmbienceVolume.h)");

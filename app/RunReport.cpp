@@ -1,6 +1,8 @@
 // RunReport.cpp — size parsing, ffmpeg pipe, progress bar, report.
 #include "app/RunReport.h"
 
+#include "lighting/Metrics.h"
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -180,12 +182,18 @@ void RunReport::write(const std::string& path) const {
         // The ambience's share of frame time: stages 2-5 plus the lookups the draw makes
         // (terrain corners and objects ask the volume while the draw list is built).
         double ambienceMs = 0.0, captureMs = 0.0, totalMs = 0.0;
-        std::vector<double> anchors, bytes, lookupMs;
+        std::vector<double> anchors, bytes, lookupMs, perFrameAmbienceMs;
+        std::int64_t faces = 0;
         std::size_t maxAnchors = 0, maxBytes = 0;
         for (const FrameRecord& f : frames) {
-            ambienceMs += f.stageMs[int(FrameStage::Predict)] + f.stageMs[int(FrameStage::Capture)] +
-                          f.stageMs[int(FrameStage::Store)] +
+            ambienceMs += f.stageMs[int(FrameStage::Predict)] +
+                          f.stageMs[int(FrameStage::Capture)] + f.stageMs[int(FrameStage::Store)] +
                           f.stageMs[int(FrameStage::Interpolate)] + f.ambience.lookupMs;
+            perFrameAmbienceMs.push_back(
+                f.stageMs[int(FrameStage::Predict)] + f.stageMs[int(FrameStage::Capture)] +
+                f.stageMs[int(FrameStage::Store)] + f.stageMs[int(FrameStage::Interpolate)] +
+                f.ambience.lookupMs);
+            faces += f.ambience.faces;
             captureMs += f.stageMs[int(FrameStage::Capture)];
             totalMs += f.frameMs;
             anchors.push_back(double(f.ambience.anchors));
@@ -202,8 +210,9 @@ void RunReport::write(const std::string& path) const {
             {"anchors", statsJson(anchors)},
             {"bytesEnd", last.ambience.bytes},
             {"bytesMax", maxBytes},
-            {"bytesPerAnchorEnd",
-             last.ambience.anchors ? double(last.ambience.bytes) / double(last.ambience.anchors) : 0.0},
+            {"bytesPerAnchorEnd", last.ambience.anchors
+                                      ? double(last.ambience.bytes) / double(last.ambience.anchors)
+                                      : 0.0},
             {"facesCaptured", t.facesCaptured},
             {"probesCompleted", t.probesCompleted},
             {"rejectedProbes", t.rejectedProbes},
@@ -213,10 +222,16 @@ void RunReport::write(const std::string& path) const {
             {"anchorsExpired", t.expired},
             {"captureTrianglesPerFace", t.captureTriangles},
             {"lookup_ms", statsJson(lookupMs)},
+            // Stages 2-5 and the draw's lookups, per frame.
+            {"ambience_ms", statsJson(perFrameAmbienceMs)},
+            {"facesPerSecond", frames.size() > 1 && frameStep_s > 0
+                                   ? double(faces) / (double(frames.size()) * frameStep_s)
+                                   : 0.0},
             {"shareOfFrameTime", totalMs > 0 ? ambienceMs / totalMs : 0.0},
             {"captureShareOfFrameTime", totalMs > 0 ? captureMs / totalMs : 0.0},
         };
     }
+    if (!measurementJson.empty()) j["measurement"] = json::parse(measurementJson);
     json rows = json::array();
     for (const FrameRecord& f : frames) {
         json r{{"frame", f.index},
@@ -272,14 +287,67 @@ void RunReport::write(const std::string& path) const {
         if (volume) {
             csv << "," << f.ambience.anchors << "," << f.ambience.bytes << "," << f.ambience.faces
                 << "," << f.ambience.finestLevel << "," << f.ambience.lookups << ","
-                << f.ambience.lookupMs << "," << f.ambience.predictMs << ","
-                << f.ambience.captureMs << "," << f.ambience.projectMs << ","
-                << f.ambience.storeMs;
+                << f.ambience.lookupMs << "," << f.ambience.predictMs << "," << f.ambience.captureMs
+                << "," << f.ambience.projectMs << "," << f.ambience.storeMs;
             for (std::size_t l = 0; l < csvLevels; ++l)
-                csv << "," << (l < f.ambience.anchorsPerLevel.size() ? f.ambience.anchorsPerLevel[l] : 0);
+                csv << ","
+                    << (l < f.ambience.anchorsPerLevel.size() ? f.ambience.anchorsPerLevel[l] : 0);
         }
         csv << "\n";
     }
+}
+
+// ---- Measurement ---------------------------------------------------------------------------
+
+std::string measurementJson(const ErrorMeter& meter) {
+    using nlohmann::json;
+    auto summaryJson = [](const Summary& s) {
+        return json{{"count", s.count}, {"mean", s.mean}, {"p50", s.p50},
+                    {"p95", s.p95},     {"p99", s.p99},   {"max", s.max}};
+    };
+    const MeasureSettings& ms = meter.settings();
+    json rings = json::array();
+    for (int r = 0; r < ms.rings(); ++r)
+        rings.push_back(summaryJson(summarize(meter.ringErrors(r))));
+    double speed = 0.0;
+    for (const auto& m : meter.measured()) speed += m.speed_mps;
+    const std::size_t n = meter.measured().size();
+    json j{{"every", ms.every},
+           {"measuredFrames", n},
+           {"ringRadii_m", ms.ringRadii},
+           {"witnessesPerRing", ms.perRing},
+           {"error", summaryJson(summarize(meter.errors()))},
+           {"errorByRing", rings},
+           {"pop", summaryJson(summarize(meter.pops()))},
+           {"meanSpeed_mps", n ? speed / double(n) : 0.0},
+           {"oracle_s", meter.oracleSeconds()},
+           {"oracleCaptures", meter.oracleCaptures()},
+           {"oracleCacheHits", meter.oracleCacheHits()},
+           {"metric",
+            "relative L2 distance of irradiance over the sphere of normals, luminance-weighted "
+            "channels (lighting/Metrics.h)"}};
+    return j.dump();
+}
+
+void writeMeasureCsv(const ErrorMeter& meter, const std::string& path) {
+    std::ofstream out(path);
+    if (!out) throw InputError(path, "cannot write the measurement CSV");
+    const int rings = meter.settings().rings();
+    out << "frame,time_s,time_of_day_h,speed_mps,error_mean,error_max";
+    for (int r = 0; r < rings; ++r) out << ",error_ring" << r;
+    out << "\n";
+    out.precision(9);
+    for (const auto& m : meter.measured()) {
+        out << m.index << ',' << m.time_s << ',' << m.timeOfDay_h << ',' << m.speed_mps << ','
+            << m.mean() << ',' << m.max();
+        for (int r = 0; r < rings; ++r) {
+            const double v = m.ringMean(r);
+            out << ',';
+            if (std::isfinite(v)) out << v;
+        }
+        out << "\n";
+    }
+    if (!out) throw InputError(path, "cannot write the measurement CSV");
 }
 
 }  // namespace amb

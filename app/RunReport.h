@@ -54,6 +54,13 @@ struct TimingStats {
 };
 TimingStats timingStats(std::vector<double> values);
 
+class ErrorMeter;
+// The measurement's summary as JSON text (error overall and per ring, pop, oracle cost).
+std::string measurementJson(const ErrorMeter& meter);
+// One row per measured frame: frame, time_s, time_of_day_h, speed_mps, error_mean, error_max,
+// error_ring0 .. error_ring<R-1>.
+void writeMeasureCsv(const ErrorMeter& meter, const std::string& path);
+
 struct RunReport {
     std::string replay, backend, glVersion, glRenderer, ambient;
     int width = 0, height = 0;
@@ -66,6 +73,9 @@ struct RunReport {
         std::size_t captureTriangles = 0;  // triangles per capture face
         std::int64_t inserted = 0, refreshed = 0, expired = 0;
     } ambienceTotals;
+
+    // The error measurement (ErrorMeter), as JSON text (empty: not measured).
+    std::string measurementJson;
 
     struct Summary {
         double frameMedianMs = 0.0, frameP95Ms = 0.0, trianglesMedian = 0.0;

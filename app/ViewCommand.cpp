@@ -15,11 +15,12 @@
 
 #include "app/Commands.h"
 #include "app/DebugOverlay.h"
-#include "app/VolumeAmbience.h"
 #include "app/FrameLoop.h"
 #include "app/Gl.h"
 #include "app/Platform.h"
 #include "app/RunReport.h"
+#include "app/VolumeAmbience.h"
+#include "lighting/Baselines.h"
 #include "world/Error.h"
 #include "world/World.h"
 // GLFW after glad (app/Gl.h).
@@ -72,9 +73,9 @@ void runView(const ViewOptions& o) {
     const bool haveReplay = !o.replay.empty();
     if (haveReplay) replay = readReplay(o.replay);
     const Size size = parseSize(o.size, "--size");
-    const bool useVolume = o.ambient == "volume";
-    const AmbientMode ambientMode =
-        useVolume ? AmbientMode::Hemisphere : parseAmbientMode(o.ambient, "--ambient");
+    checkAmbienceMethod(o.ambient, "--ambient");
+    if (o.debugOverlay && o.ambient != "volume")
+        throw InputError("--debug-overlay", "needs --ambient volume");
     if (o.frames < 0) throw InputError("--frames", "must be >= 0");
     if (!o.screenshot.empty() && o.frames == 0) {
         throw InputError("--screenshot", "needs --frames N (the frame to save)");
@@ -87,15 +88,9 @@ void runView(const ViewOptions& o) {
     rs.width = size.width;
     rs.height = size.height;
     Renderer renderer(world, rs);
-    std::unique_ptr<AmbienceStages> stages;
-    VolumeAmbienceStages* volume = nullptr;
-    if (useVolume) {
-        auto v = std::make_unique<VolumeAmbienceStages>(renderer, AmbienceVolumeSettings{});
-        volume = v.get();
-        stages = std::move(v);
-    } else {
-        stages = std::make_unique<FixedAmbienceStages>(ambientMode);
-    }
+    auto stages = std::make_unique<MethodAmbienceStages>(
+        renderer, o.ambient, AmbienceVolumeSettings{}, BaselineSettings{});
+    AmbienceVolume* volume = stages->volume();
     AmbienceStages& ambience = *stages;
     double simulation_s = 0.0;  // the volume's clock: fixed steps, stops while paused
 
@@ -213,7 +208,7 @@ void runView(const ViewOptions& o) {
         if (o.debugOverlay && volume) {
             auto pixels = renderer.readRgb8();
             drawAnchorOverlay(pixels, size.width, size.height, renderer.viewProjection(cam),
-                              cam.position_m, volume->volume());
+                              cam.position_m, *volume);
             renderer.replaceLdr(pixels);
         }
         renderer.blitToWindow(platform->width(), platform->height());
@@ -240,8 +235,7 @@ void addViewCommand(CLI::App& app) {
     cmd->add_option("--replay", o->replay, "replay to follow (its world is shown)");
     cmd->add_option("--size", o->size, "window size WxH (default 960x540)");
     cmd->add_option("--time", o->time_h, "fixed time of day [hours] (default: the replay's)");
-    cmd->add_option("--ambient", o->ambient,
-                    "volume (the dynamic ambience volume), constant or hemisphere (default volume)");
+    cmd->add_option("--ambient", o->ambient, ambienceMethodHelp());
     cmd->add_flag("--debug-overlay", o->debugOverlay,
                   "mark anchors and the probe being captured on screen and on screenshots");
     cmd->add_option("--record", o->record, "file the R key records to (default recorded.json)");

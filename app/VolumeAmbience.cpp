@@ -1,10 +1,12 @@
-// VolumeAmbience.cpp — the ambience volume as the frame's stages 2-5.
+// VolumeAmbience.cpp — an ambience method as the frame's stages 2-5.
 #include "app/VolumeAmbience.h"
 
 #include "app/CubeCaptureGl.h"
 #include "app/Renderer.h"
+#include "lighting/Baselines.h"
 #include "lighting/ProbeEnvironment.h"
 #include "lighting/SH.h"
+#include "world/Error.h"
 #include "world/World.h"
 
 namespace amb {
@@ -16,61 +18,130 @@ double msSince(Clock::time_point t0) {
 }
 }  // namespace
 
-// ---- VolumeAmbient ---------------------------------------------------------------------------
+const std::vector<std::string>& ambienceMethodNames() {
+    static const std::vector<std::string> names = {"volume", "nearest",  "grid",      "reactive",
+                                                   "object", "constant", "hemisphere"};
+    return names;
+}
 
-glm::vec3 VolumeAmbient::cornerIrradiance(const glm::dvec3& position_m,
+void checkAmbienceMethod(const std::string& name, const std::string& option) {
+    for (const auto& n : ambienceMethodNames())
+        if (n == name) return;
+    std::string list;
+    for (const auto& n : ambienceMethodNames()) list += (list.empty() ? "" : ", ") + n;
+    throw InputError(option,
+                     "unknown ambience method '" + name + "' (expected one of " + list + ")");
+}
+
+std::string ambienceMethodHelp() {
+    return "volume (ours: the dynamic ambience volume, default), nearest (ours without "
+           "blending: the nearest anchor), grid (camera-centred scrolling grid, round-robin "
+           "with hysteresis), reactive (probes only where lookups happen), object (one capture "
+           "per object), constant, hemisphere";
+}
+
+// ---- MethodAmbient ---------------------------------------------------------------------------
+
+void MethodAmbient::note(const glm::dvec3& p) const {
+    x_.push_back(p.x);
+    z_.push_back(p.z);
+}
+
+glm::vec3 MethodAmbient::cornerIrradiance(const glm::dvec3& position_m,
                                           const glm::dvec3& normal) const {
     const auto t0 = Clock::now();
     // Terrain (thesis 8.6): the colour at a patch corner from the SH interpolated there, with
     // the corner's normal; the renderer interpolates it across the patch.
-    const ShRgb sh = volume_.shAt(position_m.x, position_m.z);
+    const ShRgb sh = method_.shAt(position_m.x, position_m.z);
     const glm::vec3 e = glm::max(shIrradiance(sh, glm::vec3(normal)), glm::vec3(0.0f));
     ++lookups_;
+    note(position_m);
     lookupMs_ += msSince(t0);
     return e;
 }
 
-std::uint32_t VolumeAmbient::objectSet(const glm::dvec3& position_m,
+std::uint32_t MethodAmbient::objectSet(const glm::dvec3& position_m,
                                        std::vector<AmbientSet>& sets) const {
     const auto t0 = Clock::now();
     // Objects (thesis 8.6, 9.4): one SH set at the object's ground point, evaluated per pixel
     // with the normal through R&H's matrices.
-    const ShIrradianceMatrices m = shIrradianceMatrices(volume_.shAt(position_m.x, position_m.z));
+    const ShIrradianceMatrices m = shIrradianceMatrices(method_.shAt(position_m.x, position_m.z));
     sets.push_back(AmbientSet{m.r, m.g, m.b});
     ++lookups_;
+    note(position_m);
     lookupMs_ += msSince(t0);
     return std::uint32_t(sets.size() - 1);
 }
 
-// ---- VolumeAmbienceStages --------------------------------------------------------------------
+// ---- FixedMethod -----------------------------------------------------------------------------
 
-VolumeAmbienceStages::VolumeAmbienceStages(Renderer& renderer,
-                                           const AmbienceVolumeSettings& settings, int faceSize)
+void FixedMethod::predictStage(const glm::dvec3&, const glm::dvec3&, double timeOfDay_h, double) {
+    if (timeOfDay_h == timeOfDay_h_) return;
+    timeOfDay_h_ = timeOfDay_h;
+    // The same SH FixedAmbient draws with (Renderer.h): the sky and ground means.
+    sh_ = FixedAmbient(mode_, evaluateSky(sky_, timeOfDay_h)).sh();
+}
+
+// ---- MethodAmbienceStages --------------------------------------------------------------------
+
+MethodAmbienceStages::MethodAmbienceStages(Renderer& renderer, const std::string& method,
+                                           const AmbienceVolumeSettings& settings,
+                                           const BaselineSettings& baselines, int faceSize)
     : capture_(std::make_unique<CubeCaptureGl>(renderer.scene(), faceSize)),
-      environment_(std::make_unique<WorldProbeEnvironment>(renderer.world())),
-      volume_(std::make_unique<AmbienceVolume>(*capture_, *environment_, settings,
-                                               &renderer.world().roads())),
-      ambient_(std::make_unique<VolumeAmbient>(*volume_)) {}
+      environment_(std::make_unique<WorldProbeEnvironment>(renderer.world())) {
+    if (method == "constant" || method == "hemisphere") {
+        method_ = std::make_unique<FixedMethod>(parseAmbientMode(method, "--ambient"),
+                                                renderer.world().sky());
+    } else {
+        method_ = makeCapturingMethod(method, *capture_, *environment_, settings, baselines,
+                                      &renderer.world().roads());
+    }
+    ambient_ = std::make_unique<MethodAmbient>(*method_);
+}
 
-VolumeAmbienceStages::~VolumeAmbienceStages() = default;
+MethodAmbienceStages::MethodAmbienceStages(Renderer& renderer,
+                                           const AmbienceVolumeSettings& settings, int faceSize)
+    : MethodAmbienceStages(renderer, "volume", settings, BaselineSettings{}, faceSize) {}
 
-void VolumeAmbienceStages::predict(const FrameState& frame) {
+MethodAmbienceStages::~MethodAmbienceStages() = default;
+
+const ProbeEnvironment& MethodAmbienceStages::environment() const {
+    return *environment_;
+}
+
+void MethodAmbienceStages::addLookups(const std::vector<double>& x_m,
+                                      const std::vector<double>& z_m) {
+    extraX_.insert(extraX_.end(), x_m.begin(), x_m.end());
+    extraZ_.insert(extraZ_.end(), z_m.begin(), z_m.end());
+}
+
+void MethodAmbienceStages::predict(const FrameState& frame) {
+    // Where the last frame's draw (and the measurement's stand-in for it) looked.
+    std::vector<double> x = ambient_->lookupX(), z = ambient_->lookupZ();
+    x.insert(x.end(), extraX_.begin(), extraX_.end());
+    z.insert(z.end(), extraZ_.begin(), extraZ_.end());
+    extraX_.clear(), extraZ_.clear();
+    if (!x.empty()) method_->noteLookups(x.size(), x.data(), z.data());
     // Velocity from the camera's own history (the scheduler's inertia model); none across a cut.
     const glm::dvec3 p = frame.camera.position_m;
     const double dt = havePrevious_ ? frame.time_s - previousTime_s_ : 0.0;
-    glm::dvec3 velocity(0.0);
-    if (havePrevious_ && dt > 0.0 && !frame.camera.cut) velocity = (p - previous_m_) / dt;
-    volume_->predictStage(p, velocity, frame.timeOfDay_h, dt);
+    velocity_ = glm::dvec3(0.0);
+    if (havePrevious_ && dt > 0.0 && !frame.camera.cut) velocity_ = (p - previous_m_) / dt;
+    method_->predictStage(p, velocity_, frame.timeOfDay_h, dt);
     havePrevious_ = true;
     previous_m_ = p;
     previousTime_s_ = frame.time_s;
 }
 
-void VolumeAmbienceStages::capture(const FrameState&) { volume_->captureStage(); }
+void MethodAmbienceStages::capture(const FrameState&) {
+    method_->captureStage();
+}
 
-void VolumeAmbienceStages::store(const FrameState&) { volume_->storeStage(); }
+void MethodAmbienceStages::store(const FrameState&) {
+    method_->storeStage();
+}
 
-const AmbientSource& VolumeAmbienceStages::interpolate(const FrameState&) {
+const AmbientSource& MethodAmbienceStages::interpolate(const FrameState&) {
     ambient_->resetCounters();
     return *ambient_;
 }

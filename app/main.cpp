@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
     amb::addWorldCommand(app);
     amb::addReplayCommand(app);
     amb::addShCommand(app);
+    amb::addBenchCommand(app);
 
     try {
         app.parse(argc, argv);

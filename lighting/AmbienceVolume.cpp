@@ -15,6 +15,7 @@
 
 #include "lighting/CubeCapture.h"
 #include "lighting/CubeMapProjector.h"
+#include "lighting/ProbeCapture.h"
 #include "lighting/ProbeEnvironment.h"
 #include "world/Error.h"
 
@@ -74,7 +75,8 @@ class JsonFields {
         known_.push_back(key);
         if (!object_.contains(key)) return;
         const auto& v = object_.at(key);
-        if (!v.is_boolean()) throw InputError(where_, std::string("'") + key + "' must be true or false");
+        if (!v.is_boolean())
+            throw InputError(where_, std::string("'") + key + "' must be true or false");
         field = v.get<bool>();
     }
     void object(const char* key, const std::function<void(JsonFields&)>& read) {
@@ -203,7 +205,8 @@ void AmbienceVolume::updateFallback(double timeOfDay_h) {
 
 double AmbienceVolume::skyLevel(double timeOfDay_h) const {
     // Cached per minute of the day: the level changes slowly and anchors share capture minutes.
-    const int minute = int(std::floor(std::fmod(std::fmod(timeOfDay_h, 24.0) + 24.0, 24.0) * 60.0)) % 1440;
+    const int minute =
+        int(std::floor(std::fmod(std::fmod(timeOfDay_h, 24.0) + 24.0, 24.0) * 60.0)) % 1440;
     if (auto it = skyLevels_.find(minute); it != skyLevels_.end()) return it->second;
     // Mean luminance of the fallback scene (sky over lit flat ground) on a small cube, texels
     // clamped at the sun threshold so the disc (lit separately by the renderer) does not count.
@@ -272,8 +275,6 @@ void AmbienceVolume::captureStage() {
     // 3. Capture this frame's faces, projecting each as it arrives.
     const double timeOfDay_h = lastTimeOfDay_h_;
     Clock::time_point t0;
-    const int n = capture_.faceSize();
-    const std::size_t faceFloats = std::size_t(n) * n * 3;
     int budget = settings_.facesPerFrame;
     while (budget > 0) {
         if (!job_) {
@@ -295,27 +296,12 @@ void AmbienceVolume::captureStage() {
             stats_.predict_s += secondsSince(t0);
             if (!job_) break;  // nothing worth capturing: the budget stays unused
         }
-        const int first = job_->facesDone;
-        const int count = std::min(budget, kCubeFaces - first);
-        CubeFaceMask mask = 0;
-        for (int f = first; f < first + count; ++f) mask |= cubeFaceBit(f);
-
-        t0 = Clock::now();
-        capture_.capture(job_->position_m, timeOfDay_h, mask, cube_);
-        stats_.capture_s += secondsSince(t0);
-        AMB_CHECK(cube_.size() == faceFloats * kCubeFaces);
-
-        t0 = Clock::now();
-        for (int f = first; f < first + count; ++f) {
-            const float* face = cube_.data() + faceFloats * std::size_t(f);
-            // A texel that is NaN, infinite or negative spoils the whole probe.
-            for (std::size_t t = 0; t < faceFloats && !job_->bad; ++t) {
-                if (!(face[t] >= 0.0f) || !std::isfinite(face[t])) job_->bad = true;
-            }
-            projector_->addFace(f, face);
-        }
-        stats_.project_s += secondsSince(t0);
-
+        const ProbeFacesResult r =
+            captureProbeFaces(capture_, *projector_, cube_, job_->position_m, timeOfDay_h,
+                              job_->facesDone, budget, job_->bad);
+        stats_.capture_s += r.capture_s;
+        stats_.project_s += r.project_s;
+        const int count = r.faces;
         job_->facesDone += count;
         budget -= count;
         stats_.facesThisFrame += count;
@@ -354,6 +340,21 @@ void AmbienceVolume::storeStage() {
     }
     stats_.store_s += secondsSince(t0);
     stats_.store = store_.statistics();
+}
+
+MethodStatistics AmbienceVolume::methodStatistics() const {
+    MethodStatistics m;
+    m.probes = stats_.store.anchors;
+    m.bytes = stats_.store.bytes();
+    m.facesThisFrame = stats_.facesThisFrame;
+    m.facesCaptured = stats_.facesCaptured;
+    m.rejectedProbes = stats_.rejectedProbes;
+    m.teleports = stats_.teleports;
+    m.predict_s = stats_.predict_s;
+    m.capture_s = stats_.capture_s;
+    m.project_s = stats_.project_s;
+    m.store_s = stats_.store_s;
+    return m;
 }
 
 }  // namespace amb

@@ -30,6 +30,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "lighting/AmbienceMethod.h"
 #include "lighting/AnchorStore.h"
 #include "lighting/ProbeScheduler.h"
 
@@ -88,7 +89,7 @@ struct ProbeInProgress {
     int facesDone = 0;           // 0..6
 };
 
-class AmbienceVolume {
+class AmbienceVolume final : public AmbienceMethod {
   public:
     // `capture`, `environment` (and `roads`, may be null) must outlive the volume.
     AmbienceVolume(CubeCapture& capture, const ProbeEnvironment& environment,
@@ -105,16 +106,19 @@ class AmbienceVolume {
     // times them separately: predict (time, motion model), capture (this frame's faces, each
     // projected as it arrives), store (advance the clock, insert completed probes).
     void predictStage(const glm::dvec3& cameraPosition_m, const glm::dvec3& cameraVelocity_mps,
-                      double timeOfDay_h, double dt_s);
-    void captureStage();
-    void storeStage();
+                      double timeOfDay_h, double dt_s) override;
+    void captureStage() override;
+    void storeStage() override;
 
+    std::string methodName() const override { return "volume"; }
     // Interpolated SH at ground point (x, z); finite everywhere.
-    ShRgb shAt(double x_m, double z_m) const { return store_.interpolate(x_m, z_m); }
+    ShRgb shAt(double x_m, double z_m) const override { return store_.interpolate(x_m, z_m); }
     // The same at many points (terrain-patch corners, object instances), in parallel.
-    void shAt(std::size_t count, const double* x_m, const double* z_m, ShRgb* out) const {
+    void shAt(std::size_t count, const double* x_m, const double* z_m,
+              ShRgb* out) const override {
         store_.interpolateMany(count, x_m, z_m, out);
     }
+    MethodStatistics methodStatistics() const override;
 
     const AmbienceStatistics& statistics() const { return stats_; }
     const AnchorStore& store() const { return store_; }

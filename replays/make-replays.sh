@@ -25,3 +25,8 @@ amb="${1:-../build/bin/ambience}"
   --duration 144 --time 0 --time-rate 600 --name day-timelapse \
   --description "Stationary camera through a full day at time rate 600" \
   --out day-timelapse.json
+"$amb" replay make --mode fly --speed 120 --altitude 80 --clearance 25 --turn-radius 700 \
+  --flight-seed 11 --start 1000000,-1000000 --heading 200 --duration 40 --time 17 \
+  --name far-flight \
+  --description "Flight at 120 m/s a million metres from the origin (precision), late afternoon" \
+  --out far-flight.json

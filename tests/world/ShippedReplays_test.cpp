@@ -27,7 +27,9 @@ struct Expect {
 };
 
 // Names the case in test listings (instead of a byte dump).
-void PrintTo(const Expect& e, std::ostream* os) { *os << e.name; }
+void PrintTo(const Expect& e, std::ostream* os) {
+    *os << e.name;
+}
 
 class ShippedReplay : public testing::TestWithParam<Expect> {};
 
@@ -71,10 +73,12 @@ INSTANTIATE_TEST_SUITE_P(
                     Expect{"mountain-drive", ReplayMode::Drive, 15.0, 20.0, 60.0, 0},
                     Expect{"low-flight", ReplayMode::Fly, 80.0, 80.0, 60.0, 0},
                     Expect{"stress-flight", ReplayMode::Fly, 250.0, 250.0, 60.0, 1},
-                    Expect{"day-timelapse", ReplayMode::Static, 0.0, 0.0, 144.0, 0}),
+                    Expect{"day-timelapse", ReplayMode::Static, 0.0, 0.0, 144.0, 0},
+                    Expect{"far-flight", ReplayMode::Fly, 120.0, 120.0, 40.0, 0}),
     [](const testing::TestParamInfo<Expect>& info) {
         std::string n = info.param.name;
-        for (char& c : n) if (c == '-') c = '_';
+        for (char& c : n)
+            if (c == '-') c = '_';
         return n;
     });
 

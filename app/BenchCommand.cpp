@@ -1,0 +1,850 @@
+// BenchCommand.cpp — `ambience bench`: replays x methods x parameter points, speed against error
+// (DESIGN.md "Measuring speed against error").
+//
+// Each run is a child process `ambience run --no-frames --measure-every K --oracle ...`, so a run
+// that fails (or crashes) is recorded with its error and the sweep goes on, and `--jobs` runs
+// go side by side. The oracle of a replay does not depend on the method: the first run of each
+// replay (the cheapest method) captures it and saves it, the others of that replay wait for it
+// and read it back. Outputs in --out: runs/<replay>__<method>__<point>/ (each run's report,
+// measurement CSV and log), oracle/<replay>.json, results.csv (one row per run), summary.md
+// (tables), PNG plots from bench-plots.py (matplotlib), and with --tune, tune.csv and
+// tuned-volume.json.
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <mutex>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "app/Commands.h"
+#include "app/VolumeAmbience.h"
+#include "world/Error.h"
+
+extern char** environ;
+
+namespace amb {
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+struct BenchOptions {
+    std::string replays, methods, sweep, out = "out/bench";
+    int jobs = 0;
+    int measureEvery = 30;
+    int maxFrames = 0;
+    int stride = 2;
+    bool frames = false;  // render the main view too (slow on a software rasteriser)
+    bool noFrames = false;
+    bool tune = false;
+    std::string tuneReplays = "highway-drive,mountain-drive,low-flight";
+    int tuneRounds = 1;
+    std::string backend = "auto";
+};
+
+std::vector<std::string> splitList(const std::string& text) {
+    std::vector<std::string> out;
+    std::stringstream in(text);
+    std::string item;
+    while (std::getline(in, item, ',')) {
+        item.erase(0, item.find_first_not_of(" \t"));
+        item.erase(item.find_last_not_of(" \t") + 1);
+        if (!item.empty()) out.push_back(item);
+    }
+    return out;
+}
+
+std::string selfExecutable() {
+    char exe[4096] = {};
+    const ssize_t n = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
+    if (n <= 0) throw std::runtime_error("bench: cannot find its own executable");
+    return std::string(exe, std::size_t(n));
+}
+
+// ---- What to run -----------------------------------------------------------------------------
+
+struct ReplayRef {
+    std::string name, path;
+};
+
+std::vector<ReplayRef> resolveReplays(const std::string& list) {
+    std::vector<ReplayRef> out;
+    const std::string dir = shippedReplayDir();
+    if (list.empty()) {
+        if (dir.empty()) throw InputError("--replays", "no shipped replays found; name files");
+        std::vector<fs::path> files;
+        for (const auto& e : fs::directory_iterator(dir))
+            if (e.path().extension() == ".json") files.push_back(e.path());
+        std::sort(files.begin(), files.end());
+        for (const auto& f : files) out.push_back({f.stem().string(), f.string()});
+        return out;
+    }
+    for (const std::string& item : splitList(list)) {
+        fs::path p = item;
+        if (p.extension() != ".json")
+            p = fs::path(dir.empty() ? "replays" : dir) / (item + ".json");
+        if (!fs::exists(p))
+            throw InputError("--replays",
+                             "no replay '" + item + "' (looked for " + p.string() + ")");
+        out.push_back({p.stem().string(), fs::weakly_canonical(p).string()});
+    }
+    return out;
+}
+
+// A parameter point: settings files handed to `run`, and the methods it applies to.
+struct Point {
+    std::string label = "default";
+    std::set<std::string> methods;  // empty: every method
+    json volume = json::object(), baseline = json::object();
+    int facesPerFrame = 1;
+    std::string params;  // "key=value;..." for the CSV
+};
+
+void flatten(const json& j, const std::string& prefix, std::string& out) {
+    for (auto it = j.begin(); it != j.end(); ++it) {
+        const std::string key = prefix.empty() ? it.key() : prefix + "." + it.key();
+        if (it->is_object()) {
+            flatten(*it, key, out);
+        } else {
+            if (!out.empty()) out += ';';
+            out += key + "=" + it->dump();
+        }
+    }
+}
+
+std::vector<Point> readSweep(const std::string& path) {
+    std::vector<Point> points(1);  // the default point always runs
+    if (path.empty()) return points;
+    std::ifstream in(path);
+    if (!in) throw InputError(path, "cannot open the sweep file");
+    json j;
+    try {
+        j = json::parse(in);
+    } catch (const json::exception& e) {
+        throw InputError(path, std::string("malformed JSON: ") + e.what());
+    }
+    if (!j.is_object() || !j.contains("points") || !j["points"].is_array())
+        throw InputError(path, "expected {\"points\": [ {\"label\": ..., ...}, ... ]}");
+    std::set<std::string> labels{"default"};
+    for (std::size_t i = 0; i < j["points"].size(); ++i) {
+        const json& p = j["points"][i];
+        const std::string where = path + ": points[" + std::to_string(i) + "]";
+        if (!p.is_object()) throw InputError(where, "expected an object");
+        Point point;
+        for (auto it = p.begin(); it != p.end(); ++it) {
+            const std::string& key = it.key();
+            if (key == "label" && it->is_string()) {
+                point.label = it->get<std::string>();
+            } else if (key == "methods" && it->is_array()) {
+                for (const auto& m : *it) {
+                    if (!m.is_string()) throw InputError(where, "methods: expected names");
+                    checkAmbienceMethod(m.get<std::string>(), where + ": methods");
+                    point.methods.insert(m.get<std::string>());
+                }
+            } else if (key == "volume" && it->is_object()) {
+                point.volume = *it;
+            } else if (key == "baseline" && it->is_object()) {
+                point.baseline = *it;
+            } else if (key == "facesPerFrame" && it->is_number_integer()) {
+                point.facesPerFrame = it->get<int>();
+                if (point.facesPerFrame < 1 || point.facesPerFrame > 6)
+                    throw InputError(where, "facesPerFrame: expected 1 to 6");
+            } else {
+                throw InputError(where, "unknown key or wrong type: '" + key +
+                                            "' (label, methods, volume, baseline, facesPerFrame)");
+            }
+        }
+        if (point.label.empty() || point.label.find_first_of("/ _,;") != std::string::npos)
+            throw InputError(where, "label: a short name without '/', ' ', '_', ',' or ';'");
+        if (!labels.insert(point.label).second)
+            throw InputError(where, "label '" + point.label + "' is used twice");
+        points.push_back(point);
+    }
+    return points;
+}
+
+std::string pointParams(const Point& p) {
+    std::string s;
+    if (p.facesPerFrame != 1) s = "facesPerFrame=" + std::to_string(p.facesPerFrame);
+    std::string v, b;
+    flatten(p.volume, "volume", v);
+    flatten(p.baseline, "baseline", b);
+    for (const std::string& part : {v, b})
+        if (!part.empty()) s += (s.empty() ? "" : ";") + part;
+    return s;
+}
+
+// ---- Running ---------------------------------------------------------------------------------
+
+struct Job {
+    ReplayRef replay;
+    std::string method;
+    Point point;
+    std::string runDir;  // relative to --out
+    bool makesOracle = false;
+    // Results.
+    bool ok = false;
+    std::string error;
+    json report;
+    double wall_s = 0.0;
+};
+
+// Runs argv with stdout and stderr into `log`; returns the exit status (or -signal).
+int spawnAndWait(const std::vector<std::string>& args, const std::string& log) {
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_adddup2(&actions, 1, 2);
+    posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+    std::vector<char*> argv;
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    pid_t pid = 0;
+    const int rc = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    if (rc != 0) return -1000 - rc;
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    if (WIFEXITED(status)) return WEXITSTATUS(status);
+    if (WIFSIGNALED(status)) return -WTERMSIG(status);
+    return -1;
+}
+
+std::string lastLines(const std::string& path, int count) {
+    std::ifstream in(path);
+    std::vector<std::string> lines;
+    std::string line;
+    while (std::getline(in, line)) {
+        // Progress output uses carriage returns; keep the text after the last one.
+        const auto cr = line.find_last_of('\r');
+        if (cr != std::string::npos) line = line.substr(cr + 1);
+        if (!line.empty()) lines.push_back(line);
+    }
+    std::string out;
+    for (std::size_t i = lines.size() > std::size_t(count) ? lines.size() - count : 0;
+         i < lines.size(); ++i)
+        out += (out.empty() ? "" : " | ") + lines[i];
+    return out;
+}
+
+struct Runner {
+    std::string exe, out, backend;
+    int measureEvery = 30, maxFrames = 0, stride = 2;
+    bool frames = false;
+
+    void run(Job& job) const {
+        const fs::path dir = fs::path(out) / job.runDir;
+        fs::create_directories(dir);
+        const std::string volumeFile = (dir / "volume.json").string();
+        const std::string baselineFile = (dir / "baseline.json").string();
+        std::ofstream(volumeFile) << job.point.volume.dump(2) << "\n";
+        std::ofstream(baselineFile) << job.point.baseline.dump(2) << "\n";
+        std::vector<std::string> args = {
+            exe,
+            "run",
+            "--replay",
+            job.replay.path,
+            "--ambient",
+            job.method,
+            "--config",
+            volumeFile,
+            "--baseline-config",
+            baselineFile,
+            "--faces-per-frame",
+            std::to_string(job.point.facesPerFrame),
+            "--measure-every",
+            std::to_string(measureEvery),
+            "--oracle",
+            (fs::path(out) / "oracle" / (job.replay.name + ".json")).string(),
+            "--stride",
+            std::to_string(stride),
+            "--backend",
+            backend,
+            "--out",
+            dir.string(),
+            "--no-vehicle"};
+        if (frames) {
+            args.insert(args.end(), {"--frames", "none", "--no-video"});
+        } else {
+            args.push_back("--no-frames");
+        }
+        if (maxFrames > 0) args.insert(args.end(), {"--max-frames", std::to_string(maxFrames)});
+        const std::string log = (dir / "log.txt").string();
+        {
+            std::ofstream cmd((dir / "command.txt").string());
+            for (const auto& a : args) cmd << a << ' ';
+            cmd << "\n";
+        }
+        const auto t0 = std::chrono::steady_clock::now();
+        const int status = spawnAndWait(args, log);
+        job.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        const fs::path report = dir / "report.json";
+        if (status != 0 || !fs::exists(report)) {
+            job.ok = false;
+            job.error =
+                (status < 0 && status > -1000 ? "killed by signal " + std::to_string(-status)
+                                              : "exit code " + std::to_string(status)) +
+                ": " + lastLines(log, 2);
+            return;
+        }
+        try {
+            std::ifstream in(report);
+            job.report = json::parse(in);
+            job.ok = true;
+        } catch (const json::exception& e) {
+            job.ok = false;
+            job.error = std::string("unreadable report: ") + e.what();
+        }
+    }
+};
+
+// Runs the jobs on `workers` threads; jobs of a replay wait for that replay's oracle job.
+void runJobs(std::vector<Job>& jobs, const Runner& runner, int workers, const std::string& title) {
+    std::mutex mutex;
+    std::condition_variable changed;
+    std::vector<int> state(jobs.size(), 0);  // 0 waiting, 1 running, 2 done
+    std::map<std::string, bool> oracleDone;
+    for (const Job& j : jobs) oracleDone[j.replay.name] = true;
+    for (const Job& j : jobs)
+        if (j.makesOracle) oracleDone[j.replay.name] = false;
+    std::size_t done = 0;
+    const auto start = std::chrono::steady_clock::now();
+    const bool tty = isatty(2);
+    auto progress = [&](const std::string& what) {
+        const double elapsed =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        const double eta = done ? elapsed / double(done) * double(jobs.size() - done) : 0.0;
+        const int width = 30, filled = int(width * double(done) / double(jobs.size()));
+        std::fprintf(stderr, "%s[%s%s] %zu/%zu  %.0f s elapsed, ~%.0f s left  %s%s",
+                     tty ? "\r\033[K" : "", std::string(std::size_t(filled), '#').c_str(),
+                     std::string(std::size_t(width - filled), '.').c_str(), done, jobs.size(),
+                     elapsed, eta, what.c_str(), tty ? "" : "\n");
+    };
+    std::fprintf(stderr, "%s: %zu runs on %d job(s)\n", title.c_str(), jobs.size(), workers);
+    auto worker = [&] {
+        for (;;) {
+            std::size_t pick = jobs.size();
+            {
+                std::unique_lock<std::mutex> lock(mutex);
+                for (;;) {
+                    bool waiting = false;
+                    for (std::size_t i = 0; i < jobs.size(); ++i) {
+                        if (state[i] != 0) continue;
+                        waiting = true;
+                        if (jobs[i].makesOracle || oracleDone[jobs[i].replay.name]) {
+                            pick = i;
+                            break;
+                        }
+                    }
+                    if (pick < jobs.size() || !waiting) break;
+                    changed.wait(lock);
+                }
+                if (pick == jobs.size()) return;
+                state[pick] = 1;
+            }
+            runner.run(jobs[pick]);
+            {
+                std::lock_guard<std::mutex> lock(mutex);
+                state[pick] = 2;
+                ++done;
+                if (jobs[pick].makesOracle) oracleDone[jobs[pick].replay.name] = true;
+                progress(jobs[pick].replay.name + "/" + jobs[pick].method + "/" +
+                         jobs[pick].point.label + (jobs[pick].ok ? "" : " FAILED"));
+            }
+            changed.notify_all();
+        }
+    };
+    std::vector<std::thread> threads;
+    for (int w = 0; w < workers; ++w) threads.emplace_back(worker);
+    for (auto& t : threads) t.join();
+    if (tty) std::fprintf(stderr, "\n");
+}
+
+// ---- Results ---------------------------------------------------------------------------------
+
+double number(const json& j, std::initializer_list<const char*> path) {
+    const json* at = &j;
+    for (const char* key : path) {
+        if (!at->is_object() || !at->contains(key)) return std::nan("");
+        at = &(*at)[key];
+    }
+    return at->is_number() ? at->get<double>() : std::nan("");
+}
+
+const std::vector<std::string> kColumns = {"replay",
+                                           "method",
+                                           "point",
+                                           "params",
+                                           "status",
+                                           "error_message",
+                                           "frames",
+                                           "measured_frames",
+                                           "error_mean",
+                                           "error_p50",
+                                           "error_p95",
+                                           "error_max",
+                                           "error_ring0_mean",
+                                           "error_ring1_mean",
+                                           "error_ring2_mean",
+                                           "error_ring3_mean",
+                                           "error_ring1_p95",
+                                           "error_ring2_p95",
+                                           "error_ring3_p95",
+                                           "pop_p99",
+                                           "pop_max",
+                                           "ambience_ms_median",
+                                           "ambience_ms_p95",
+                                           "frame_ms_median",
+                                           "frame_ms_p95",
+                                           "predict_ms_median",
+                                           "capture_ms_median",
+                                           "capture_ms_p95",
+                                           "store_ms_median",
+                                           "lookup_ms_median",
+                                           "share_of_frame",
+                                           "faces_per_s",
+                                           "faces_captured",
+                                           "probes_max",
+                                           "probes_end",
+                                           "bytes_max",
+                                           "bytes_end",
+                                           "teleports",
+                                           "rejected_probes",
+                                           "mean_speed_mps",
+                                           "oracle_s",
+                                           "wall_s",
+                                           "run_dir"};
+
+std::map<std::string, std::string> resultRow(const Job& job) {
+    std::map<std::string, std::string> row;
+    auto put = [&](const std::string& key, double v) {
+        if (!std::isfinite(v)) return;
+        char text[64];
+        std::snprintf(text, sizeof(text), "%.6g", v);
+        row[key] = text;
+    };
+    row["replay"] = job.replay.name;
+    row["method"] = job.method;
+    row["point"] = job.point.label;
+    row["params"] = job.point.params;
+    row["status"] = job.ok ? "ok" : "failed";
+    row["error_message"] = job.error;
+    row["run_dir"] = job.runDir;
+    put("wall_s", job.wall_s);
+    if (!job.ok) return row;
+    const json& r = job.report;
+    put("frames", number(r, {"frameCount"}));
+    const json m = r.value("measurement", json::object());
+    put("measured_frames", number(m, {"measuredFrames"}));
+    put("error_mean", number(m, {"error", "mean"}));
+    put("error_p50", number(m, {"error", "p50"}));
+    put("error_p95", number(m, {"error", "p95"}));
+    put("error_max", number(m, {"error", "max"}));
+    if (m.contains("errorByRing") && m["errorByRing"].is_array()) {
+        for (std::size_t ring = 0; ring < m["errorByRing"].size() && ring < 4; ++ring) {
+            const json& e = m["errorByRing"][ring];
+            put("error_ring" + std::to_string(ring) + "_mean", number(e, {"mean"}));
+            if (ring > 0) put("error_ring" + std::to_string(ring) + "_p95", number(e, {"p95"}));
+        }
+    }
+    put("pop_p99", number(m, {"pop", "p99"}));
+    put("pop_max", number(m, {"pop", "max"}));
+    put("mean_speed_mps", number(m, {"meanSpeed_mps"}));
+    put("oracle_s", number(m, {"oracle_s"}));
+    put("ambience_ms_median", number(r, {"ambience", "ambience_ms", "median"}));
+    put("ambience_ms_p95", number(r, {"ambience", "ambience_ms", "p95"}));
+    put("frame_ms_median", number(r, {"frame_ms", "median"}));
+    put("frame_ms_p95", number(r, {"frame_ms", "p95"}));
+    put("predict_ms_median", number(r, {"stages_ms", "predict", "median"}));
+    put("capture_ms_median", number(r, {"stages_ms", "capture", "median"}));
+    put("capture_ms_p95", number(r, {"stages_ms", "capture", "p95"}));
+    put("store_ms_median", number(r, {"stages_ms", "store", "median"}));
+    put("lookup_ms_median", number(r, {"ambience", "lookup_ms", "median"}));
+    put("share_of_frame", number(r, {"ambience", "shareOfFrameTime"}));
+    put("faces_per_s", number(r, {"ambience", "facesPerSecond"}));
+    put("faces_captured", number(r, {"ambience", "facesCaptured"}));
+    put("probes_max", number(r, {"ambience", "anchorsMax"}));
+    put("probes_end", number(r, {"ambience", "anchorsEnd"}));
+    put("bytes_max", number(r, {"ambience", "bytesMax"}));
+    put("bytes_end", number(r, {"ambience", "bytesEnd"}));
+    put("teleports", number(r, {"ambience", "teleports"}));
+    put("rejected_probes", number(r, {"ambience", "rejectedProbes"}));
+    return row;
+}
+
+std::string csvField(const std::string& s) {
+    if (s.find_first_of(",\"\n") == std::string::npos) return s;
+    std::string q = "\"";
+    for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c == '\n' ? ' ' : c);
+    return q + "\"";
+}
+
+void writeResultsCsv(const std::vector<Job>& jobs, const std::string& path) {
+    std::ofstream out(path);
+    if (!out) throw InputError(path, "cannot write the results");
+    for (std::size_t c = 0; c < kColumns.size(); ++c) out << (c ? "," : "") << kColumns[c];
+    out << "\n";
+    for (const Job& job : jobs) {
+        const auto row = resultRow(job);
+        for (std::size_t c = 0; c < kColumns.size(); ++c) {
+            const auto it = row.find(kColumns[c]);
+            out << (c ? "," : "") << (it == row.end() ? "" : csvField(it->second));
+        }
+        out << "\n";
+    }
+}
+
+std::string fmt(double v, const char* format) {
+    if (!std::isfinite(v)) return "—";
+    char text[64];
+    std::snprintf(text, sizeof(text), format, v);
+    return text;
+}
+
+void writeSummary(const std::vector<Job>& jobs, const std::string& path,
+                  const std::string& commandLine, double wall_s, int workers) {
+    std::ofstream out(path);
+    if (!out) throw InputError(path, "cannot write the summary");
+    out << "# Ambience bench: speed against error\n\n";
+    out << "Command: `" << commandLine << "`  \n";
+    out << "Wall time " << fmt(wall_s / 60.0, "%.1f") << " min on " << workers
+        << " job(s). Error = relative L2 distance of the applied irradiance from a fresh capture "
+           "(the oracle) over the sphere of normals, luminance-weighted, at the witness points "
+           "(the camera's ground point and terrain patch corners in rings of 16-48, 48-144 and "
+           "144-432 m). Pop = per-frame change of applied irradiance at fixed points less the "
+           "oracle's own change. Ambience ms = stages predict + capture + store + interpolate "
+           "and the lookups, per frame (median). All methods have the same capture budget.\n\n";
+    std::vector<std::string> replays;
+    for (const Job& j : jobs)
+        if (std::find(replays.begin(), replays.end(), j.replay.name) == replays.end())
+            replays.push_back(j.replay.name);
+    // Headline: default point, per replay.
+    for (const std::string& replay : replays) {
+        out << "## " << replay << "\n\n";
+        out << "| method | point | mean error | p95 error | max error | p99 pop | ambience ms "
+               "(median) | faces/s | probes (max) | kB (max) |\n";
+        out << "|---|---|---|---|---|---|---|---|---|---|\n";
+        double ours = std::nan(""), grid = std::nan("");
+        for (const Job& j : jobs) {
+            if (j.replay.name != replay) continue;
+            if (!j.ok) {
+                out << "| " << j.method << " | " << j.point.label
+                    << " | failed: " << j.error.substr(0, 120) << " | | | | | | | |\n";
+                continue;
+            }
+            const json& r = j.report;
+            const json m = r.value("measurement", json::object());
+            const double e = number(m, {"error", "mean"});
+            if (j.point.label == "default" && j.method == "volume") ours = e;
+            if (j.point.label == "default" && j.method == "grid") grid = e;
+            out << "| " << (j.method == "volume" ? "**volume (ours)**" : j.method) << " | "
+                << j.point.label << " | " << fmt(e, "%.4f") << " | "
+                << fmt(number(m, {"error", "p95"}), "%.4f") << " | "
+                << fmt(number(m, {"error", "max"}), "%.3f") << " | "
+                << fmt(number(m, {"pop", "p99"}), "%.5f") << " | "
+                << fmt(number(r, {"ambience", "ambience_ms", "median"}), "%.2f") << " | "
+                << fmt(number(r, {"ambience", "facesPerSecond"}), "%.1f") << " | "
+                << fmt(number(r, {"ambience", "anchorsMax"}), "%.0f") << " | "
+                << fmt(number(r, {"ambience", "bytesMax"}) / 1024.0, "%.1f") << " |\n";
+        }
+        out << "\nOur mean error / scrolling grid's: **" << fmt(ours / grid, "%.3f") << "**\n\n";
+    }
+    out << "## Plots\n\n";
+    for (const std::string& replay : replays)
+        out << "- `pareto-" << replay << ".png`, `error-over-time-" << replay << ".png`\n";
+    out << "- `error-vs-speed.png`, `error-by-ring.png`\n\n";
+    out << "Each run's report, measurement CSV, log and exact command line are in `runs/`.\n";
+}
+
+void drawPlots(const std::string& out) {
+    const fs::path exeDir = fs::path(selfExecutable()).parent_path();
+    fs::path script;
+    for (const fs::path& c : {exeDir / "bench-plots.py", exeDir / "../../app/bench-plots.py"})
+        if (fs::exists(c)) {
+            script = c;
+            break;
+        }
+    if (script.empty()) {
+        std::fprintf(stderr, "plots skipped: bench-plots.py not found beside the executable\n");
+        return;
+    }
+    // Debian's Python (the one python3-matplotlib installs into), else the first on PATH.
+    const std::string python = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+    if (std::system((python + " -c 'import matplotlib' >/dev/null 2>&1").c_str()) != 0) {
+        std::fprintf(stderr,
+                     "plots skipped: python3 with matplotlib is missing (Debian: apt-get install "
+                     "python3-matplotlib); results.csv and summary.md are written\n");
+        return;
+    }
+    const int rc = spawnAndWait({"/usr/bin/env", python, script.string(), out},
+                                (fs::path(out) / "plots.log").string());
+    if (rc != 0)
+        std::fprintf(stderr, "plots failed (exit %d), see %s/plots.log\n", rc, out.c_str());
+    else
+        std::fprintf(stderr, "plots written (see %s/plots.log)\n", out.c_str());
+}
+
+std::string jobDir(const std::string& replay, const std::string& method, const std::string& p) {
+    return "runs/" + replay + "__" + method + "__" + p;
+}
+
+// ---- Tuning ----------------------------------------------------------------------------------
+
+// Coordinate descent over the scheduler's and the store's main parameters, for the volume at
+// the default capture budget: each parameter in turn tries the values around the current best,
+// keeping a change only when the mean error over the tuning replays falls.
+struct TuneParameter {
+    std::vector<std::string> path;  // into the volume settings JSON
+    double start;
+    std::vector<double> factors;
+    bool integer;
+};
+
+json withValue(json base, const std::vector<std::string>& path, double value, bool integer) {
+    json* at = &base;
+    for (std::size_t i = 0; i + 1 < path.size(); ++i) {
+        if (!at->contains(path[i])) (*at)[path[i]] = json::object();
+        at = &(*at)[path[i]];
+    }
+    if (integer)
+        (*at)[path.back()] = int(std::lround(value));
+    else
+        (*at)[path.back()] = value;
+    return base;
+}
+
+double valueAt(const json& j, const std::vector<std::string>& path, double fallback) {
+    const json* at = &j;
+    for (const auto& k : path) {
+        if (!at->is_object() || !at->contains(k)) return fallback;
+        at = &(*at)[k];
+    }
+    return at->is_number() ? at->get<double>() : fallback;
+}
+
+void tune(const BenchOptions& o, const Runner& runner, int workers) {
+    const auto replays = resolveReplays(o.tuneReplays);
+    const AmbienceVolumeSettings d;
+    const std::vector<TuneParameter> parameters = {
+        {{"scheduler", "horizon_s"}, d.scheduler.horizon_s, {0.5, 2.0}, false},
+        {{"scheduler", "corridorCells"}, d.scheduler.corridorCells, {0.5, 2.0}, false},
+        {{"store", "blendTime_s"}, d.store.blendTime_s, {0.5, 2.0}, false},
+        {{"scheduler", "finestRingCells"}, d.scheduler.finestRingCells, {0.5, 2.0}, false},
+        {{"store", "searchCells"}, double(d.store.searchCells), {0.5, 1.5}, true},
+    };
+    std::ofstream log((fs::path(o.out) / "tune.csv").string());
+    log << "round,candidate,params,objective_mean_error,ambience_ms_median,status\n";
+    int candidate = 0;
+    auto evaluate = [&](const json& volume, const std::string& label, double* ms) {
+        std::vector<Job> jobs;
+        for (const auto& r : replays) {
+            Job j;
+            j.replay = r;
+            j.method = "volume";
+            j.point.label = label;
+            j.point.volume = volume;
+            j.point.params = pointParams(j.point);
+            j.runDir = "tune/" + label + "__" + r.name;
+            j.makesOracle = !fs::exists(fs::path(o.out) / "oracle" / (r.name + ".json"));
+            jobs.push_back(j);
+        }
+        runJobs(jobs, runner, workers, "tune " + label);
+        double total = 0.0, totalMs = 0.0;
+        for (const Job& j : jobs) {
+            if (!j.ok) return std::numeric_limits<double>::infinity();
+            total += number(j.report, {"measurement", "error", "mean"});
+            totalMs += number(j.report, {"ambience", "ambience_ms", "median"});
+        }
+        if (ms) *ms = totalMs / double(jobs.size());
+        return total / double(jobs.size());
+    };
+    json best = json::object();
+    double bestMs = 0.0;
+    double bestError = evaluate(best, "t0", &bestMs);
+    log << 0 << ",t0,," << bestError << "," << bestMs << ",ok\n";
+    std::fprintf(stderr, "tune: defaults give mean error %.4f\n", bestError);
+    for (int round = 1; round <= o.tuneRounds; ++round) {
+        for (const TuneParameter& p : parameters) {
+            const double current = valueAt(best, p.path, p.start);
+            for (double f : p.factors) {
+                const double value =
+                    p.integer ? std::max(1.0, std::round(current * f)) : current * f;
+                if (value == current) continue;
+                const json trial = withValue(best, p.path, value, p.integer);
+                const std::string label = "t" + std::to_string(++candidate);
+                double ms = 0.0;
+                const double e = evaluate(trial, label, &ms);
+                std::string params;
+                flatten(trial, "volume", params);
+                log << round << "," << label << "," << csvField(params) << "," << e << "," << ms
+                    << "," << (std::isfinite(e) ? "ok" : "failed") << "\n";
+                log.flush();
+                std::fprintf(stderr, "tune: %s = %g -> mean error %.4f (best %.4f)\n",
+                             p.path.back().c_str(), value, e, bestError);
+                if (e < bestError) {
+                    bestError = e;
+                    bestMs = ms;
+                    best = trial;
+                }
+            }
+        }
+    }
+    const std::string file = (fs::path(o.out) / "tuned-volume.json").string();
+    std::ofstream(file) << best.dump(2) << "\n";
+    std::printf("tuned settings (mean error %.4f over %s, ambience %.2f ms/frame): %s\n", bestError,
+                o.tuneReplays.c_str(), bestMs, file.c_str());
+    std::printf("  use with: ambience run --config %s\n", file.c_str());
+}
+
+// ---- The command -----------------------------------------------------------------------------
+
+void runBench(const BenchOptions& o, const std::string& commandLine) {
+    if (o.jobs < 0 || o.jobs > 64) throw InputError("--jobs", "expected 0 (cores) to 64");
+    if (o.measureEvery < 1) throw InputError("--measure-every", "must be at least 1");
+    if (o.maxFrames < 0) throw InputError("--max-frames", "must be >= 0");
+    if (o.stride < 1) throw InputError("--stride", "must be at least 1");
+    if (o.frames && o.noFrames) throw InputError("--frames", "conflicts with --no-frames");
+    if (o.tuneRounds < 1 || o.tuneRounds > 5) throw InputError("--tune-rounds", "expected 1 to 5");
+    std::vector<std::string> methods =
+        o.methods.empty() ? ambienceMethodNames() : splitList(o.methods);
+    for (const auto& m : methods) checkAmbienceMethod(m, "--methods");
+    const auto points = readSweep(o.sweep);
+    const int workers = o.jobs > 0 ? o.jobs : std::max(1, int(std::thread::hardware_concurrency()));
+    std::error_code ec;
+    fs::create_directories(fs::path(o.out) / "oracle", ec);
+    if (ec || access(o.out.c_str(), W_OK) != 0)
+        throw InputError("--out", "cannot create or write the folder '" + o.out + "'");
+
+    Runner runner;
+    runner.exe = selfExecutable();
+    runner.out = o.out;
+    runner.backend = o.backend;
+    runner.measureEvery = o.measureEvery;
+    runner.maxFrames = o.maxFrames;
+    runner.stride = o.stride;
+    runner.frames = o.frames;
+    const auto start = std::chrono::steady_clock::now();
+    if (o.tune) {
+        tune(o, runner, workers);
+        return;
+    }
+    const auto replays = resolveReplays(o.replays);
+
+    // Jobs: per replay the cheapest method first (it captures the oracle unless a saved one
+    // matches), then the rest.
+    std::vector<Job> jobs;
+    const std::vector<std::string> cheapFirst = {"constant", "hemisphere"};
+    for (const auto& r : replays) {
+        std::vector<std::string> order = methods;
+        std::stable_sort(order.begin(), order.end(), [&](const auto& a, const auto& b) {
+            auto rank = [&](const std::string& m) {
+                return int(std::find(cheapFirst.begin(), cheapFirst.end(), m) - cheapFirst.begin());
+            };
+            return rank(a) < rank(b);
+        });
+        bool first = true;
+        for (const auto& m : order)
+            for (const Point& p : points) {
+                if (!p.methods.empty() && !p.methods.count(m)) continue;
+                Job j;
+                j.replay = r;
+                j.method = m;
+                j.point = p;
+                j.point.params = pointParams(p);
+                j.runDir = jobDir(r.name, m, p.label);
+                j.makesOracle = first;
+                first = false;
+                jobs.push_back(j);
+            }
+    }
+    // Put every replay's oracle job at the front, so the replays' oracles are made in parallel.
+    std::stable_partition(jobs.begin(), jobs.end(), [](const Job& j) { return j.makesOracle; });
+    runJobs(jobs, runner, workers, "bench");
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+    // Results keep the order replay x method x point.
+    std::stable_sort(jobs.begin(), jobs.end(), [&](const Job& a, const Job& b) {
+        auto ri = [&](const Job& j) {
+            for (std::size_t i = 0; i < replays.size(); ++i)
+                if (replays[i].name == j.replay.name) return i;
+            return replays.size();
+        };
+        auto mi = [&](const Job& j) {
+            return std::find(methods.begin(), methods.end(), j.method) - methods.begin();
+        };
+        return std::make_pair(ri(a), mi(a)) < std::make_pair(ri(b), mi(b));
+    });
+    const std::string results = (fs::path(o.out) / "results.csv").string();
+    writeResultsCsv(jobs, results);
+    writeSummary(jobs, (fs::path(o.out) / "summary.md").string(), commandLine, wall, workers);
+    drawPlots(o.out);
+    int failed = 0;
+    for (const Job& j : jobs) failed += !j.ok;
+    std::printf("bench: %zu runs (%d failed) in %.1f min on %d job(s)\n", jobs.size(), failed,
+                wall / 60.0, workers);
+    std::printf("  results: %s\n  summary: %s\n", results.c_str(),
+                (fs::path(o.out) / "summary.md").string().c_str());
+}
+
+}  // namespace
+
+void addBenchCommand(CLI::App& app) {
+    auto* cmd = app.add_subcommand(
+        "bench", "replays x methods x parameter points: error against an oracle, pop and cost");
+    auto o = std::make_shared<BenchOptions>();
+    cmd->add_option("--replays", o->replays,
+                    "comma-separated replay names or files (default: every shipped replay)");
+    cmd->add_option("--methods", o->methods,
+                    "comma-separated methods (default: all): " + ambienceMethodHelp());
+    cmd->add_option("--sweep", o->sweep,
+                    "JSON parameter points: {\"points\": [{\"label\", \"methods\", \"volume\", "
+                    "\"baseline\", \"facesPerFrame\"}]}");
+    cmd->add_option("--jobs", o->jobs, "runs side by side (default: the number of cores)");
+    cmd->add_option("--out", o->out, "output folder (default out/bench)");
+    cmd->add_option("--measure-every", o->measureEvery,
+                    "measure every K-th frame against the oracle (default 30: once a second)");
+    cmd->add_option("--max-frames", o->maxFrames, "stop each run after N frames (default: all)");
+    cmd->add_option("--stride", o->stride, "replay steps per frame (default 2: 30 frames/s)");
+    cmd->add_flag("--frames", o->frames,
+                  "render the main view too (slow; the error does not depend on it)");
+    cmd->add_flag("--no-frames", o->noFrames,
+                  "do not render the main view (the default; captures still render)");
+    cmd->add_flag("--tune", o->tune,
+                  "coordinate descent over the volume's scheduler and store parameters at the "
+                  "default budget; writes tune.csv and tuned-volume.json");
+    cmd->add_option("--tune-replays", o->tuneReplays,
+                    "replays the tuning averages over (default highway-drive,mountain-drive,"
+                    "low-flight)");
+    cmd->add_option("--tune-rounds", o->tuneRounds, "passes over the parameters (default 1)");
+    cmd->add_option("--backend", o->backend, "auto, egl or osmesa (default auto)");
+    cmd->callback([o, cmd] {
+        std::string line = "ambience bench";
+        for (const auto* opt : cmd->get_options()) {
+            if (opt->count() == 0 || opt->get_name() == "--help") continue;
+            line += " " + opt->get_name();
+            if (opt->get_type_size() != 0) line += " " + opt->as<std::string>();
+        }
+        runBench(*o, line);
+    });
+}
+
+}  // namespace amb

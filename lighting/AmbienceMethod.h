@@ -1,0 +1,59 @@
+// AmbienceMethod.h — one way of giving ambience to ground points, run frame by frame: ours (the
+// dynamic ambience volume, AmbienceVolume.h) and the baselines it is measured against
+// (Baselines.h; DESIGN.md "Measuring speed against error"). The frame loop drives every method
+// through the same three stages with the same capture budget, and the draw and the measurement
+// read the same shAt, so what is measured is what is drawn.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include <glm/vec3.hpp>
+
+#include "lighting/SH.h"
+
+namespace amb {
+
+struct MethodStatistics {
+    std::size_t probes = 0;  // coefficient sets held (anchors, grid probes, cache entries)
+    std::size_t bytes = 0;   // memory those take, structure included
+    int facesThisFrame = 0;  // cube faces captured this frame
+    std::int64_t facesCaptured = 0;
+    std::int64_t rejectedProbes = 0;  // captures refused (NaN, Inf, negative)
+    std::int64_t teleports = 0;
+    // Wall time of this frame's stages [s] (project = SH projection of captured faces).
+    double predict_s = 0.0, capture_s = 0.0, project_s = 0.0, store_s = 0.0;
+};
+
+class AmbienceMethod {
+  public:
+    virtual ~AmbienceMethod() = default;
+
+    // Short name, as given to --ambient.
+    virtual std::string methodName() const = 0;
+
+    // The frame's stages 2-4 (DESIGN.md "The frame"). dt_s <= 0 or non-finite: no time passes.
+    virtual void predictStage(const glm::dvec3& cameraPosition_m,
+                              const glm::dvec3& cameraVelocity_mps, double timeOfDay_h,
+                              double dt_s) = 0;
+    virtual void captureStage() = 0;
+    virtual void storeStage() = 0;
+
+    // The SH applied at ground point (x, z); always finite.
+    virtual ShRgb shAt(double x_m, double z_m) const = 0;
+    // The same at many points.
+    virtual void shAt(std::size_t count, const double* x_m, const double* z_m, ShRgb* out) const {
+        for (std::size_t i = 0; i < count; ++i) out[i] = shAt(x_m[i], z_m[i]);
+    }
+
+    // Where the draw looked up ambience this frame (terrain corners, objects). Only methods that
+    // place probes by demand use it; called once per frame before the next predictStage.
+    virtual void noteLookups(std::size_t count, const double* x_m, const double* z_m) {
+        (void)count, (void)x_m, (void)z_m;
+    }
+
+    virtual MethodStatistics methodStatistics() const = 0;
+};
+
+}  // namespace amb

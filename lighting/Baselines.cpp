@@ -1,0 +1,759 @@
+// Baselines.cpp — the baseline ambience methods (see Baselines.h).
+//
+// [SECTION] Settings from JSON
+// [SECTION] Shared machinery (CapturingBaseline)
+// [SECTION] ScrollingGridMethod
+// [SECTION] ReactiveCacheMethod
+// [SECTION] PerObjectMethod
+// [SECTION] NearestAnchorMethod
+// [SECTION] Factory
+#include "lighting/Baselines.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <glm/geometric.hpp>
+#include <nlohmann/json.hpp>
+
+#include "lighting/AnchorStore.h"
+#include "lighting/CubeCapture.h"
+#include "lighting/CubeMapProjector.h"
+#include "lighting/ProbeCapture.h"
+#include "lighting/ProbeEnvironment.h"
+#include "world/Error.h"
+
+namespace amb {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t0) {
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// Signed difference b - a of two times of day, in (-12, 12] hours (the wrap at 24 h).
+double dayDifference_h(double a, double b) {
+    double d = std::fmod(b - a, 24.0);
+    if (d > 12.0) d -= 24.0;
+    if (d <= -12.0) d += 24.0;
+    return d;
+}
+
+// The fallback scene's cube size and how far the time of day may move before it is recomputed.
+constexpr int kFallbackFaceSize = 16;
+constexpr double kFallbackRefresh_h = 1.0 / 60.0;
+
+// Cell coordinates beyond this are not formed (x / s must convert to int64 exactly; points that
+// far out get the fallback).
+constexpr double kMaxCell = 1.0e15;
+
+bool finite(const glm::dvec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+// Every coefficient finite and within the range the anchor store accepts.
+bool acceptable(const ShRgb& sh) {
+    for (const glm::vec3& c : sh.c) {
+        for (int ch = 0; ch < 3; ++ch) {
+            if (!std::isfinite(c[ch]) || std::fabs(c[ch]) > AnchorStore::kMaxCoefficient) {
+                return false;
+            }
+        }
+    }
+    return true;
+}
+
+// floor(x / s) as an integer cell, if representable.
+std::optional<std::int64_t> cellOf(double x_m, double spacing_m) {
+    const double u = std::floor(x_m / spacing_m);
+    if (!(std::fabs(u) <= kMaxCell)) return std::nullopt;
+    return std::int64_t(u);
+}
+
+// Non-negative remainder of a by m (m > 0).
+std::int64_t positiveModulo(std::int64_t a, std::int64_t m) {
+    const std::int64_t r = a % m;
+    return r < 0 ? r + m : r;
+}
+
+// Ordering of candidate probes: nearest the camera first, ties by cell.
+struct Rank {
+    double distance2 = std::numeric_limits<double>::infinity();
+    CellKey key;
+    bool operator<(const Rank& o) const {
+        return distance2 != o.distance2 ? distance2 < o.distance2 : key < o.key;
+    }
+};
+
+bool contains(const std::vector<CellKey>& keys, const CellKey& key) {
+    return std::find(keys.begin(), keys.end(), key) != keys.end();
+}
+
+// Bilinear interpolation over the four lattice points (i s, k s) at the corners of the cell
+// holding (x, z), renormalised over the corners `lookup` returns a value for (lookup(cell) gives
+// a const ShRgb* or null). Corners of weight 0 are not looked up, so a query on a lattice point
+// returns that point's value exactly. Returns false when no corner with weight > 0 has a value.
+template <class Lookup>
+bool bilinear(double x_m, double z_m, double spacing_m, const Lookup& lookup, ShRgb& out) {
+    if (!std::isfinite(x_m) || !std::isfinite(z_m)) return false;
+    const double u = x_m / spacing_m, v = z_m / spacing_m;
+    const double fu = std::floor(u), fv = std::floor(v);
+    if (!(std::fabs(fu) <= kMaxCell && std::fabs(fv) <= kMaxCell)) return false;
+    const double tx = u - fu, tz = v - fv;
+    const std::int64_t i = std::int64_t(fu), k = std::int64_t(fv);
+    const CellKey corners[4] = {{i, k}, {i + 1, k}, {i, k + 1}, {i + 1, k + 1}};
+    const double weights[4] = {(1.0 - tx) * (1.0 - tz), tx * (1.0 - tz), (1.0 - tx) * tz, tx * tz};
+    std::array<double, 3 * kShCoefficients> sum{};
+    double weightSum = 0.0;
+    for (int c = 0; c < 4; ++c) {
+        if (!(weights[c] > 0.0)) continue;
+        const ShRgb* value = lookup(corners[c]);
+        if (!value) continue;
+        weightSum += weights[c];
+        for (int n = 0; n < kShCoefficients; ++n) {
+            for (int ch = 0; ch < 3; ++ch) sum[3 * n + ch] += weights[c] * value->c[n][ch];
+        }
+    }
+    if (!(weightSum > 0.0)) return false;
+    for (int n = 0; n < kShCoefficients; ++n) {
+        for (int ch = 0; ch < 3; ++ch) out.c[n][ch] = float(sum[3 * n + ch] / weightSum);
+    }
+    return true;
+}
+
+// ---- Settings from JSON -------------------------------------------------------------------------
+
+// Reads the keys of one JSON object into fields; unknown keys and bad values are input errors.
+class JsonFields {
+  public:
+    JsonFields(const nlohmann::json& object, std::string where)
+        : object_(object), where_(std::move(where)) {
+        if (!object_.is_object()) throw InputError(where_, "expected a JSON object");
+    }
+    void number(const char* key, double& field, double lo, double hi) {
+        known_.push_back(key);
+        if (!object_.contains(key)) return;
+        const auto& v = object_.at(key);
+        if (!v.is_number()) throw InputError(where_, std::string("'") + key + "' must be a number");
+        const double x = v.get<double>();
+        if (!(x >= lo && x <= hi)) outOfRange(key, lo, hi);
+        field = x;
+    }
+    void integer(const char* key, int& field, int lo, int hi) {
+        known_.push_back(key);
+        if (!object_.contains(key)) return;
+        const auto& v = object_.at(key);
+        if (!v.is_number_integer()) {
+            throw InputError(where_, std::string("'") + key + "' must be an integer");
+        }
+        const long long x = v.get<long long>();
+        if (x < lo || x > hi) outOfRange(key, lo, hi);
+        field = int(x);
+    }
+    void finish() const {
+        for (auto it = object_.begin(); it != object_.end(); ++it) {
+            if (std::find(known_.begin(), known_.end(), it.key()) == known_.end()) {
+                throw InputError(where_, "unknown key '" + it.key() + "'");
+            }
+        }
+    }
+
+  private:
+    [[noreturn]] void outOfRange(const char* key, double lo, double hi) const {
+        throw InputError(where_, std::string("'") + key + "' must be in [" + std::to_string(lo) +
+                                     ", " + std::to_string(hi) + "]");
+    }
+    const nlohmann::json& object_;
+    std::string where_;
+    std::vector<std::string> known_;
+};
+
+}  // namespace
+
+BaselineSettings baselineSettingsFromJson(const std::string& jsonText, const std::string& where) {
+    nlohmann::json root;
+    try {
+        root = nlohmann::json::parse(jsonText);
+    } catch (const nlohmann::json::exception& e) {
+        throw InputError(where, std::string("not valid JSON: ") + e.what());
+    }
+    constexpr double kBig = 1e9;
+    BaselineSettings s;
+    JsonFields f(root, where);
+    f.integer("facesPerFrame", s.facesPerFrame, 1, 64);
+    f.number("sunThreshold", s.sunThreshold, 0.0, std::numeric_limits<double>::infinity());
+    f.number("maxAside_m", s.maxAside_m, 0.0, 1000.0);
+    f.number("defaultTimeRate_hPerS", s.defaultTimeRate_hPerS, -10.0, 10.0);
+    f.number("timeJump_h", s.timeJump_h, 0.0, 12.0);
+    f.number("teleportDistance_m", s.teleportDistance_m, 0.0, kBig);
+    f.integer("gridSize", s.gridSize, 2, 256);
+    f.number("gridSpacing_m", s.gridSpacing_m, 1e-3, 1e6);
+    f.number("hysteresis", s.hysteresis, 0.0, 1.0);
+    f.number("cacheSpacing_m", s.cacheSpacing_m, 1e-3, 1e6);
+    f.number("unusedTimeout_s", s.unusedTimeout_s, 1e-3, kBig);
+    f.number("objectSize_m", s.objectSize_m, 1e-3, 1e6);
+    f.number("objectRange_m", s.objectRange_m, 0.0, 1e6);
+    f.finish();
+    return s;
+}
+
+// ---- Shared machinery ---------------------------------------------------------------------------
+
+std::size_t CellKeyHash::operator()(const CellKey& key) const noexcept {
+    // Mix both coordinates (splitmix64 finaliser), so neighbouring cells spread over buckets.
+    std::uint64_t h = std::uint64_t(key.i) * 0x9e3779b97f4a7c15ull ^ std::uint64_t(key.k);
+    h ^= h >> 30;
+    h *= 0xbf58476d1ce4e5b9ull;
+    h ^= h >> 27;
+    h *= 0x94d049bb133111ebull;
+    h ^= h >> 31;
+    return std::size_t(h);
+}
+
+std::size_t hashMapBytes(std::size_t buckets, std::size_t elements, std::size_t elementBytes) {
+    // A node holds the next pointer, the cached hash (conservatively) and the element; glibc's
+    // malloc adds an 8-byte header, rounds to 16 bytes and allocates at least 32.
+    const std::size_t node = sizeof(void*) + sizeof(std::size_t) + elementBytes;
+    const std::size_t chunk = std::max<std::size_t>(32, (node + 8 + 15) / 16 * 16);
+    return buckets * sizeof(void*) + elements * chunk;
+}
+
+CapturingBaseline::CapturingBaseline(CubeCapture& capture, const ProbeEnvironment& environment,
+                                     const BaselineSettings& settings)
+    : capture_(capture), environment_(environment), settings_(settings) {
+    AMB_CHECK(settings.facesPerFrame >= 1);
+    CubeMapProjector::Options options;
+    options.sunThreshold = settings.sunThreshold;
+    projector_ = std::make_unique<CubeMapProjector>(capture_.faceSize(), options);
+    timeRate_hPerS_ = settings.defaultTimeRate_hPerS;
+    lifetime_s_ = currentLifetime_s();
+}
+
+CapturingBaseline::~CapturingBaseline() = default;
+
+double CapturingBaseline::currentLifetime_s() const {
+    return anchorLifetime_s(AnchorStoreSettings{}, environment_.sunAngularSpeed_radPerHour(),
+                            timeRate_hPerS_);
+}
+
+bool CapturingBaseline::isStale(double captureTime_s) const {
+    return captureTime_s < lastJump_s_ || time_s_ - captureTime_s > lifetime_s_;
+}
+
+double CapturingBaseline::cameraDistance2(double x_m, double z_m) const {
+    const double dx = x_m - camera_m_.x, dz = z_m - camera_m_.z;
+    return dx * dx + dz * dz;
+}
+
+void CapturingBaseline::updateFallback(double timeOfDay_h) {
+    if (haveFallback_ &&
+        !(std::fabs(dayDifference_h(fallbackTimeOfDay_h_, timeOfDay_h)) > kFallbackRefresh_h)) {
+        return;
+    }
+    std::vector<float> cube;
+    environment_.fallbackCubeMap(timeOfDay_h, kFallbackFaceSize, cube);
+    const ShRgb sh = toFloat(projectCubeMap(kFallbackFaceSize, cube).sh);
+    // A broken fallback scene must not put NaN into shAt: keep the previous value (or zero).
+    if (acceptable(sh)) fallback_ = sh;
+    haveFallback_ = true;
+    fallbackTimeOfDay_h_ = timeOfDay_h;
+}
+
+void CapturingBaseline::predictStage(const glm::dvec3& cameraPosition_m,
+                                     const glm::dvec3& cameraVelocity_mps, double timeOfDay_h,
+                                     double dt_s) {
+    stats_.facesThisFrame = 0;
+    stats_.capture_s = stats_.project_s = stats_.store_s = 0.0;
+    stats_.predict_s = pendingPredict_s_;  // work recorded since the last frame (lookups)
+    pendingPredict_s_ = 0.0;
+    completed_.clear();
+    const Clock::time_point t0 = Clock::now();
+    if (!std::isfinite(dt_s) || dt_s < 0.0) dt_s = 0.0;
+    if (!std::isfinite(timeOfDay_h)) timeOfDay_h = timeOfDay_h_;
+    timeOfDay_h = std::fmod(timeOfDay_h, 24.0);
+    if (timeOfDay_h < 0.0) timeOfDay_h += 24.0;
+
+    // Time: clock, rate of the time of day (wrap-safe), jumps (as AmbienceVolume).
+    time_s_ += dt_s;
+    if (haveTime_) {
+        const double d = dayDifference_h(timeOfDay_h_, timeOfDay_h);
+        if (std::fabs(d) > settings_.timeJump_h) {
+            lastJump_s_ = time_s_;
+        } else if (dt_s > 0.0) {
+            timeRate_hPerS_ = d / dt_s;
+        }
+    }
+    haveTime_ = true;
+    timeOfDay_h_ = timeOfDay_h;
+    lifetime_s_ = currentLifetime_s();
+
+    // Motion: a step the reported (or previous) speed cannot explain is a teleport; the probe
+    // in progress belongs to the old place.
+    if (finite(cameraPosition_m)) {
+        const double reported = finite(cameraVelocity_mps) ? glm::length(cameraVelocity_mps) : 0.0;
+        if (haveCamera_) {
+            const double speed = std::max(reported, cameraSpeed_mps_);
+            const double allowed = settings_.teleportDistance_m + 3.0 * speed * dt_s;
+            if (glm::length(cameraPosition_m - camera_m_) > allowed) {
+                ++stats_.teleports;
+                job_.reset();
+            }
+        }
+        camera_m_ = cameraPosition_m;
+        cameraSpeed_mps_ = reported;
+        haveCamera_ = true;
+    }
+
+    updateFallback(timeOfDay_h);
+    updateStructure();
+    stats_.predict_s += secondsSince(t0);
+}
+
+void CapturingBaseline::captureStage() {
+    Clock::time_point t0;
+    int budget = settings_.facesPerFrame;
+    // A probe whose point left the method's structure (scrolled out, forgotten) is not finished.
+    if (job_ && !wantsProbe(job_->key)) job_.reset();
+    while (budget > 0) {
+        if (!job_) {
+            t0 = Clock::now();
+            std::vector<CellKey> busy;
+            for (const Completed& c : completed_) busy.push_back(c.job.key);
+            const std::optional<ProbeRequest> request = nextProbe(busy);
+            if (request) {
+                Job job;
+                job.key = request->key;
+                job.position_m =
+                    environment_.placeProbe(request->x_m, request->z_m, settings_.maxAside_m);
+                job.startTime_s = time_s_;
+                job_ = job;
+                projector_->reset();
+            }
+            stats_.predict_s += secondsSince(t0);
+            if (!job_) break;  // nothing to capture: the budget stays unused
+        }
+        const ProbeFacesResult r =
+            captureProbeFaces(capture_, *projector_, cube_, job_->position_m, timeOfDay_h_,
+                              job_->facesDone, budget, job_->bad);
+        stats_.capture_s += r.capture_s;
+        stats_.project_s += r.project_s;
+        const int count = r.faces;
+        job_->facesDone += count;
+        budget -= count;
+        stats_.facesThisFrame += count;
+        stats_.facesCaptured += count;
+        if (job_->facesDone == kCubeFaces) {
+            completed_.push_back({*job_, projector_->coefficients()});
+            job_.reset();
+        }
+    }
+}
+
+void CapturingBaseline::storeStage() {
+    const Clock::time_point t0 = Clock::now();
+    for (const Completed& c : completed_) {
+        const ShRgb sh = toFloat(c.sh);
+        if (c.job.bad || !acceptable(sh)) {
+            ++stats_.rejectedProbes;
+            continue;
+        }
+        if (wantsProbe(c.job.key)) storeProbe(c.job.key, sh, c.job.startTime_s);
+    }
+    completed_.clear();
+    stats_.store_s += secondsSince(t0);
+}
+
+MethodStatistics CapturingBaseline::methodStatistics() const {
+    MethodStatistics m = stats_;
+    m.probes = probesHeld();
+    m.bytes = bytesHeld();
+    return m;
+}
+
+// ---- ScrollingGridMethod ------------------------------------------------------------------------
+
+ScrollingGridMethod::ScrollingGridMethod(CubeCapture& capture, const ProbeEnvironment& environment,
+                                         const BaselineSettings& settings)
+    : CapturingBaseline(capture, environment, settings),
+      size_(settings.gridSize),
+      spacing_m_(settings.gridSpacing_m),
+      slots_(std::size_t(settings.gridSize) * std::size_t(settings.gridSize)) {
+    AMB_CHECK(settings.gridSize >= 1);
+    AMB_CHECK(settings.gridSpacing_m > 0.0);
+    AMB_CHECK(settings.hysteresis >= 0.0 && settings.hysteresis <= 1.0);
+}
+
+std::size_t ScrollingGridMethod::slotOf(const CellKey& cell) const {
+    return std::size_t(positiveModulo(cell.i, size_) + size_ * positiveModulo(cell.k, size_));
+}
+
+bool ScrollingGridMethod::inGrid(const CellKey& cell) const {
+    return haveOrigin_ && cell.i >= origin_.i && cell.i < origin_.i + size_ &&
+           cell.k >= origin_.k && cell.k < origin_.k + size_;
+}
+
+void ScrollingGridMethod::updateStructure() {
+    // The grid's centre (origin + (G - 1) / 2) at the lattice position nearest the camera: for
+    // even G the camera lies in the central cell, for odd G nearest the central probe.
+    const glm::dvec3& p = camera_m();
+    const auto lowest = [&](double x_m) -> std::optional<std::int64_t> {
+        if (size_ % 2 == 0) {
+            const auto c = cellOf(x_m, spacing_m_);
+            if (!c) return std::nullopt;
+            return *c - (size_ / 2 - 1);
+        }
+        const auto c = cellOf(x_m + 0.5 * spacing_m_, spacing_m_);
+        if (!c) return std::nullopt;
+        return *c - (size_ - 1) / 2;
+    };
+    const auto i0 = lowest(p.x), k0 = lowest(p.z);
+    if (!i0 || !k0) return;  // the camera is too far out to form cells: keep the grid
+    const CellKey origin{*i0, *k0};
+    if (haveOrigin_ && origin == origin_) return;
+    origin_ = origin;
+    haveOrigin_ = true;
+    // Scroll: slot (a, b) holds the one grid cell congruent to (a, b) modulo G.
+    for (int b = 0; b < size_; ++b) {
+        for (int a = 0; a < size_; ++a) {
+            const CellKey cell{origin_.i + positiveModulo(a - origin_.i, size_),
+                               origin_.k + positiveModulo(b - origin_.k, size_)};
+            Slot& slot = slots_[std::size_t(a) + std::size_t(size_) * std::size_t(b)];
+            if (slot.cell == cell && slot.valid) continue;
+            if (slot.valid) --validCount_;
+            slot.cell = cell;
+            slot.valid = false;
+            slot.updates = 0;
+        }
+    }
+}
+
+std::optional<CapturingBaseline::ProbeRequest> ScrollingGridMethod::nextProbe(
+    const std::vector<CellKey>& busy) {
+    if (!haveOrigin_) return std::nullopt;
+    const auto request = [&](const CellKey& cell) {
+        return ProbeRequest{cell, double(cell.i) * spacing_m_, double(cell.k) * spacing_m_};
+    };
+    // Invalid probes first, nearest the camera first.
+    if (validCount_ < slots_.size()) {
+        Rank best;
+        bool found = false;
+        for (const Slot& slot : slots_) {
+            if (slot.valid || contains(busy, slot.cell)) continue;
+            const Rank r{
+                cameraDistance2(double(slot.cell.i) * spacing_m_, double(slot.cell.k) * spacing_m_),
+                slot.cell};
+            if (!found || r < best) best = r;
+            found = true;
+        }
+        if (found) return request(best.key);
+    }
+    // Otherwise the round-robin over the slots.
+    for (std::size_t tries = 0; tries < slots_.size(); ++tries) {
+        const Slot& slot = slots_[roundRobin_];
+        roundRobin_ = (roundRobin_ + 1) % slots_.size();
+        if (!contains(busy, slot.cell)) return request(slot.cell);
+    }
+    return std::nullopt;
+}
+
+bool ScrollingGridMethod::wantsProbe(const CellKey& key) const {
+    return inGrid(key);
+}
+
+void ScrollingGridMethod::storeProbe(const CellKey& key, const ShRgb& sh, double) {
+    Slot& slot = slots_[slotOf(key)];
+    if (slot.cell != key) return;
+    if (!slot.valid) {
+        slot.value = sh;
+        slot.valid = true;
+        slot.updates = 1;
+        ++validCount_;
+        return;
+    }
+    // Hysteresis (DDGI): h of the old value, 1 - h of the new, in double, rounded once.
+    const double h = settings().hysteresis;
+    for (int n = 0; n < kShCoefficients; ++n) {
+        for (int ch = 0; ch < 3; ++ch) {
+            slot.value.c[n][ch] =
+                float(h * double(slot.value.c[n][ch]) + (1.0 - h) * double(sh.c[n][ch]));
+        }
+    }
+    ++slot.updates;
+}
+
+std::optional<ScrollingGridMethod::GridProbe> ScrollingGridMethod::probe(
+    const CellKey& cell) const {
+    if (!inGrid(cell)) return std::nullopt;
+    const Slot& slot = slots_[slotOf(cell)];
+    if (!slot.valid || slot.cell != cell) return std::nullopt;
+    return GridProbe{slot.value, slot.updates};
+}
+
+ShRgb ScrollingGridMethod::shAt(double x_m, double z_m) const {
+    bool outside = false;
+    const auto lookup = [&](const CellKey& cell) -> const ShRgb* {
+        if (!inGrid(cell)) {
+            outside = true;
+            return nullptr;
+        }
+        const Slot& slot = slots_[slotOf(cell)];
+        return slot.valid && slot.cell == cell ? &slot.value : nullptr;
+    };
+    ShRgb out;
+    if (!bilinear(x_m, z_m, spacing_m_, lookup, out) || outside) return fallback();
+    return out;
+}
+
+std::size_t ScrollingGridMethod::bytesHeld() const {
+    return slots_.capacity() * sizeof(Slot);
+}
+
+// ---- ReactiveCacheMethod ------------------------------------------------------------------------
+
+ReactiveCacheMethod::ReactiveCacheMethod(CubeCapture& capture, const ProbeEnvironment& environment,
+                                         const BaselineSettings& settings)
+    : CapturingBaseline(capture, environment, settings), spacing_m_(settings.cacheSpacing_m) {
+    AMB_CHECK(settings.cacheSpacing_m > 0.0);
+}
+
+void ReactiveCacheMethod::noteLookups(std::size_t count, const double* x_m, const double* z_m) {
+    const Clock::time_point t0 = Clock::now();
+    const double now = simulationTime_s();
+    std::optional<CellKey> previous;
+    for (std::size_t p = 0; p < count; ++p) {
+        if (!std::isfinite(x_m[p]) || !std::isfinite(z_m[p])) continue;
+        const auto i = cellOf(x_m[p], spacing_m_), k = cellOf(z_m[p], spacing_m_);
+        if (!i || !k) continue;
+        const CellKey cell{*i, *k};
+        if (previous && *previous == cell) continue;  // neighbouring lookups share cells
+        previous = cell;
+        for (int b = 0; b <= 1; ++b) {
+            for (int a = 0; a <= 1; ++a) {
+                entries_[CellKey{cell.i + a, cell.k + b}].lastWanted_s = now;
+            }
+        }
+    }
+    addPendingPredictTime(secondsSince(t0));
+}
+
+void ReactiveCacheMethod::updateStructure() {
+    const double now = simulationTime_s();
+    const double timeout = settings().unusedTimeout_s;
+    for (auto it = entries_.begin(); it != entries_.end();) {
+        if (now - it->second.lastWanted_s > timeout) {
+            if (it->second.present) --presentCount_;
+            it = entries_.erase(it);
+        } else {
+            ++it;
+        }
+    }
+}
+
+std::optional<CapturingBaseline::ProbeRequest> ReactiveCacheMethod::nextProbe(
+    const std::vector<CellKey>& busy) {
+    // Missing probes first, then stale ones; nearest the camera first within each.
+    Rank missing, stale;
+    bool haveMissing = false, haveStale = false;
+    for (const auto& [key, entry] : entries_) {
+        if (entry.present && !isStale(entry.captureTime_s)) continue;
+        if (contains(busy, key)) continue;
+        const Rank r{cameraDistance2(double(key.i) * spacing_m_, double(key.k) * spacing_m_), key};
+        if (!entry.present) {
+            if (!haveMissing || r < missing) missing = r;
+            haveMissing = true;
+        } else {
+            if (!haveStale || r < stale) stale = r;
+            haveStale = true;
+        }
+    }
+    if (!haveMissing && !haveStale) return std::nullopt;
+    const CellKey key = haveMissing ? missing.key : stale.key;
+    return ProbeRequest{key, double(key.i) * spacing_m_, double(key.k) * spacing_m_};
+}
+
+bool ReactiveCacheMethod::wantsProbe(const CellKey& key) const {
+    return entries_.count(key) != 0;
+}
+
+void ReactiveCacheMethod::storeProbe(const CellKey& key, const ShRgb& sh, double captureTime_s) {
+    const auto it = entries_.find(key);
+    if (it == entries_.end()) return;
+    if (!it->second.present) ++presentCount_;
+    it->second.present = true;
+    it->second.value = sh;
+    it->second.captureTime_s = captureTime_s;
+}
+
+ShRgb ReactiveCacheMethod::shAt(double x_m, double z_m) const {
+    const auto lookup = [&](const CellKey& cell) -> const ShRgb* {
+        const auto it = entries_.find(cell);
+        return it != entries_.end() && it->second.present ? &it->second.value : nullptr;
+    };
+    ShRgb out;
+    if (!bilinear(x_m, z_m, spacing_m_, lookup, out)) return fallback();
+    return out;
+}
+
+std::size_t ReactiveCacheMethod::bytesHeld() const {
+    return hashMapBytes(entries_.bucket_count(), entries_.size(),
+                        sizeof(std::pair<const CellKey, Entry>));
+}
+
+// ---- PerObjectMethod ----------------------------------------------------------------------------
+
+PerObjectMethod::PerObjectMethod(CubeCapture& capture, const ProbeEnvironment& environment,
+                                 const BaselineSettings& settings)
+    : CapturingBaseline(capture, environment, settings),
+      size_m_(settings.objectSize_m),
+      range_m_(settings.objectRange_m) {
+    AMB_CHECK(settings.objectSize_m > 0.0);
+    AMB_CHECK(settings.objectRange_m >= 0.0);
+}
+
+CellKey PerObjectMethod::objectAt(double x_m, double z_m) const {
+    const auto i = cellOf(x_m, size_m_), k = cellOf(z_m, size_m_);
+    AMB_CHECK(i && k);
+    return {*i, *k};
+}
+
+double PerObjectMethod::objectCentreX_m(const CellKey& key) const {
+    return (double(key.i) + 0.5) * size_m_;
+}
+
+double PerObjectMethod::objectCentreZ_m(const CellKey& key) const {
+    return (double(key.k) + 0.5) * size_m_;
+}
+
+void PerObjectMethod::updateStructure() {
+    const double forget2 = 4.0 * range_m_ * range_m_;
+    for (auto it = objects_.begin(); it != objects_.end();) {
+        if (cameraDistance2(objectCentreX_m(it->first), objectCentreZ_m(it->first)) > forget2) {
+            it = objects_.erase(it);
+        } else {
+            ++it;
+        }
+    }
+}
+
+std::optional<CapturingBaseline::ProbeRequest> PerObjectMethod::nextProbe(
+    const std::vector<CellKey>& busy) {
+    // The objects whose centre lies within range: missing first, then stale, nearest first.
+    const glm::dvec3& p = camera_m();
+    const auto i0 = cellOf(p.x - range_m_, size_m_), i1 = cellOf(p.x + range_m_, size_m_);
+    const auto k0 = cellOf(p.z - range_m_, size_m_), k1 = cellOf(p.z + range_m_, size_m_);
+    if (!i0 || !i1 || !k0 || !k1) return std::nullopt;
+    const double range2 = range_m_ * range_m_;
+    Rank missing, stale;
+    bool haveMissing = false, haveStale = false;
+    for (std::int64_t k = *k0; k <= *k1; ++k) {
+        for (std::int64_t i = *i0; i <= *i1; ++i) {
+            const CellKey key{i, k};
+            const double d2 = cameraDistance2(objectCentreX_m(key), objectCentreZ_m(key));
+            if (d2 > range2 || contains(busy, key)) continue;
+            const auto it = objects_.find(key);
+            if (it == objects_.end()) {
+                const Rank r{d2, key};
+                if (!haveMissing || r < missing) missing = r;
+                haveMissing = true;
+            } else if (isStale(it->second.captureTime_s)) {
+                const Rank r{d2, key};
+                if (!haveStale || r < stale) stale = r;
+                haveStale = true;
+            }
+        }
+    }
+    if (!haveMissing && !haveStale) return std::nullopt;
+    const CellKey key = haveMissing ? missing.key : stale.key;
+    return ProbeRequest{key, objectCentreX_m(key), objectCentreZ_m(key)};
+}
+
+bool PerObjectMethod::wantsProbe(const CellKey& key) const {
+    return cameraDistance2(objectCentreX_m(key), objectCentreZ_m(key)) <= 4.0 * range_m_ * range_m_;
+}
+
+void PerObjectMethod::storeProbe(const CellKey& key, const ShRgb& sh, double captureTime_s) {
+    objects_[key] = ObjectProbe{sh, captureTime_s};
+}
+
+ShRgb PerObjectMethod::shAt(double x_m, double z_m) const {
+    if (!std::isfinite(x_m) || !std::isfinite(z_m)) return fallback();
+    const auto i = cellOf(x_m, size_m_), k = cellOf(z_m, size_m_);
+    if (!i || !k) return fallback();
+    const auto it = objects_.find(CellKey{*i, *k});
+    return it != objects_.end() ? it->second.value : fallback();
+}
+
+std::size_t PerObjectMethod::bytesHeld() const {
+    return hashMapBytes(objects_.bucket_count(), objects_.size(),
+                        sizeof(std::pair<const CellKey, ObjectProbe>));
+}
+
+// ---- NearestAnchorMethod ------------------------------------------------------------------------
+
+AmbienceVolumeSettings NearestAnchorMethod::withoutBlending(AmbienceVolumeSettings settings) {
+    settings.store.blendTime_s = kBlendTime_s;
+    return settings;
+}
+
+NearestAnchorMethod::NearestAnchorMethod(CubeCapture& capture, const ProbeEnvironment& environment,
+                                         const AmbienceVolumeSettings& settings,
+                                         const RoadNetwork* roads)
+    : volume_(capture, environment, withoutBlending(settings), roads) {}
+
+ShRgb NearestAnchorMethod::shAt(double x_m, double z_m) const {
+    const AnchorStore& store = volume_.store();
+    InterpolationDetail detail;
+    const ShRgb interpolated = store.interpolate(x_m, z_m, &detail);
+    if (detail.exact || detail.fallback || detail.used.empty()) return interpolated;
+    const InterpolationDetail::Used* nearest = &detail.used.front();
+    for (const InterpolationDetail::Used& u : detail.used) {
+        if (u.distance_m < nearest->distance_m) nearest = &u;
+    }
+    const Anchor* anchor = store.find(nearest->key);
+    if (!anchor) return interpolated;
+    return anchor->relight == 1.0f ? anchor->current : anchor->current * anchor->relight;
+}
+
+void NearestAnchorMethod::shAt(std::size_t count, const double* x_m, const double* z_m,
+                               ShRgb* out) const {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                              out[i] = shAt(x_m[i], z_m[i]);
+                          }
+                      });
+}
+
+// ---- Factory ------------------------------------------------------------------------------------
+
+std::unique_ptr<AmbienceMethod> makeCapturingMethod(const std::string& name, CubeCapture& capture,
+                                                    const ProbeEnvironment& environment,
+                                                    const AmbienceVolumeSettings& volumeSettings,
+                                                    const BaselineSettings& baselineSettings,
+                                                    const RoadNetwork* roads) {
+    if (name == "volume") {
+        return std::make_unique<AmbienceVolume>(capture, environment, volumeSettings, roads);
+    }
+    if (name == "nearest") {
+        return std::make_unique<NearestAnchorMethod>(capture, environment, volumeSettings, roads);
+    }
+    if (name == "grid") {
+        return std::make_unique<ScrollingGridMethod>(capture, environment, baselineSettings);
+    }
+    if (name == "reactive") {
+        return std::make_unique<ReactiveCacheMethod>(capture, environment, baselineSettings);
+    }
+    if (name == "object") {
+        return std::make_unique<PerObjectMethod>(capture, environment, baselineSettings);
+    }
+    throw InputError("--ambient", "unknown method '" + name +
+                                      "' (expected volume, nearest, grid, reactive or object)");
+}
+
+}  // namespace amb

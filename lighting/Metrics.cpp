@@ -1,0 +1,322 @@
+// Metrics.cpp — irradiance distance, summaries, witnesses, oracle and the error meter
+// (see Metrics.h).
+#include "lighting/Metrics.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "lighting/AmbienceMethod.h"
+#include "lighting/CubeCapture.h"
+#include "lighting/CubeMapProjector.h"
+#include "lighting/ProbeEnvironment.h"
+#include "world/Error.h"
+
+namespace amb {
+
+namespace {
+
+constexpr double kBandWeight[kShCoefficients] = {kShA0, kShA1, kShA1, kShA1, kShA2,
+                                                 kShA2, kShA2, kShA2, kShA2};
+
+double normSquared(const ShRgb& d) {
+    double total = 0.0;
+    for (int k = 0; k < kShCoefficients; ++k) {
+        const double a2 = kBandWeight[k] * kBandWeight[k];
+        for (int c = 0; c < 3; ++c) {
+            const double v = d.c[k][c];
+            total += kLuminanceWeights[c] * a2 * v * v;
+        }
+    }
+    return total;
+}
+
+double secondsSince(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+constexpr double kGoldenAngle = 2.39996322972865332;  // pi (3 - sqrt 5)
+
+}  // namespace
+
+// ---- Irradiance distance ---------------------------------------------------------------------
+
+double irradianceDistance(const ShRgb& a, const ShRgb& b) {
+    return std::sqrt(normSquared(a - b));
+}
+
+double irradianceNorm(const ShRgb& a) {
+    return std::sqrt(normSquared(a));
+}
+
+double relativeIrradianceError(const ShRgb& applied, const ShRgb& oracle, double floor) {
+    return irradianceDistance(applied, oracle) / std::max(irradianceNorm(oracle), floor);
+}
+
+double popValue(const ShRgb& appliedChange, const ShRgb& oracleChange, const ShRgb& oracle,
+                double floor) {
+    return irradianceDistance(appliedChange, oracleChange) /
+           std::max(irradianceNorm(oracle), floor);
+}
+
+// ---- Statistics ------------------------------------------------------------------------------
+
+Summary summarize(std::vector<double> values) {
+    Summary s;
+    s.count = values.size();
+    if (values.empty()) return s;
+    bool finite = true;
+    double total = 0.0;
+    for (double v : values) {
+        finite &= std::isfinite(v);
+        total += v;
+    }
+    if (!finite) {
+        const double inf = std::numeric_limits<double>::infinity();
+        s.mean = s.p50 = s.p95 = s.p99 = s.max = inf;
+        return s;
+    }
+    std::sort(values.begin(), values.end());
+    auto quantile = [&](double q) {
+        const double at = q * double(values.size() - 1);
+        const std::size_t i = std::size_t(std::floor(at));
+        const std::size_t j = std::min(i + 1, values.size() - 1);
+        return values[i] + (values[j] - values[i]) * (at - double(i));
+    };
+    s.mean = total / double(values.size());
+    s.p50 = quantile(0.50);
+    s.p95 = quantile(0.95);
+    s.p99 = quantile(0.99);
+    s.max = values.back();
+    return s;
+}
+
+// ---- Witness points --------------------------------------------------------------------------
+
+std::vector<Witness> witnessPoints(const MeasureSettings& settings, double cameraX_m,
+                                   double cameraZ_m, int measuredIndex) {
+    std::vector<Witness> out;
+    out.push_back({cameraX_m, cameraZ_m, 0});
+    const double s = settings.cornerSpacing_m;
+    const double turn = kGoldenAngle * measuredIndex;
+    for (int r = 1; r < settings.rings(); ++r) {
+        const double radius =
+            0.5 * (settings.ringRadii[std::size_t(r - 1)] + settings.ringRadii[std::size_t(r)]);
+        for (int j = 0; j < settings.perRing; ++j) {
+            // Rings are offset by half a step from each other, so no two rings share a bearing.
+            const double angle = turn + 2.0 * kPi * (j + 0.5 * (r % 2)) / settings.perRing;
+            const double x = cameraX_m + radius * std::cos(angle);
+            const double z = cameraZ_m + radius * std::sin(angle);
+            // Nearest corner of the patch lattice (exact: integer multiples of the spacing).
+            out.push_back({std::round(x / s) * s, std::round(z / s) * s, r});
+        }
+    }
+    return out;
+}
+
+ShRgb oracleSh(CubeCapture& capture, const ProbeEnvironment& environment,
+               const MeasureSettings& settings, double x_m, double z_m, double timeOfDay_h) {
+    const glm::dvec3 probe = environment.placeProbe(x_m, z_m, settings.maxAside_m);
+    const std::vector<float> cube = capture.captureAll(probe, timeOfDay_h);
+    CubeMapProjector::Options options;
+    options.sunThreshold = settings.sunThreshold;
+    const CubeMapProjection p = projectCubeMap(capture.faceSize(), cube, options);
+    // Bad texels are zeroed and counted by the projection; the coefficients stay finite.
+    return toFloat(p.sh);
+}
+
+// ---- Error meter -----------------------------------------------------------------------------
+
+bool ErrorMeter::Key::operator<(const Key& o) const {
+    if (frame != o.frame) return frame < o.frame;
+    if (x != o.x) return x < o.x;
+    return z < o.z;
+}
+
+ErrorMeter::ErrorMeter(CubeCapture& capture, const ProbeEnvironment& environment,
+                       const MeasureSettings& settings)
+    : capture_(capture), environment_(environment), settings_(settings) {
+    if (settings.every < 0) throw InputError("--measure-every", "must be >= 0");
+    if (settings.ringRadii.empty() || settings.perRing < 0 || settings.popPoints < 1 ||
+        settings.cornerSpacing_m <= 0.0)
+        throw InputError("measure settings", "need rings, perRing >= 0, popPoints >= 1");
+}
+
+ShRgb ErrorMeter::oracle(int frameIndex, double x_m, double z_m, double timeOfDay_h) {
+    const Key key{frameIndex, x_m, z_m};
+    const auto it = oracleCache_.find(key);
+    if (it != oracleCache_.end()) {
+        ++oracleHits_;
+        return it->second;
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    const ShRgb sh = oracleSh(capture_, environment_, settings_, x_m, z_m, timeOfDay_h);
+    oracle_s_ += secondsSince(t0);
+    ++oracleCaptures_;
+    oracleCache_.emplace(key, sh);
+    return sh;
+}
+
+void ErrorMeter::frame(int index, double time_s, double timeOfDay_h, const glm::dvec3& camera_m,
+                       double speed_mps, const AmbienceMethod& method) {
+    if (settings_.every <= 0) return;
+    // Pop: this frame's change at the held points.
+    if (!popPoints_.empty()) {
+        for (std::size_t i = 0; i < popPoints_.size(); ++i) {
+            const ShRgb now = method.shAt(popPoints_[i].x_m, popPoints_[i].z_m);
+            pending_.push_back({i, now - popPrevious_[i]});
+            popPrevious_[i] = now;
+        }
+        ++framesSinceMeasure_;
+    }
+    const bool measure = frameCounter_++ % settings_.every == 0;
+    if (!measure) return;
+
+    // Close the pops since the last measured frame against the oracle's change there.
+    if (!popPoints_.empty() && framesSinceMeasure_ > 0) {
+        std::vector<ShRgb> oracleEnd;
+        for (const Witness& p : popPoints_)
+            oracleEnd.push_back(oracle(index, p.x_m, p.z_m, timeOfDay_h));
+        const float perFrame = 1.0f / float(framesSinceMeasure_);
+        for (const PendingPop& pp : pending_) {
+            const ShRgb oracleStep = (oracleEnd[pp.point] - popOracleStart_[pp.point]) * perFrame;
+            pops_.push_back(popValue(pp.delta, oracleStep, popOracleStart_[pp.point]));
+        }
+    }
+    pending_.clear();
+    framesSinceMeasure_ = 0;
+
+    MeasuredFrame mf;
+    mf.index = index;
+    mf.time_s = time_s;
+    mf.timeOfDay_h = timeOfDay_h;
+    mf.speed_mps = speed_mps;
+    mf.witnesses = witnessPoints(settings_, camera_m.x, camera_m.z, measuredCount_++);
+    std::vector<ShRgb> oracles;
+    for (const Witness& w : mf.witnesses) {
+        const ShRgb o = oracle(index, w.x_m, w.z_m, timeOfDay_h);
+        oracles.push_back(o);
+        mf.errors.push_back(relativeIrradianceError(method.shAt(w.x_m, w.z_m), o));
+    }
+    // New pop points: the camera's ground point and the first ring-1 witnesses.
+    popPoints_.clear();
+    popOracleStart_.clear();
+    popPrevious_.clear();
+    for (std::size_t i = 0; i < mf.witnesses.size() && int(popPoints_.size()) < settings_.popPoints;
+         ++i) {
+        if (mf.witnesses[i].ring > 1) break;
+        popPoints_.push_back(mf.witnesses[i]);
+        popOracleStart_.push_back(oracles[i]);
+        popPrevious_.push_back(method.shAt(mf.witnesses[i].x_m, mf.witnesses[i].z_m));
+    }
+    measured_.push_back(std::move(mf));
+}
+
+double ErrorMeter::MeasuredFrame::mean() const {
+    if (errors.empty()) return 0.0;
+    double total = 0.0;
+    for (double e : errors) total += e;
+    return total / double(errors.size());
+}
+
+double ErrorMeter::MeasuredFrame::max() const {
+    double m = 0.0;
+    for (double e : errors) m = std::max(m, e);
+    return m;
+}
+
+double ErrorMeter::MeasuredFrame::ringMean(int ring) const {
+    double total = 0.0;
+    int n = 0;
+    for (std::size_t i = 0; i < witnesses.size(); ++i)
+        if (witnesses[i].ring == ring) total += errors[i], ++n;
+    return n ? total / n : std::numeric_limits<double>::quiet_NaN();
+}
+
+std::vector<double> ErrorMeter::errors() const {
+    std::vector<double> out;
+    for (const auto& m : measured_) out.insert(out.end(), m.errors.begin(), m.errors.end());
+    return out;
+}
+
+std::vector<double> ErrorMeter::ringErrors(int ring) const {
+    std::vector<double> out;
+    for (const auto& m : measured_)
+        for (std::size_t i = 0; i < m.witnesses.size(); ++i)
+            if (m.witnesses[i].ring == ring) out.push_back(m.errors[i]);
+    return out;
+}
+
+// ---- Oracle cache ----------------------------------------------------------------------------
+
+void ErrorMeter::saveOracle(const std::string& path, const std::string& signature) const {
+    nlohmann::json j;
+    j["format"] = "ambience-oracle";
+    j["version"] = 1;
+    j["signature"] = signature;
+    nlohmann::json entries = nlohmann::json::array();
+    for (const auto& [key, sh] : oracleCache_) {
+        nlohmann::json coefficients = nlohmann::json::array();
+        for (int k = 0; k < kShCoefficients; ++k)
+            for (int c = 0; c < 3; ++c) coefficients.push_back(sh.c[k][c]);
+        entries.push_back({{"frame", key.frame}, {"x", key.x}, {"z", key.z}, {"sh", coefficients}});
+    }
+    j["entries"] = std::move(entries);
+    const std::string tmp = path + ".part";
+    {
+        std::ofstream out(tmp);
+        if (!out) throw InputError(path, "cannot write the oracle file");
+        out << j.dump() << "\n";
+        if (!out) throw InputError(path, "cannot write the oracle file");
+    }
+    if (std::rename(tmp.c_str(), path.c_str()) != 0)
+        throw InputError(path, "cannot write the oracle file");
+}
+
+void ErrorMeter::loadOracle(const std::string& path, const std::string& signature) {
+    std::ifstream in(path);
+    if (!in) throw InputError(path, "cannot open the oracle file");
+    nlohmann::json j;
+    try {
+        j = nlohmann::json::parse(in);
+    } catch (const nlohmann::json::exception& e) {
+        throw InputError(path, std::string("malformed oracle file: ") + e.what());
+    }
+    if (!j.is_object() || j.value("format", "") != "ambience-oracle" || j.value("version", 0) != 1)
+        throw InputError(path, "not an ambience oracle file (format/version)");
+    if (j.value("signature", "") != signature)
+        throw InputError(path, "oracle made for other settings: '" + j.value("signature", "") +
+                                   "', this run is '" + signature + "'");
+    std::map<Key, ShRgb> loaded;
+    const auto& entries = j.at("entries");
+    if (!entries.is_array()) throw InputError(path, "entries: expected an array");
+    for (std::size_t e = 0; e < entries.size(); ++e) {
+        const auto& item = entries[e];
+        const std::string where = path + ": entries[" + std::to_string(e) + "]";
+        try {
+            Key key{item.at("frame").get<int>(), item.at("x").get<double>(),
+                    item.at("z").get<double>()};
+            const auto& coefficients = item.at("sh");
+            if (!coefficients.is_array() || coefficients.size() != 27)
+                throw InputError(where, "sh: expected 27 numbers");
+            ShRgb sh;
+            for (int k = 0; k < kShCoefficients; ++k)
+                for (int c = 0; c < 3; ++c) {
+                    const double v = coefficients[std::size_t(3 * k + c)].get<double>();
+                    if (!std::isfinite(v)) throw InputError(where, "sh: non-finite value");
+                    sh.c[k][c] = float(v);
+                }
+            loaded[key] = sh;
+        } catch (const nlohmann::json::exception& ex) {
+            throw InputError(where, ex.what());
+        }
+    }
+    oracleCache_ = std::move(loaded);
+}
+
+}  // namespace amb

@@ -1,0 +1,164 @@
+// Metrics.h — how wrong the applied ambience is, and how much it pops (DESIGN.md "Measuring
+// speed against error").
+//
+// [SECTION] Irradiance distance
+//   For coefficient sets a, b the irradiance difference over the sphere of normals has the closed
+//   form (the basis is orthonormal over the sphere, E(n) = sum_k Ahat_l L_k Y_k(n)):
+//       ||E_a - E_b||^2 = sum_c w_c sum_k Ahat_l(k)^2 (a_kc - b_kc)^2,
+//   w_c = Rec. 709 luminance weights (0.2126, 0.7152, 0.0722): a channel counts as much as it
+//   contributes to perceived brightness, and a colour error still counts. The relative error of
+//   an applied set against the oracle is ||E_applied - E_oracle|| / ||E_oracle||.
+// [SECTION] Pop
+//   The change of the applied irradiance at a fixed world point from one frame to the next, less
+//   the oracle's own change over that frame (the light itself moving with the time of day):
+//       pop = ||(A_t - A_{t-1}) - (O_t - O_{t-1})|| / ||O_{t-1}||.
+//   The oracle is captured only on measured frames, so its per-frame change is taken as linear
+//   between two measured frames (its change there comes from the time of day alone: the captured
+//   scene is static).
+// [SECTION] Witness points
+//   On a measured frame: the camera's ground point (ring 0) and, for each ring r >= 1 with
+//   radius band [R_{r-1}, R_r), `perRing` terrain patch corners (a 32 m lattice, the corners of
+//   the finest terrain patches) near radius (R_{r-1} + R_r) / 2, at angles spread around the
+//   camera and turned by the golden angle from one measured frame to the next, so that over a
+//   replay every direction is sampled. Pop points: the camera's ground point and the first
+//   popPoints - 1 ring-1 witnesses, held fixed from one measured frame to the next.
+// [SECTION] Oracle
+//   A fresh capture at the exact point and time with the same capture settings: the probe placed
+//   as the volume places its probes (probeHeight above the ground, moved out of plants), six
+//   faces, projected with the same sun threshold. It does not depend on the method, so a run
+//   can save the oracle of a replay and other runs of the same replay read it back.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "lighting/SH.h"
+
+namespace amb {
+
+class AmbienceMethod;
+class CubeCapture;
+class ProbeEnvironment;
+
+// ---- Irradiance distance ---------------------------------------------------------------------
+inline constexpr double kLuminanceWeights[3] = {0.2126, 0.7152, 0.0722};
+
+// ||E_a - E_b|| over the sphere of normals (see above), in irradiance units x sqrt(sr).
+double irradianceDistance(const ShRgb& a, const ShRgb& b);
+// ||E_a||.
+double irradianceNorm(const ShRgb& a);
+// ||E_applied - E_oracle|| / ||E_oracle||; the oracle's norm is floored at `floor` so a black
+// oracle (a sealed cave, a moonless night) gives a large but finite number.
+double relativeIrradianceError(const ShRgb& applied, const ShRgb& oracle, double floor = 1e-9);
+// Pop at one point (see above): appliedChange = A_t - A_{t-1}, oracleChange = O_t - O_{t-1},
+// oracle = O_{t-1} (the scale).
+double popValue(const ShRgb& appliedChange, const ShRgb& oracleChange, const ShRgb& oracle,
+                double floor = 1e-9);
+
+// ---- Statistics ------------------------------------------------------------------------------
+struct Summary {
+    std::size_t count = 0;
+    double mean = 0.0, p50 = 0.0, p95 = 0.0, p99 = 0.0, max = 0.0;
+};
+// Percentiles by linear interpolation between order statistics; empty input gives zeros.
+// Non-finite values are counted in `count` but make mean and max infinite (they are never
+// dropped silently).
+Summary summarize(std::vector<double> values);
+
+// ---- Witness points --------------------------------------------------------------------------
+struct MeasureSettings {
+    int every = 30;  // measure every K-th frame (0: never)
+    // Ring bands [m]: ring r >= 1 covers [ringRadii[r-1], ringRadii[r]).
+    std::vector<double> ringRadii{16.0, 48.0, 144.0, 432.0};
+    int perRing = 4;                // witnesses per ring
+    int popPoints = 3;              // the camera's ground point + popPoints - 1 ring-1 witnesses
+    double cornerSpacing_m = 32.0;  // witnesses sit on this lattice (terrain patch corners)
+    double maxAside_m = 4.0;        // oracle probe placement, as the volume's probes
+    double sunThreshold = 5000.0;   // as AmbienceVolumeSettings::sunThreshold
+    int rings() const { return int(ringRadii.size()); }  // ring 0 + ringRadii.size() - 1 bands
+};
+
+struct Witness {
+    double x_m = 0.0, z_m = 0.0;
+    int ring = 0;
+};
+// The witnesses of the `measuredIndex`-th measured frame for a camera at (x, z).
+std::vector<Witness> witnessPoints(const MeasureSettings& settings, double cameraX_m,
+                                   double cameraZ_m, int measuredIndex);
+
+// The oracle SH at ground point (x, z) at `timeOfDay_h` (see above).
+ShRgb oracleSh(CubeCapture& capture, const ProbeEnvironment& environment,
+               const MeasureSettings& settings, double x_m, double z_m, double timeOfDay_h);
+
+// ---- Error meter -----------------------------------------------------------------------------
+// Drives the measurement along a run: call frame() once per frame after the method's store
+// stage. Oracle values come from the cache when present (loadOracle) and are captured otherwise.
+class ErrorMeter {
+  public:
+    ErrorMeter(CubeCapture& capture, const ProbeEnvironment& environment,
+               const MeasureSettings& settings);
+
+    void frame(int index, double time_s, double timeOfDay_h, const glm::dvec3& camera_m,
+               double speed_mps, const AmbienceMethod& method);
+
+    struct MeasuredFrame {
+        int index = 0;
+        double time_s = 0.0, timeOfDay_h = 0.0, speed_mps = 0.0;
+        std::vector<Witness> witnesses;
+        std::vector<double> errors;  // per witness
+        double mean() const;
+        double max() const;
+        double ringMean(int ring) const;  // NaN when the ring has no witness
+    };
+    const std::vector<MeasuredFrame>& measured() const { return measured_; }
+    std::vector<double> errors() const;  // every witness of every measured frame
+    std::vector<double> ringErrors(int ring) const;
+    const std::vector<double>& pops() const { return pops_; }
+    const MeasureSettings& settings() const { return settings_; }
+    double oracleSeconds() const { return oracle_s_; }  // wall time spent capturing the oracle
+    std::int64_t oracleCaptures() const { return oracleCaptures_; }
+    std::int64_t oracleCacheHits() const { return oracleHits_; }
+
+    // Oracle cache: JSON keyed by (frame index, x, z) with the settings it was made with; load
+    // throws InputError(path, ...) for a malformed file or one made with other settings
+    // (`signature` names the replay, stride and capture settings).
+    void loadOracle(const std::string& path, const std::string& signature);
+    void saveOracle(const std::string& path, const std::string& signature) const;
+
+  private:
+    ShRgb oracle(int frameIndex, double x_m, double z_m, double timeOfDay_h);
+
+    CubeCapture& capture_;
+    const ProbeEnvironment& environment_;
+    MeasureSettings settings_;
+    std::vector<MeasuredFrame> measured_;
+    std::vector<double> pops_;
+    // Oracle values by (frame, x, z) (the cache).
+    struct Key {
+        int frame;
+        double x, z;
+        bool operator<(const Key& o) const;
+    };
+    std::map<Key, ShRgb> oracleCache_;
+    double oracle_s_ = 0.0;
+    std::int64_t oracleCaptures_ = 0, oracleHits_ = 0;
+    // Pop tracking between measured frames.
+    std::vector<Witness> popPoints_;
+    std::vector<ShRgb> popOracleStart_;
+    std::vector<ShRgb> popPrevious_;  // applied at the previous frame
+    struct PendingPop {
+        std::size_t point;
+        ShRgb delta;  // A_t - A_{t-1}
+    };
+    std::vector<PendingPop> pending_;
+    int framesSinceMeasure_ = 0;
+    int measuredCount_ = 0;
+    int frameCounter_ = 0;
+};
+
+}  // namespace amb

@@ -1,0 +1,152 @@
+// BenchCommand_test.cpp — `ambience run --measure-every` and `ambience bench` end to end on
+// short runs: results, summary, oracle reuse, a failing run recorded while the sweep goes on,
+// bad input.
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "RunAmbience.h"
+
+namespace amb::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::vector<std::vector<std::string>> readCsv(const std::string& path) {
+    // Plain CSV with one quoted field at most per row in these tests (error messages).
+    std::vector<std::vector<std::string>> rows;
+    std::ifstream in(path);
+    std::string line;
+    while (std::getline(in, line)) {
+        std::vector<std::string> row;
+        std::string field;
+        bool quoted = false;
+        for (std::size_t i = 0; i < line.size(); ++i) {
+            const char c = line[i];
+            if (c == '"') {
+                if (quoted && i + 1 < line.size() && line[i + 1] == '"') {
+                    field += '"';
+                    ++i;
+                } else {
+                    quoted = !quoted;
+                }
+            } else if (c == ',' && !quoted) {
+                row.push_back(field);
+                field.clear();
+            } else {
+                field += c;
+            }
+        }
+        row.push_back(field);
+        rows.push_back(row);
+    }
+    return rows;
+}
+
+std::size_t column(const std::vector<std::string>& header, const std::string& name) {
+    for (std::size_t i = 0; i < header.size(); ++i)
+        if (header[i] == name) return i;
+    ADD_FAILURE() << "no column " << name;
+    return 0;
+}
+
+nlohmann::json readJson(const fs::path& path) {
+    std::ifstream in(path);
+    return nlohmann::json::parse(in);
+}
+
+// A measured run writes the error block and the per-frame CSV; a second run of the same replay
+// reads the saved oracle (no captures) and, the simulation being deterministic, measures the
+// very same errors.
+TEST(RunMeasure, OracleIsSavedReusedAndTheResultDeterministic) {
+    const fs::path dir = scratchDir("run-measure");
+    const std::string common = "run --no-frames --max-frames 61 --measure-every 20 --oracle " +
+                               (dir / "oracle.json").string();
+    const auto a = runAmbience(common + " --out " + (dir / "a").string());
+    ASSERT_EQ(a.exitCode, 0) << a.err;
+    const auto b = runAmbience(common + " --out " + (dir / "b").string());
+    ASSERT_EQ(b.exitCode, 0) << b.err;
+    const auto ja = readJson(dir / "a" / "report.json")["measurement"];
+    const auto jb = readJson(dir / "b" / "report.json")["measurement"];
+    EXPECT_EQ(ja["measuredFrames"], 4);  // frames 0, 20, 40, 60
+    EXPECT_GT(ja["oracleCaptures"].get<int>(), 0);
+    EXPECT_EQ(jb["oracleCaptures"], 0);
+    EXPECT_EQ(ja["error"], jb["error"]);
+    EXPECT_EQ(ja["pop"], jb["pop"]);
+    const double mean = ja["error"]["mean"].get<double>();
+    EXPECT_TRUE(std::isfinite(mean) && mean >= 0.0 && mean < 5.0) << mean;
+    EXPECT_EQ(lineCount(slurp((dir / "a" / "report.measure.csv").string())), 1 + 4);
+    // The oracle is refused for another measurement schedule (one line, exit code 2).
+    const auto c = runAmbience("run --no-frames --max-frames 61 --measure-every 10 --oracle " +
+                               (dir / "oracle.json").string() + " --out " + (dir / "c").string());
+    EXPECT_EQ(c.exitCode, 2);
+    EXPECT_EQ(c.errLines(), 1) << c.err;
+}
+
+// Three methods on one short replay, plus a sweep point that cannot run (an unknown settings
+// key): the failure is recorded with its error, every other run is ok, and the outputs exist.
+TEST(BenchCommand, SweepRecordsAFailureAndGoesOn) {
+    const fs::path dir = scratchDir("bench");
+    {
+        std::ofstream sweep(dir / "sweep.json");
+        sweep << R"({"points": [
+            {"label": "blend1", "methods": ["volume"], "volume": {"store": {"blendTime_s": 1.0}}},
+            {"label": "broken", "methods": ["volume"], "volume": {"noSuchSetting": 1}}]})";
+    }
+    const auto r = runAmbience(
+        "bench --replays highway-drive --methods volume,constant,grid "
+        "--max-frames 60 --measure-every 20 --jobs 2 --sweep " +
+        (dir / "sweep.json").string() + " --out " + (dir / "out").string());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const auto rows = readCsv((dir / "out" / "results.csv").string());
+    ASSERT_EQ(rows.size(), 1u + 5u);  // header + volume x 3 points + constant + grid
+    const auto& h = rows[0];
+    int ok = 0, failed = 0;
+    for (std::size_t i = 1; i < rows.size(); ++i) {
+        const auto& row = rows[i];
+        ASSERT_EQ(row.size(), h.size());
+        EXPECT_EQ(row[column(h, "replay")], "highway-drive");
+        if (row[column(h, "status")] == "ok") {
+            ++ok;
+            const double e = std::stod(row[column(h, "error_mean")]);
+            EXPECT_TRUE(e >= 0.0 && e < 5.0) << e;
+            EXPECT_EQ(row[column(h, "measured_frames")], "3");
+            EXPECT_TRUE(fs::exists(dir / "out" / row[column(h, "run_dir")] / "report.json"));
+        } else {
+            ++failed;
+            EXPECT_EQ(row[column(h, "point")], "broken");
+            EXPECT_NE(row[column(h, "error_message")].find("noSuchSetting"), std::string::npos)
+                << row[column(h, "error_message")];
+        }
+    }
+    EXPECT_EQ(ok, 4);
+    EXPECT_EQ(failed, 1);
+    const std::string summary = slurp((dir / "out" / "summary.md").string());
+    EXPECT_NE(summary.find("volume (ours)"), std::string::npos);
+    EXPECT_NE(summary.find("scrolling grid"), std::string::npos);
+    EXPECT_TRUE(fs::exists(dir / "out" / "oracle" / "highway-drive.json"));
+}
+
+TEST(BenchCommand, BadInputIsOneLineAndExitCode2) {
+    const fs::path dir = scratchDir("bench-bad");
+    for (const std::string& args :
+         {std::string("bench --methods volume,nonsense"), std::string("bench --replays nowhere"),
+          std::string("bench --sweep ") + (dir / "missing.json").string(),
+          std::string("bench --measure-every 0"), std::string("bench --jobs -1"),
+          std::string("run --oracle x.json"), std::string("run --ambient nonsense")}) {
+        const auto r = runAmbience(args + " --out " + (dir / "o").string());
+        EXPECT_EQ(r.exitCode, 2) << args;
+        EXPECT_EQ(r.errLines(), 1) << args << ": " << r.err;
+    }
+    std::ofstream(dir / "bad.json") << R"({"points": [{"label": "x", "volume": 3}]})";
+    const auto r = runAmbience("bench --sweep " + (dir / "bad.json").string());
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.err.find("points[0]"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace amb::test

@@ -1,0 +1,205 @@
+// Metrics_test.cpp — the irradiance distance against its definition by quadrature, summaries,
+// witness points, and the error meter with an oracle known in closed form.
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include "FakeCubeCapture.h"
+#include "lighting/AmbienceMethod.h"
+#include "lighting/Metrics.h"
+#include "world/Error.h"
+
+namespace amb {
+namespace {
+
+using testing_support::FakeCubeCapture;
+using testing_support::FlatProbeEnvironment;
+
+ShRgb randomSh(std::mt19937& rng) {
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    ShRgb sh;
+    for (auto& c : sh.c) c = {u(rng), u(rng), u(rng)};
+    sh.c[0] += glm::vec3(4.0f);
+    return sh;
+}
+
+// ||E_a - E_b||^2 by quadrature over the sphere (a fine latitude-longitude midpoint rule) of the
+// luminance-weighted squared channel differences of E(n) = sum_k Ahat_l L_k Y_k(n).
+double distanceByQuadrature(const ShRgb& a, const ShRgb& b) {
+    const int nt = 400, np = 800;
+    double total = 0.0;
+    for (int i = 0; i < nt; ++i) {
+        const double theta = kPi * (i + 0.5) / nt;
+        for (int j = 0; j < np; ++j) {
+            const double phi = 2.0 * kPi * (j + 0.5) / np;
+            const glm::dvec3 n(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                               std::cos(theta));
+            const glm::vec3 d = shIrradiance(a, glm::vec3(n)) - shIrradiance(b, glm::vec3(n));
+            const double w = std::sin(theta) * (kPi / nt) * (2.0 * kPi / np);
+            for (int c = 0; c < 3; ++c) total += w * kLuminanceWeights[c] * double(d[c]) * d[c];
+        }
+    }
+    return std::sqrt(total);
+}
+
+// The closed form equals the integral (quadrature error of this rule < 1e-4 relative).
+TEST(Metrics, DistanceMatchesQuadrature) {
+    std::mt19937 rng(7);
+    for (int t = 0; t < 3; ++t) {
+        const ShRgb a = randomSh(rng), b = randomSh(rng);
+        const double exact = irradianceDistance(a, b);
+        EXPECT_NEAR(exact, distanceByQuadrature(a, b), 1e-4 * exact);
+    }
+}
+
+// Constant radiance c in every channel: E = pi c everywhere, so ||E|| = pi c sqrt(4 pi) (the
+// weights sum to 1); two constants c1, c2 differ by pi |c1 - c2| sqrt(4 pi).
+TEST(Metrics, ConstantRadianceClosedForm) {
+    auto constant = [](float c) {
+        ShRgb sh;
+        sh.c[0] = glm::vec3(float(2.0 * std::sqrt(kPi)) * c);
+        return sh;
+    };
+    const double s4pi = std::sqrt(4.0 * kPi);
+    EXPECT_NEAR(irradianceNorm(constant(2.0f)), kPi * 2.0 * s4pi, 1e-5);
+    EXPECT_NEAR(irradianceDistance(constant(2.0f), constant(1.5f)), kPi * 0.5 * s4pi, 1e-5);
+    EXPECT_NEAR(relativeIrradianceError(constant(2.0f), constant(1.0f)), 1.0, 1e-6);
+    EXPECT_EQ(relativeIrradianceError(constant(1.0f), constant(1.0f)), 0.0);
+    // Scale invariance of the relative error.
+    std::mt19937 rng(3);
+    const ShRgb a = randomSh(rng), b = randomSh(rng);
+    EXPECT_NEAR(relativeIrradianceError(a * 7.0f, b * 7.0f), relativeIrradianceError(a, b), 1e-5);
+    // A black oracle gives a large finite number, not Inf or NaN.
+    EXPECT_TRUE(std::isfinite(relativeIrradianceError(a, ShRgb{})));
+}
+
+// Pop: a change the oracle shares is no pop; a change it does not share is.
+TEST(Metrics, PopSubtractsTheOraclesOwnChange) {
+    std::mt19937 rng(11);
+    const ShRgb o = randomSh(rng), change = randomSh(rng) * 0.1f;
+    EXPECT_EQ(popValue(change, change, o), 0.0);
+    EXPECT_NEAR(popValue(change, ShRgb{}, o), irradianceNorm(change) / irradianceNorm(o), 1e-9);
+}
+
+// Quantiles by linear interpolation: 0..100 gives p95 = 95, p99 = 99, mean 50.
+TEST(Metrics, SummaryQuantiles) {
+    std::vector<double> v;
+    for (int i = 100; i >= 0; --i) v.push_back(i);
+    const Summary s = summarize(v);
+    EXPECT_EQ(s.count, 101u);
+    EXPECT_DOUBLE_EQ(s.mean, 50.0);
+    EXPECT_DOUBLE_EQ(s.p50, 50.0);
+    EXPECT_DOUBLE_EQ(s.p95, 95.0);
+    EXPECT_DOUBLE_EQ(s.p99, 99.0);
+    EXPECT_DOUBLE_EQ(s.max, 100.0);
+    EXPECT_EQ(summarize({}).count, 0u);
+    EXPECT_TRUE(std::isinf(summarize({1.0, std::nan("")}).mean));  // never dropped silently
+}
+
+// Witnesses: ring 0 is the camera's point; ring r lies on the corner lattice, within its band
+// widened by half a lattice diagonal; exact multiples of the spacing 10^6 m from the origin.
+TEST(Metrics, WitnessRingsAndLattice) {
+    MeasureSettings s;
+    for (double cx : {0.0, 123.4, 1.0e6 + 17.25}) {
+        const double cz = -cx * 0.5;
+        for (int m = 0; m < 5; ++m) {
+            const auto w = witnessPoints(s, cx, cz, m);
+            ASSERT_EQ(w.size(), 1u + std::size_t(s.perRing) * (s.ringRadii.size() - 1));
+            EXPECT_EQ(w[0].ring, 0);
+            EXPECT_EQ(w[0].x_m, cx);
+            for (std::size_t i = 1; i < w.size(); ++i) {
+                const int r = w[i].ring;
+                ASSERT_GE(r, 1);
+                const double d = std::hypot(w[i].x_m - cx, w[i].z_m - cz);
+                const double slack = s.cornerSpacing_m * std::sqrt(0.5);
+                EXPECT_GE(d, s.ringRadii[std::size_t(r - 1)] - slack);
+                EXPECT_LE(d, s.ringRadii[std::size_t(r)] + slack);
+                EXPECT_EQ(std::fmod(w[i].x_m, s.cornerSpacing_m), 0.0);
+                EXPECT_EQ(std::fmod(w[i].z_m, s.cornerSpacing_m), 0.0);
+            }
+        }
+    }
+}
+
+// A method that applies a fixed multiple of the fake's own capture (the oracle) at every point.
+class ScaledOracleMethod final : public AmbienceMethod {
+  public:
+    ScaledOracleMethod(FakeCubeCapture& capture, const FlatProbeEnvironment& env, float scale)
+        : capture_(capture), env_(env), scale_(scale) {}
+    std::string methodName() const override { return "scaled"; }
+    void predictStage(const glm::dvec3&, const glm::dvec3&, double tod, double) override {
+        tod_ = tod;
+    }
+    void captureStage() override {}
+    void storeStage() override {}
+    ShRgb shAt(double x, double z) const override {
+        return oracleSh(capture_, env_, MeasureSettings{}, x, z, tod_) * scale_;
+    }
+    MethodStatistics methodStatistics() const override { return {}; }
+
+  private:
+    FakeCubeCapture& capture_;
+    const FlatProbeEnvironment& env_;
+    float scale_;
+    double tod_ = 12.0;
+};
+
+// The meter against an exact method reads 0 error and 0 pop; against 1.25 x the oracle it reads
+// 0.25 everywhere (scale invariance of the relative norm). The oracle file round-trips, and one
+// made for other settings or malformed is refused with InputError.
+TEST(Metrics, ErrorMeterClosedFormsAndOracleFile) {
+    FakeCubeCapture capture(8);
+    FlatProbeEnvironment env;
+    MeasureSettings s;
+    s.every = 4;
+    s.ringRadii = {16.0, 48.0, 144.0};
+    s.perRing = 2;
+    for (float scale : {1.0f, 1.25f}) {
+        ScaledOracleMethod method(capture, env, scale);
+        ErrorMeter meter(capture, env, s);
+        for (int f = 0; f < 13; ++f) {
+            const double tod = 12.0 + 0.01 * f;
+            method.predictStage({}, {}, tod, 0.1);
+            meter.frame(f, 0.1 * f, tod, glm::dvec3(10.0 * f, 5.0, 3.0 * f), 10.0, method);
+        }
+        ASSERT_EQ(meter.measured().size(), 4u);  // frames 0, 4, 8, 12
+        for (double e : meter.errors()) EXPECT_NEAR(e, scale - 1.0, 1e-5);
+        // The pops: the applied value follows the oracle, whose change is linear in between
+        // only approximately, so a small residue remains; it is far below a real pop.
+        EXPECT_EQ(meter.pops().size(), 12u * std::size_t(s.popPoints));
+        for (double p : meter.pops()) EXPECT_LT(p, 2e-3);
+    }
+    // Oracle file: save, load into a new meter, no captures needed.
+    ScaledOracleMethod method(capture, env, 1.0f);
+    ErrorMeter first(capture, env, s);
+    for (int f = 0; f < 9; ++f) first.frame(f, 0.1 * f, 12.0, glm::dvec3(f, 0, 0), 1.0, method);
+    const auto dir =
+        std::filesystem::temp_directory_path() / ("amb-metrics-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    const std::string file = (dir / "oracle.json").string();
+    first.saveOracle(file, "sig-a");
+    ErrorMeter second(capture, env, s);
+    second.loadOracle(file, "sig-a");
+    for (int f = 0; f < 9; ++f) second.frame(f, 0.1 * f, 12.0, glm::dvec3(f, 0, 0), 1.0, method);
+    EXPECT_EQ(second.oracleCaptures(), 0);
+    EXPECT_EQ(second.oracleCacheHits(), first.oracleCaptures());
+    EXPECT_EQ(second.errors(), first.errors());
+    EXPECT_THROW(second.loadOracle(file, "sig-b"), InputError);
+    std::ofstream(dir / "bad.json") << "{\"format\": \"ambience-oracle\", \"version\": 1, ";
+    EXPECT_THROW(second.loadOracle((dir / "bad.json").string(), "sig-a"), InputError);
+    std::ofstream(dir / "nan.json")
+        << "{\"format\":\"ambience-oracle\",\"version\":1,\"signature\":\"s\",\"entries\":"
+           "[{\"frame\":0,\"x\":0,\"z\":0,\"sh\":[1,2]}]}";
+    EXPECT_THROW(second.loadOracle((dir / "nan.json").string(), "s"), InputError);
+    EXPECT_THROW(second.loadOracle((dir / "missing.json").string(), "s"), InputError);
+    std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace amb
