@@ -70,12 +70,14 @@ std::string readTextFile(const std::string& path, const char* what) {
     return text.str();
 }
 
-// Where the draw would look up ambience, for a run without the main view: patch corners (the
-// 32 m lattice) within 48 m all around the camera and within 240 m in a 60-degree half-angle
-// cone ahead, on the ground plane. The reactive baseline creates its probes from these.
+// Where the draw would look up ambience, for a run without the main view: points of an 8 m
+// lattice (about the density of near terrain corners and plants) within 48 m all around the
+// camera and within 240 m in a 60-degree half-angle cone ahead, on the ground plane: about a
+// thousand a frame. They are looked up (and timed as the draw's lookups), and the reactive
+// baseline creates its probes from them.
 void drawLookupStandIn(const CameraSample& camera, std::vector<double>& x, std::vector<double>& z) {
     x.clear(), z.clear();
-    constexpr double kSpacing = 32.0, kNear = 48.0, kFar = 240.0, kCosCone = 0.5;
+    constexpr double kSpacing = 8.0, kNear = 48.0, kFar = 240.0, kCosCone = 0.5;
     glm::dvec2 ahead(camera.forward.x, camera.forward.z);
     const double len = glm::length(ahead);
     ahead = len > 1e-6 ? ahead / len : glm::dvec2(0.0);
@@ -186,6 +188,7 @@ void runReplay(RunOptions o) {
         if (!o.oracle.empty() && fs::exists(o.oracle)) meter->loadOracle(o.oracle, oracleSignature);
     }
     std::vector<double> standInX, standInZ;
+    std::vector<ShRgb> standInSh;
     const int frames =
         o.maxFrames > 0 ? std::min(o.maxFrames, loop.frameCount()) : loop.frameCount();
 
@@ -239,6 +242,14 @@ void runReplay(RunOptions o) {
         }
         if (o.noFrames) {
             drawLookupStandIn(camera, standInX, standInZ);
+            standInSh.resize(standInX.size());
+            const auto t0 = std::chrono::steady_clock::now();
+            stages->method().shAt(standInX.size(), standInX.data(), standInZ.data(),
+                                  standInSh.data());
+            rec.ambience.lookups = standInX.size();
+            rec.ambience.lookupMs =
+                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                    .count();
             stages->addLookups(standInX, standInZ);
         }
         const bool writeFrame = o.frames != "none" && rec.index % o.every == 0;
@@ -283,7 +294,7 @@ void runReplay(RunOptions o) {
     }
     if (meter) {
         report.measurementJson = measurementJson(*meter);
-        writeMeasureCsv(*meter, fs::path(o.report).replace_extension(".measure.csv").string());
+        writeMeasureCsv(*meter, (fs::path(o.report).parent_path() / "measure.csv").string());
         if (!o.oracle.empty() && meter->oracleCaptures() > 0)
             meter->saveOracle(o.oracle, oracleSignature);
     }
@@ -319,6 +330,9 @@ void runReplay(RunOptions o) {
     if (o.frames != "none") std::printf("  frames: %s (every %d)\n", o.frames.c_str(), o.every);
     if (video) std::printf("  video:  %s\n", o.video.c_str());
     std::printf("  report: %s (+ .csv)\n", o.report.c_str());
+    if (meter)
+        std::printf("  measurement: %s\n",
+                    (fs::path(o.report).parent_path() / "measure.csv").string().c_str());
 }
 
 }  // namespace

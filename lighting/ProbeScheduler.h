@@ -47,7 +47,11 @@ struct ProbeSchedulerSettings {
     double roadAlignment = 0.7;  // |cos| between motion and road direction needed to follow it
     double teleportDistance_m = 100.0;  // a step longer than this + 3 x speed x dt is a teleport
     // Resolution against speed.
-    double corridorCells = 2.0;  // width of the finest-level corridor along the path, in cells
+    // Width of the finest-level corridor along the path, in cells. 4 from `ambience bench
+    // --tune` (candidate t4 of its tune.csv): 2 -> 4 lowered the mean error over the highway,
+    // mountain, low-flight and stress-flight replays from 0.183 to 0.143 (the mountain road's
+    // from 0.32 to 0.17); 1 raised it to 0.277, and 6 or 8 (a later sweep) to 0.154-0.156.
+    double corridorCells = 4.0;
     int maxLevel = kMaxAnchorLevels - 1;  // never capture finer than this level
     // Candidates and priority.
     double finestRingCells = 1.0;     // finest-level candidates within this x s_L of the path

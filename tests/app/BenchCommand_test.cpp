@@ -79,7 +79,7 @@ TEST(RunMeasure, OracleIsSavedReusedAndTheResultDeterministic) {
     EXPECT_EQ(ja["pop"], jb["pop"]);
     const double mean = ja["error"]["mean"].get<double>();
     EXPECT_TRUE(std::isfinite(mean) && mean >= 0.0 && mean < 5.0) << mean;
-    EXPECT_EQ(lineCount(slurp((dir / "a" / "report.measure.csv").string())), 1 + 4);
+    EXPECT_EQ(lineCount(slurp((dir / "a" / "measure.csv").string())), 1 + 4);
     // The oracle is refused for another measurement schedule (one line, exit code 2).
     const auto c = runAmbience("run --no-frames --max-frames 61 --measure-every 10 --oracle " +
                                (dir / "oracle.json").string() + " --out " + (dir / "c").string());

@@ -30,8 +30,10 @@ TEST(ProbeScheduler, FinestLevelFallsAsSpeedRises) {
     AnchorStore store;  // 243, 81, 27, 9, 3 m
     ProbeScheduler scheduler;
     const double rate = 10.0;  // probes per second: one face per frame at 60 Hz
+    ProbeSchedulerSettings two;
+    two.corridorCells = 2.0;  // the rule with a corridor two cells wide (the default is wider)
     auto levelAt = [&](double speed) {
-        ProbeScheduler s;
+        ProbeScheduler s(two);
         s.observe({0, 0, 0}, {speed, 0, 0}, 0.0);
         return s.finestLevel(store, rate);
     };
@@ -194,7 +196,13 @@ struct Drive {
     FakeCubeCapture capture{16, false};
     FlatProbeEnvironment environment;
     AmbienceVolume volume;
-    explicit Drive(const AmbienceVolumeSettings& s = {}) : volume(capture, environment, s) {}
+    // The drives below state their spacings for a corridor two cells wide.
+    static AmbienceVolumeSettings twoCellCorridor(AmbienceVolumeSettings s) {
+        s.scheduler.corridorCells = 2.0;
+        return s;
+    }
+    explicit Drive(const AmbienceVolumeSettings& s = {})
+        : volume(capture, environment, twoCellCorridor(s)) {}
 };
 
 // Nearest anchor (horizontal distance) to p, or nullptr.
