@@ -24,6 +24,7 @@
 #include "lighting/AnchorStore.h"
 #include "lighting/CubeCapture.h"
 #include "lighting/CubeMapProjector.h"
+#include "lighting/JsonFields.h"
 #include "lighting/ProbeCapture.h"
 #include "lighting/ProbeEnvironment.h"
 #include "world/Error.h"
@@ -127,54 +128,9 @@ bool bilinear(double x_m, double z_m, double spacing_m, const Lookup& lookup, Sh
     return true;
 }
 
-// ---- Settings from JSON -------------------------------------------------------------------------
-
-// Reads the keys of one JSON object into fields; unknown keys and bad values are input errors.
-class JsonFields {
-  public:
-    JsonFields(const nlohmann::json& object, std::string where)
-        : object_(object), where_(std::move(where)) {
-        if (!object_.is_object()) throw InputError(where_, "expected a JSON object");
-    }
-    void number(const char* key, double& field, double lo, double hi) {
-        known_.push_back(key);
-        if (!object_.contains(key)) return;
-        const auto& v = object_.at(key);
-        if (!v.is_number()) throw InputError(where_, std::string("'") + key + "' must be a number");
-        const double x = v.get<double>();
-        if (!(x >= lo && x <= hi)) outOfRange(key, lo, hi);
-        field = x;
-    }
-    void integer(const char* key, int& field, int lo, int hi) {
-        known_.push_back(key);
-        if (!object_.contains(key)) return;
-        const auto& v = object_.at(key);
-        if (!v.is_number_integer()) {
-            throw InputError(where_, std::string("'") + key + "' must be an integer");
-        }
-        const long long x = v.get<long long>();
-        if (x < lo || x > hi) outOfRange(key, lo, hi);
-        field = int(x);
-    }
-    void finish() const {
-        for (auto it = object_.begin(); it != object_.end(); ++it) {
-            if (std::find(known_.begin(), known_.end(), it.key()) == known_.end()) {
-                throw InputError(where_, "unknown key '" + it.key() + "'");
-            }
-        }
-    }
-
-  private:
-    [[noreturn]] void outOfRange(const char* key, double lo, double hi) const {
-        throw InputError(where_, std::string("'") + key + "' must be in [" + std::to_string(lo) +
-                                     ", " + std::to_string(hi) + "]");
-    }
-    const nlohmann::json& object_;
-    std::string where_;
-    std::vector<std::string> known_;
-};
-
 }  // namespace
+
+// ---- Settings from JSON -------------------------------------------------------------------------
 
 BaselineSettings baselineSettingsFromJson(const std::string& jsonText, const std::string& where) {
     nlohmann::json root;
