@@ -408,9 +408,14 @@ const std::vector<std::string> kColumns = {"replay",
                                            "error_ring1_mean",
                                            "error_ring2_mean",
                                            "error_ring3_mean",
+                                           "error_ring0_p95",
                                            "error_ring1_p95",
                                            "error_ring2_p95",
                                            "error_ring3_p95",
+                                           "error_ring0_max",
+                                           "error_ring1_max",
+                                           "error_ring2_max",
+                                           "error_ring3_max",
                                            "pop_p99",
                                            "pop_max",
                                            "ambience_ms_median",
@@ -418,10 +423,15 @@ const std::vector<std::string> kColumns = {"replay",
                                            "frame_ms_median",
                                            "frame_ms_p95",
                                            "predict_ms_median",
+                                           "predict_ms_p95",
                                            "capture_ms_median",
                                            "capture_ms_p95",
                                            "store_ms_median",
+                                           "store_ms_p95",
+                                           "interpolate_ms_median",
+                                           "interpolate_ms_p95",
                                            "lookup_ms_median",
+                                           "lookup_ms_p95",
                                            "share_of_frame",
                                            "faces_per_s",
                                            "faces_captured",
@@ -464,8 +474,10 @@ std::map<std::string, std::string> resultRow(const Job& job) {
     if (m.contains("errorByRing") && m["errorByRing"].is_array()) {
         for (std::size_t ring = 0; ring < m["errorByRing"].size() && ring < 4; ++ring) {
             const json& e = m["errorByRing"][ring];
-            put("error_ring" + std::to_string(ring) + "_mean", number(e, {"mean"}));
-            if (ring > 0) put("error_ring" + std::to_string(ring) + "_p95", number(e, {"p95"}));
+            const std::string name = "error_ring" + std::to_string(ring);
+            put(name + "_mean", number(e, {"mean"}));
+            put(name + "_p95", number(e, {"p95"}));
+            put(name + "_max", number(e, {"max"}));
         }
     }
     put("pop_p99", number(m, {"pop", "p99"}));
@@ -476,11 +488,12 @@ std::map<std::string, std::string> resultRow(const Job& job) {
     put("ambience_ms_p95", number(r, {"ambience", "ambience_ms", "p95"}));
     put("frame_ms_median", number(r, {"frame_ms", "median"}));
     put("frame_ms_p95", number(r, {"frame_ms", "p95"}));
-    put("predict_ms_median", number(r, {"stages_ms", "predict", "median"}));
-    put("capture_ms_median", number(r, {"stages_ms", "capture", "median"}));
-    put("capture_ms_p95", number(r, {"stages_ms", "capture", "p95"}));
-    put("store_ms_median", number(r, {"stages_ms", "store", "median"}));
+    for (const char* stage : {"predict", "capture", "store", "interpolate"}) {
+        put(std::string(stage) + "_ms_median", number(r, {"stages_ms", stage, "median"}));
+        put(std::string(stage) + "_ms_p95", number(r, {"stages_ms", stage, "p95"}));
+    }
     put("lookup_ms_median", number(r, {"ambience", "lookup_ms", "median"}));
+    put("lookup_ms_p95", number(r, {"ambience", "lookup_ms", "p95"}));
     put("share_of_frame", number(r, {"ambience", "shareOfFrameTime"}));
     put("faces_per_s", number(r, {"ambience", "facesPerSecond"}));
     put("faces_captured", number(r, {"ambience", "facesCaptured"}));

@@ -87,6 +87,23 @@ TEST(RunMeasure, OracleIsSavedReusedAndTheResultDeterministic) {
     EXPECT_EQ(c.errLines(), 1) << c.err;
 }
 
+// Stress, a million metres from the origin: the volume captures, stores anchors and measures a
+// finite error; nothing is rejected (float positions would have collapsed the lattice there).
+TEST(RunMeasure, FarFromTheOriginStaysFinite) {
+    const fs::path dir = scratchDir("run-far");
+    const auto r =
+        runAmbience("run --replay " + sourcePath("replays/far-flight.json") +
+                    " --no-frames --max-frames 150 --measure-every 30 --out " + dir.string());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const auto report = readJson(dir / "report.json");
+    const auto& m = report["measurement"];
+    EXPECT_EQ(m["measuredFrames"], 5);
+    const double maxError = m["error"]["max"].get<double>();
+    EXPECT_TRUE(std::isfinite(maxError) && maxError < 5.0) << maxError;
+    EXPECT_GT(report["ambience"]["anchorsMax"].get<int>(), 10);  // 25 probes in 150 frames
+    EXPECT_EQ(report["ambience"]["rejectedProbes"], 0);
+}
+
 // Three methods on one short replay, plus a sweep point that cannot run (an unknown settings
 // key): the failure is recorded with its error, every other run is ok, and the outputs exist.
 TEST(BenchCommand, SweepRecordsAFailureAndGoesOn) {
