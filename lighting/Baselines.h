@@ -64,16 +64,22 @@ struct BaselineSettings {
     double defaultTimeRate_hPerS = 1.0 / 3600.0;  // time rate before it is measured [h/s]
     double timeJump_h = 0.25;           // a larger change of the time of day in a frame is a jump
     double teleportDistance_m = 100.0;  // a camera step longer than this + 3 x speed x dt [m]
+    // The spacings below are each baseline's best at one face per frame, from `ambience bench
+    // --sweep` over the highway, mountain, low-flight, stress-flight and far-flight replays (mean
+    // error): grid 24 m 0.369, 48 m 0.257, 96 m 0.167, 128 m 0.149, 192 m 0.148 (128 m kept: the
+    // same error with a grid that reaches 1 km instead of 1.5 km); reactive 12 m 0.442, 24 m
+    // 0.366, 48 m 0.276, 96 m 0.185; object 32 m 0.360, 64 m 0.277, 256 m 0.191. At this budget
+    // a dense layout cannot be refreshed as fast as the camera moves, so coarse probes win.
     // ScrollingGridMethod.
-    int gridSize = 16;            // G: the grid holds G x G probes
-    double gridSpacing_m = 24.0;  // s: probe spacing, also the lattice the grid snaps to [m]
-    double hysteresis = 0.97;     // h: an update keeps h of the old value
+    int gridSize = 16;             // G: the grid holds G x G probes
+    double gridSpacing_m = 128.0;  // s: probe spacing, also the lattice the grid snaps to [m]
+    double hysteresis = 0.97;      // h: an update keeps h of the old value
     // ReactiveCacheMethod.
-    double cacheSpacing_m = 12.0;  // lattice of the cached probes [m]
+    double cacheSpacing_m = 96.0;  // lattice of the cached probes [m]
     double unusedTimeout_s = 4.0;  // a probe not looked up for this long is dropped [s]
     // PerObjectMethod.
-    double objectSize_m = 32.0;    // objects are the level-0 terrain patches of this size [m]
-    double objectRange_m = 150.0;  // objects whose centre lies this close to the camera [m]
+    double objectSize_m = 256.0;   // objects are terrain squares of this size [m]
+    double objectRange_m = 400.0;  // objects whose centre lies this close to the camera [m]
 };
 
 // Parses settings from JSON text: an object whose keys are the field names above; missing keys

@@ -32,6 +32,17 @@ constexpr double kProbeHeight = 2.0;  // FlatProbeEnvironment's default
 // rounding; relative to the coefficient L00 of the red channel.
 constexpr double kRelative = 1e-5;
 
+// The layouts these tests state their closed forms for (finer than the defaults, which are tuned
+// for one face per frame on the shipped replays).
+BaselineSettings testLayout() {
+    BaselineSettings s;
+    s.gridSpacing_m = 24.0;
+    s.cacheSpacing_m = 12.0;
+    s.objectSize_m = 32.0;
+    s.objectRange_m = 150.0;
+    return s;
+}
+
 bool allFinite(const ShRgb& sh) {
     for (const auto& c : sh.c) {
         if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.z)) return false;
@@ -100,7 +111,7 @@ std::vector<glm::dvec3> probeStarts(const FakeCubeCapture& capture) {
 // ---- ScrollingGridMethod ------------------------------------------------------------------------
 
 TEST(ScrollingGridMethod, ConvergesToCapturesBilinearly) {
-    BaselineSettings s;
+    BaselineSettings s = testLayout();
     s.gridSize = 4;
     s.gridSpacing_m = 24.0;
     s.facesPerFrame = 6;  // a whole probe per frame
@@ -140,7 +151,7 @@ TEST(ScrollingGridMethod, HysteresisClosedForm) {
     // G = 2: four probes, one captured per frame. Four frames at noon set them (value a), then
     // every four frames at 15:00 update each once with the constant capture c:
     // after k updates, value = c + (a - c) h^k.
-    BaselineSettings s;
+    BaselineSettings s = testLayout();
     s.gridSize = 2;
     s.facesPerFrame = 6;
     s.hysteresis = 0.9;
@@ -168,7 +179,7 @@ TEST(ScrollingGridMethod, HysteresisClosedForm) {
 }
 
 TEST(ScrollingGridMethod, ScrollingKeepsIntegerCellsExactFarFromTheOrigin) {
-    BaselineSettings s;
+    BaselineSettings s = testLayout();
     s.gridSize = 4;
     s.facesPerFrame = 6;
     const double spacing = s.gridSpacing_m;
@@ -255,7 +266,7 @@ TEST(ReactiveCacheMethod, NoLookupsNoCaptures) {
 }
 
 TEST(ReactiveCacheMethod, CapturesTheCornersOfLookupsNearestFirst) {
-    BaselineSettings s;
+    BaselineSettings s = testLayout();
     s.facesPerFrame = 6;
     const double spacing = s.cacheSpacing_m;  // 12 m
     FakeCubeCapture capture(kFace);
@@ -297,7 +308,7 @@ TEST(ReactiveCacheMethod, CapturesTheCornersOfLookupsNearestFirst) {
 }
 
 TEST(ReactiveCacheMethod, DroppedAfterTheTimeout) {
-    BaselineSettings s;
+    BaselineSettings s = testLayout();
     s.facesPerFrame = 6;
     FakeCubeCapture capture(kFace);
     FlatProbeEnvironment environment;
@@ -327,7 +338,7 @@ TEST(ReactiveCacheMethod, MissingBeforeStale) {
     // The four probes around A are captured at noon; then the time of day jumps to 15:00, which
     // makes them stale, and B, further from the camera, is looked up too: B's four missing
     // probes are captured first, then A's four again.
-    BaselineSettings s;
+    BaselineSettings s = testLayout();
     s.facesPerFrame = 6;
     FakeCubeCapture capture(kFace);
     FlatProbeEnvironment environment;
@@ -357,7 +368,7 @@ TEST(ReactiveCacheMethod, MissingBeforeStale) {
 // ---- PerObjectMethod ----------------------------------------------------------------------------
 
 TEST(PerObjectMethod, EachPointGetsItsObjectsCaptureAndNothingElse) {
-    BaselineSettings s;
+    BaselineSettings s = testLayout();
     s.facesPerFrame = 6;
     s.objectRange_m = 40.0;
     FakeCubeCapture capture(kFace);
@@ -400,7 +411,7 @@ TEST(PerObjectMethod, EachPointGetsItsObjectsCaptureAndNothingElse) {
 }
 
 TEST(PerObjectMethod, RecapturedAfterTheLifetimeForgottenFarAway) {
-    BaselineSettings s;
+    BaselineSettings s = testLayout();
     s.facesPerFrame = 6;
     s.objectRange_m = 20.0;
     FakeCubeCapture capture(kFace);
@@ -504,7 +515,7 @@ TEST(Baselines, FaceBudgetAndWholeProbesPerPosition) {
     for (const char* name : kBaselineNames) {
         AmbienceVolumeSettings vs;
         vs.facesPerFrame = 2;
-        BaselineSettings bs;
+        BaselineSettings bs = testLayout();
         bs.facesPerFrame = 2;
         FakeCubeCapture capture(kFace);
         FlatProbeEnvironment environment;
@@ -551,7 +562,7 @@ TEST(Baselines, PoisonedProbesNeverReachShAt) {
         for (const char* name : kBaselineNames) {
             AmbienceVolumeSettings vs;
             vs.facesPerFrame = 6;  // whole probes per frame: none left half done at the end
-            BaselineSettings bs;
+            BaselineSettings bs = testLayout();
             bs.facesPerFrame = 6;
             FakeCubeCapture capture(kFace);
             capture.poisonEvery(2, kind, 3);
@@ -605,7 +616,7 @@ TEST(BaselineSettings, FromJson) {
     EXPECT_EQ(s.cacheSpacing_m, 6.0);
     EXPECT_EQ(s.unusedTimeout_s, 1.5);
     EXPECT_EQ(s.objectRange_m, 80.0);
-    EXPECT_EQ(s.objectSize_m, 32.0);
+    EXPECT_EQ(s.objectSize_m, BaselineSettings{}.objectSize_m);  // missing keys keep defaults
     EXPECT_EQ(s.sunThreshold, 5000.0);
     const auto failsNaming = [](const std::string& json, const std::string& key) {
         try {
