@@ -52,7 +52,11 @@ struct ProbeSchedulerSettings {
     // mountain, low-flight and stress-flight replays from 0.183 to 0.143 (the mountain road's
     // from 0.32 to 0.17); 1 raised it to 0.277, and 6 or 8 (a later sweep) to 0.154-0.156.
     double corridorCells = 4.0;
-    int maxLevel = kMaxAnchorLevels - 1;  // never capture finer than this level
+    // Never capture finer than this level. 2 (27 m with the default lattice) from `ambience bench
+    // --sweep` (point finest27m, out/bench2): the day time-lapse 0.448 -> 0.225 mean error, the
+    // mountain road's largest pop 0.28 -> 0.02, every other replay within 0.002: finer anchors
+    // cost captures that a moving camera outruns at one face per frame.
+    int maxLevel = 2;
     // Candidates and priority.
     double finestRingCells = 1.0;     // finest-level candidates within this x s_L of the path
     double coarseRingCells = 2.0;     // coarser-level candidates within this x s_L of the path

@@ -32,6 +32,7 @@ TEST(ProbeScheduler, FinestLevelFallsAsSpeedRises) {
     const double rate = 10.0;  // probes per second: one face per frame at 60 Hz
     ProbeSchedulerSettings two;
     two.corridorCells = 2.0;  // the rule with a corridor two cells wide (the default is wider)
+    two.maxLevel = kMaxAnchorLevels - 1;  // and the whole hierarchy (the default stops at 27 m)
     auto levelAt = [&](double speed) {
         ProbeScheduler s(two);
         s.observe({0, 0, 0}, {speed, 0, 0}, 0.0);
@@ -161,6 +162,7 @@ TEST(ProbeScheduler, ChoosesNearTheCameraFirstSkipsFreshAndReturnsToStale) {
     AnchorStore store(storeSettings);
     ProbeSchedulerSettings settings;
     settings.maxWiden = 0;
+    settings.maxLevel = kMaxAnchorLevels - 1;  // the whole hierarchy, down to 3 m
     ProbeScheduler s(settings);
     const glm::dvec3 cam(100.4, 0.0, 50.2);
     EXPECT_FALSE(s.choose(store, 10.0).has_value());  // nothing observed yet
@@ -196,9 +198,11 @@ struct Drive {
     FakeCubeCapture capture{16, false};
     FlatProbeEnvironment environment;
     AmbienceVolume volume;
-    // The drives below state their spacings for a corridor two cells wide.
+    // The drives below state their spacings for a corridor two cells wide and the whole
+    // hierarchy (the defaults: four cells, finest level 27 m).
     static AmbienceVolumeSettings twoCellCorridor(AmbienceVolumeSettings s) {
         s.scheduler.corridorCells = 2.0;
+        s.scheduler.maxLevel = kMaxAnchorLevels - 1;
         return s;
     }
     explicit Drive(const AmbienceVolumeSettings& s = {})
