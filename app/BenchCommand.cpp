@@ -582,7 +582,7 @@ void writeSummary(const std::vector<Job>& jobs, const std::string& path,
                 << fmt(number(r, {"ambience", "anchorsMax"}), "%.0f") << " | "
                 << fmt(number(r, {"ambience", "bytesMax"}) / 1024.0, "%.1f") << " |\n";
         }
-        out << "\nOur mean error / scrolling grid's: **" << fmt(ours / grid, "%.3f") << "**\n\n";
+        out << "\nOur mean error / scrolling grid's: **" << fmt(ours / grid, "%.3g") << "**\n\n";
     }
     // Stress: every replay (the fast flight with its cut, the time-lapse, the far flight), for
     // every method: finite error, memory held, teleports and rejected probes.
