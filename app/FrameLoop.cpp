@@ -14,14 +14,6 @@ const char* toString(FrameStage stage) {
     return names[int(stage)];
 }
 
-const AmbientSource& FixedAmbienceStages::interpolate(const FrameState& frame) {
-    if (!ambient_ || frame.timeOfDay_h != timeOfDay_h_) {
-        ambient_ = std::make_unique<FixedAmbient>(mode_, *frame.sky);
-        timeOfDay_h_ = frame.timeOfDay_h;
-    }
-    return *ambient_;
-}
-
 FrameLoop::FrameLoop(const Replay& replay, Renderer& renderer, AmbienceStages& ambience, int stride)
     : replay_(replay), renderer_(renderer), ambience_(ambience) {
     step_s_ = replay.step_s * std::max(1, stride);

@@ -6,8 +6,8 @@
 //   5. interpolate  ambient at every terrain-patch corner and every object
 //   6. draw         terrain, vegetation, road, sky; HDR -> tone map
 //   7. measure      stage timings
-// Stages 2-5 belong to an AmbienceStages implementation; FixedAmbienceStages (constant or
-// hemisphere ambient, no probes) fills them until the ambience volume does.
+// Stages 2-5 belong to an AmbienceStages implementation (MethodAmbienceStages, VolumeAmbience.h:
+// ours or a baseline).
 #pragma once
 
 #include <array>
@@ -51,27 +51,13 @@ class AmbienceStages {
     virtual const AmbientSource& interpolate(const FrameState& frame) = 0;
 };
 
-class FixedAmbienceStages final : public AmbienceStages {
-  public:
-    explicit FixedAmbienceStages(AmbientMode mode) : mode_(mode) {}
-    void predict(const FrameState&) override {}
-    void capture(const FrameState&) override {}
-    void store(const FrameState&) override {}
-    const AmbientSource& interpolate(const FrameState& frame) override;
-
-  private:
-    AmbientMode mode_;
-    std::unique_ptr<FixedAmbient> ambient_;
-    double timeOfDay_h_ = -1.0;
-};
-
 struct FrameRecord {
     int index = 0;
     double time_s = 0.0, timeOfDay_h = 0.0;
     std::array<double, kFrameStages> stageMs{};  // CPU wall time per stage
     double frameMs = 0.0;                        // all stages
     RenderStats render;
-    // Ambience volume (only with --ambient volume): state after the frame.
+    // The ambience method (ours or a baseline): state after the frame.
     struct Ambience {
         bool active = false;
         std::size_t anchors = 0, bytes = 0;

@@ -43,6 +43,7 @@ std::string ambienceMethodHelp() {
 // ---- MethodAmbient ---------------------------------------------------------------------------
 
 void MethodAmbient::note(const glm::dvec3& p) const {
+    if (!method_.wantsLookups()) return;
     x_.push_back(p.x);
     z_.push_back(p.z);
 }
@@ -121,7 +122,7 @@ void MethodAmbienceStages::predict(const FrameState& frame) {
     x.insert(x.end(), extraX_.begin(), extraX_.end());
     z.insert(z.end(), extraZ_.begin(), extraZ_.end());
     extraX_.clear(), extraZ_.clear();
-    if (!x.empty()) method_->noteLookups(x.size(), x.data(), z.data());
+    if (!x.empty() && method_->wantsLookups()) method_->noteLookups(x.size(), x.data(), z.data());
     // Velocity from the camera's own history (the scheduler's inertia model); none across a cut.
     const glm::dvec3 p = frame.camera.position_m;
     const double dt = havePrevious_ ? frame.time_s - previousTime_s_ : 0.0;

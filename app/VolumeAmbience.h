@@ -111,7 +111,4 @@ class MethodAmbienceStages final : public AmbienceStages {
     double previousTime_s_ = 0.0;
 };
 
-// The ambient the viewer and tests name "volume stages".
-using VolumeAmbienceStages = MethodAmbienceStages;
-
 }  // namespace amb

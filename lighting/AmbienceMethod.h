@@ -52,6 +52,8 @@ class AmbienceMethod {
     virtual void noteLookups(std::size_t count, const double* x_m, const double* z_m) {
         (void)count, (void)x_m, (void)z_m;
     }
+    // True when noteLookups is used (the draw then records where it looks; otherwise it need not).
+    virtual bool wantsLookups() const { return false; }
 
     virtual MethodStatistics methodStatistics() const = 0;
 };

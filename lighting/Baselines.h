@@ -272,6 +272,7 @@ class ReactiveCacheMethod final : public CapturingBaseline {
     ShRgb shAt(double x_m, double z_m) const override;
     using AmbienceMethod::shAt;
     void noteLookups(std::size_t count, const double* x_m, const double* z_m) override;
+    bool wantsLookups() const override { return true; }
 
     // Lattice points wanted (looked up within the timeout), probes present among them.
     std::size_t wantedCount() const { return entries_.size(); }
