@@ -29,6 +29,7 @@
 #include "lighting/Baselines.h"
 #include "lighting/Metrics.h"
 #include "world/Error.h"
+#include "world/TextFile.h"
 #include "world/World.h"
 
 namespace amb {
@@ -62,12 +63,8 @@ struct RunOptions {
     std::string oracle;
 };
 
-std::string readTextFile(const std::string& path, const char* what) {
-    std::ifstream in(path);
-    if (!in) throw InputError(path, std::string("cannot open the ") + what);
-    std::ostringstream text;
-    text << in.rdbuf();
-    return text.str();
+std::string readSettingsFile(const std::string& path, const char* what) {
+    return readTextFile(path, what, kMaxSettingsFileBytes);
 }
 
 // Where the draw would look up ambience, for a run without the main view: points of an 8 m
@@ -121,12 +118,12 @@ void runReplay(RunOptions o) {
     AmbienceVolumeSettings volumeSettings;
     if (!o.ambienceConfig.empty()) {
         volumeSettings = ambienceSettingsFromJson(
-            readTextFile(o.ambienceConfig, "ambience settings file"), o.ambienceConfig);
+            readSettingsFile(o.ambienceConfig, "ambience settings file"), o.ambienceConfig);
     }
     BaselineSettings baselines;
     if (!o.baselineConfig.empty()) {
         baselines = baselineSettingsFromJson(
-            readTextFile(o.baselineConfig, "baseline settings file"), o.baselineConfig);
+            readSettingsFile(o.baselineConfig, "baseline settings file"), o.baselineConfig);
     }
     if (o.facesPerFrame < 1 || o.facesPerFrame > 6)
         throw InputError("--faces-per-frame", "expected 1 to 6");

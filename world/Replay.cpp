@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "world/Error.h"
+#include "world/TextFile.h"
 
 namespace amb {
 
@@ -27,7 +28,7 @@ const char* const kSampleFields[] = {"t_s",  "x_m",  "y_m",  "z_m",  "forward_x"
                                      "forward_z", "up_x", "up_y", "up_z", "cut"};
 constexpr int kSampleFieldCount = 11;
 constexpr double kMaxCoordinate_m = 1.0e8;   // far beyond any replay; rejects absurd values
-constexpr std::size_t kMaxSamples = 10'000'000;
+constexpr std::size_t kMaxSamples = 2'000'000;
 
 }  // namespace
 
@@ -248,12 +249,7 @@ Replay parseReplay(const std::string& text, const std::string& where) {
 }
 
 Replay readReplay(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError(path, "cannot open replay file");
-    std::ostringstream text;
-    text << in.rdbuf();
-    if (in.bad()) throw InputError(path, "read error");
-    return parseReplay(text.str(), path);
+    return parseReplay(readTextFile(path, "replay file", kMaxReplayFileBytes), path);
 }
 
 // ---- [SECTION] Writer ------------------------------------------------------------------------
