@@ -1,0 +1,97 @@
+// BenchSweep.cpp — the sweep file of `ambience bench` (see BenchSweep.h).
+#include "app/BenchSweep.h"
+
+#include <algorithm>
+#include <cstdint>
+
+#include "world/Error.h"
+#include "world/TextFile.h"
+
+namespace amb {
+
+namespace {
+
+using nlohmann::json;
+
+void checkMethod(const std::string& name, const std::vector<std::string>& methodNames,
+                 const std::string& where) {
+    if (std::find(methodNames.begin(), methodNames.end(), name) != methodNames.end()) return;
+    std::string list;
+    for (const auto& n : methodNames) list += (list.empty() ? "" : ", ") + n;
+    throw InputError(where, "unknown ambience method '" + name + "' (expected one of " + list + ")");
+}
+
+SweepPoint parsePoint(const json& p, const std::string& where,
+                      const std::vector<std::string>& methodNames) {
+    if (!p.is_object()) throw InputError(where, "expected an object");
+    SweepPoint point;
+    for (auto it = p.begin(); it != p.end(); ++it) {
+        const std::string& key = it.key();
+        if (key == "label" && it->is_string()) {
+            point.label = it->get<std::string>();
+        } else if (key == "methods" && it->is_array()) {
+            for (const auto& m : *it) {
+                if (!m.is_string()) throw InputError(where, "methods: expected names");
+                checkMethod(m.get<std::string>(), methodNames, where + ": methods");
+                point.methods.insert(m.get<std::string>());
+            }
+        } else if (key == "volume" && it->is_object()) {
+            point.volume = *it;
+        } else if (key == "baseline" && it->is_object()) {
+            point.baseline = *it;
+        } else if (key == "facesPerFrame" && it->is_number_integer()) {
+            // Range-check at full width before narrowing, so 4294967297 does not become 1.
+            const std::uint64_t u = it->is_number_unsigned() ? it->get<std::uint64_t>() : 0;
+            const std::int64_t n = it->is_number_unsigned() ? (u > 6 ? 7 : std::int64_t(u))
+                                                            : it->get<std::int64_t>();
+            if (n < 1 || n > 6) throw InputError(where, "facesPerFrame: expected 1 to 6");
+            point.facesPerFrame = int(n);
+        } else {
+            throw InputError(where, "unknown key or wrong type: '" + key +
+                                        "' (label, methods, volume, baseline, facesPerFrame)");
+        }
+    }
+    if (point.label.empty() || point.label.find_first_of("/ _,;") != std::string::npos)
+        throw InputError(where, "label: a short name without '/', ' ', '_', ',' or ';'");
+    return point;
+}
+
+}  // namespace
+
+std::vector<SweepPoint> parseSweep(const std::string& text, const std::string& where,
+                                   const std::vector<std::string>& methodNames) {
+    std::vector<SweepPoint> points(1);  // the default point always runs
+    json j;
+    try {
+        // The depth is checked while parsing (the parser itself does not recurse).
+        const json::parser_callback_t limitDepth = [&](int depth, json::parse_event_t, json&) {
+            if (depth > kMaxSweepJsonDepth)
+                throw InputError(where, "nested deeper than " +
+                                            std::to_string(kMaxSweepJsonDepth) + " levels");
+            return true;
+        };
+        j = json::parse(text, limitDepth);
+    } catch (const json::exception& e) {
+        throw InputError(where, std::string("malformed JSON: ") + e.what());
+    }
+    if (!j.is_object() || !j.contains("points") || !j["points"].is_array())
+        throw InputError(where, "expected {\"points\": [ {\"label\": ..., ...}, ... ]}");
+    std::set<std::string> labels{"default"};
+    const json& list = j["points"];
+    for (std::size_t i = 0; i < list.size(); ++i) {
+        const std::string pointWhere = where + ": points[" + std::to_string(i) + "]";
+        SweepPoint point = parsePoint(list[i], pointWhere, methodNames);
+        if (!labels.insert(point.label).second)
+            throw InputError(pointWhere, "label '" + point.label + "' is used twice");
+        points.push_back(std::move(point));
+    }
+    return points;
+}
+
+std::vector<SweepPoint> readSweep(const std::string& path,
+                                  const std::vector<std::string>& methodNames) {
+    if (path.empty()) return std::vector<SweepPoint>(1);
+    return parseSweep(readTextFile(path, "sweep file", kMaxSettingsFileBytes), path, methodNames);
+}
+
+}  // namespace amb

@@ -1,0 +1,106 @@
+#!/usr/bin/env bash
+# Rebuilds the seed corpora in tests/fuzz/corpus/<target>/ from the project's own files and
+# outputs, kept small (each file under 64 kB):
+#   fuzz_replay             the shipped replays cut to their first 8 samples, and 8 samples
+#                           around the stress flight's camera cut
+#   fuzz_volume_settings,   settings examples (empty, a few keys, every key)
+#   fuzz_baseline_settings
+#   fuzz_sweep              the README's sweep example and a two-point sweep
+#   fuzz_oracle             the oracle of a 30-frame run measured every 10th frame
+#   fuzz_anchor_store       the anchor store after a 60-frame run
+#   fuzz_cubemap            4 x 4 cube maps from `ambience probe` as .png, .exr and .hdr, each
+#                           behind the byte that selects its extension in the target
+#
+#   tests/fuzz/make-corpus.sh [ambience executable, default build/bin/ambience]
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+ambience="${1:-build/bin/ambience}"
+corpus=tests/fuzz/corpus
+tmp="$(mktemp -d "${TMPDIR:-/tmp}/ambience-corpus.XXXXXX")"
+trap 'rm -rf "$tmp"' EXIT
+
+mkdir -p "$corpus"/{fuzz_replay,fuzz_volume_settings,fuzz_baseline_settings,fuzz_sweep,fuzz_oracle,fuzz_anchor_store,fuzz_cubemap}
+
+# Replays: the header lines as written and a window of sample lines (the writer puts one sample
+# per line), so numbers keep their exact text.
+python3 - "$corpus/fuzz_replay" replays/*.json <<'PY'
+import os, sys
+out_dir, files = sys.argv[1], sys.argv[2:]
+def cut(lines, first, count):
+    start = next(i for i, l in enumerate(lines) if l.strip().startswith('"samples"')) + 1
+    rows = [l.rstrip().rstrip(',') for l in lines[start + first:start + first + count]]
+    return ''.join(lines[:start]) + ',\n'.join(rows) + '\n  ]\n}\n'
+for path in files:
+    lines = open(path).read().splitlines(keepends=True)
+    name = os.path.splitext(os.path.basename(path))[0]
+    open(os.path.join(out_dir, name + '-8.json'), 'w').write(cut(lines, 0, 8))
+    if name == 'stress-flight':
+        start = next(i for i, l in enumerate(lines) if l.strip().startswith('"samples"')) + 1
+        cut_row = next(i for i, l in enumerate(lines[start:]) if l.rstrip().rstrip(',').endswith('true]'))
+        open(os.path.join(out_dir, name + '-cut.json'), 'w').write(cut(lines, cut_row - 4, 8))
+PY
+
+# Settings.
+v="$corpus/fuzz_volume_settings"
+echo '{}' >"$v/empty.json"
+echo '{"store": {"blendTime_s": 1}, "scheduler": {"corridorCells": 4}}' >"$v/tuned.json"
+cat >"$v/every-key.json" <<'JSON'
+{"store": {"coarsestSpacing_m": 243, "levels": 6, "blendTime_s": 1, "allowedSunAngle_rad": 0.05,
+           "minLifetime_s": 2, "maxLifetime_s": 600, "regenerateFraction": 0.8, "searchCells": 2},
+ "scheduler": {"velocityTimeConstant_s": 0.5, "horizon_s": 2, "pathStep_s": 0.25,
+               "historyLength_s": 4, "roadSnap_m": 20, "roadAlignment": 0.7,
+               "teleportDistance_m": 100, "corridorCells": 4, "maxLevel": 2,
+               "finestRingCells": 1, "coarseRingCells": 2, "maxWiden": 2,
+               "minReachSpeed_mps": 1, "gapBonus_s": 0.5, "staleBias_s": 1},
+ "facesPerFrame": 1, "nominalFrameTime_s": 0.016, "defaultTimeRate_hPerS": 0.0002778,
+ "timeJump_h": 0.25, "sunThreshold": 5000, "fallbackFaceSize": 8, "fallbackRefresh_h": 0.0167,
+ "asideFraction": 0.5, "maxAside_m": 4, "relightBySkyLevel": true}
+JSON
+b="$corpus/fuzz_baseline_settings"
+echo '{}' >"$b/empty.json"
+echo '{"gridSpacing_m": 24, "gridSize": 16}' >"$b/grid24.json"
+cat >"$b/every-key.json" <<'JSON'
+{"facesPerFrame": 1, "sunThreshold": 5000, "maxAside_m": 4, "defaultTimeRate_hPerS": 0.0002778,
+ "timeJump_h": 0.25, "teleportDistance_m": 100, "gridSize": 16, "gridSpacing_m": 128,
+ "hysteresis": 0.97, "cacheSpacing_m": 96, "unusedTimeout_s": 4, "objectSize_m": 256,
+ "objectRange_m": 400}
+JSON
+
+# Sweeps.
+s="$corpus/fuzz_sweep"
+cat >"$s/readme.json" <<'JSON'
+{"points": [{"label": "b1", "methods": ["volume"], "volume": {"store": {"blendTime_s": 1}},
+  "baseline": {}, "facesPerFrame": 2}]}
+JSON
+cat >"$s/two-points.json" <<'JSON'
+{"points": [{"label": "g24", "methods": ["grid"], "baseline": {"gridSpacing_m": 24}},
+            {"label": "fine3", "methods": ["volume", "nearest"],
+             "volume": {"scheduler": {"maxLevel": 4}}}]}
+JSON
+
+# Files the program writes: a short run, measured, saving its anchors; a probe.
+if [[ ! -x "$ambience" ]]; then
+  echo "make-corpus: no $ambience; oracle, anchor store and cube-map seeds left as they are" >&2
+  exit 0
+fi
+"$ambience" run --replay replays/highway-drive.json --max-frames 30 --no-frames --no-video \
+  --measure-every 10 --oracle "$tmp/oracle.json" --save-anchors "$tmp/anchors.vdb" \
+  --out "$tmp/run" >/dev/null
+# The fuzz target asks for the signature "fuzz"; keep the first 6 entries.
+python3 - "$tmp/oracle.json" "$corpus/fuzz_oracle/highway-30.json" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+d['signature'] = 'fuzz'
+d['entries'] = d['entries'][:6]
+json.dump(d, open(sys.argv[2], 'w'))
+PY
+cp "$tmp/anchors.vdb" "$corpus/fuzz_anchor_store/highway-30.vdb"
+for ext in png exr hdr; do
+  "$ambience" probe --at 0,0 --size 4 --out "$tmp/probe.$ext" >/dev/null
+done
+printf '\x00' | cat - "$tmp/probe.png" >"$corpus/fuzz_cubemap/probe4.png.bin"
+printf '\x01' | cat - "$tmp/probe.exr" >"$corpus/fuzz_cubemap/probe4.exr.bin"
+printf '\x02' | cat - "$tmp/probe.hdr" >"$corpus/fuzz_cubemap/probe4.hdr.bin"
+
+find "$corpus" -type f -size +64k -printf 'make-corpus: %p is over 64 kB\n'
+du -sh "$corpus"
