@@ -1,8 +1,10 @@
 // FrameLoop.cpp — one frame: the seven stages of DESIGN.md in order, each timed.
 #include "app/FrameLoop.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include "app/Gl.h"
 
@@ -14,10 +16,19 @@ const char* toString(FrameStage stage) {
     return names[int(stage)];
 }
 
-FrameLoop::FrameLoop(const Replay& replay, Renderer& renderer, AmbienceStages& ambience, int stride)
+int FrameLoop::framesPerPass(const Replay& replay, int stride) {
+    const double step_s = replay.step_s * std::max(1, stride);
+    return int(std::floor(replay.duration_s() / step_s + 1e-9)) + 1;
+}
+
+FrameLoop::FrameLoop(const Replay& replay, Renderer& renderer, AmbienceStages& ambience, int stride,
+                     int loops)
     : replay_(replay), renderer_(renderer), ambience_(ambience) {
     step_s_ = replay.step_s * std::max(1, stride);
-    frameCount_ = int(std::floor(replay.duration_s() / step_s_ + 1e-9)) + 1;
+    framesPerLoop_ = framesPerPass(replay, stride);
+    // The run length is checked by the caller (run --loop); saturate rather than overflow.
+    const long total = long(framesPerLoop_) * std::max(1, loops);
+    frameCount_ = int(std::min<long>(total, std::numeric_limits<int>::max()));
 }
 
 FrameRecord FrameLoop::step() {
@@ -34,15 +45,24 @@ FrameRecord FrameLoop::step() {
 
     // 1. advance
     frame.index = next_++;
+    frame.loop = frame.index / framesPerLoop_;
+    const int inLoop = frame.index % framesPerLoop_;
+    // One clock for the whole run, so dt stays one frame step across a loop's end and the time
+    // of day keeps moving at the replay's rate; the camera follows the replay's own time.
     frame.time_s = frame.index * step_s_;
+    frame.replayTime_s = inLoop * step_s_;
     frame.timeOfDay_h = replay_.timeOfDayAt_h(frame.time_s);
-    frame.camera = replay_.sampleAt(frame.time_s);
-    {
+    frame.camera = replay_.sampleAt(frame.replayTime_s);
+    if (inLoop == 0) {
+        // Back at the replay's start: the jump from its end is a camera cut.
+        frame.camera.cut = frame.loop > 0;
+        lastSample_ = 0;
+    } else {
         // A cut anywhere since the previous frame is this frame's cut (frames may be several
         // replay steps apart, and interpolation never lands on the cut sample itself).
         const auto& samples = replay_.samples;
         const double t0 = samples.front().time_s;
-        const long last = long(std::floor((frame.time_s - t0) / replay_.step_s + 1e-6));
+        const long last = long(std::floor((frame.replayTime_s - t0) / replay_.step_s + 1e-6));
         for (long j = std::max(lastSample_ + 1, 1L); j <= last && j < long(samples.size()); ++j)
             if (samples[std::size_t(j)].cut) frame.camera.cut = true;
         lastSample_ = last;
@@ -69,8 +89,11 @@ FrameRecord FrameLoop::step() {
     lap(FrameStage::Draw);
     // 7. measure
     rec.index = frame.index;
+    rec.loop = frame.loop;
     rec.time_s = frame.time_s;
+    rec.replayTime_s = frame.replayTime_s;
     rec.timeOfDay_h = frame.timeOfDay_h;
+    rec.cut = frame.camera.cut;
     lap(FrameStage::Measure);
     rec.frameMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     return rec;

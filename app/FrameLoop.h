@@ -34,7 +34,9 @@ const char* toString(FrameStage stage);
 // What every stage may read about the current frame.
 struct FrameState {
     int index = 0;        // frame number from 0
-    double time_s = 0.0;  // replay time
+    double time_s = 0.0;  // the run's clock: replay time, continuing to grow across loops
+    double replayTime_s = 0.0;  // position in the replay (time_s less the loops before)
+    int loop = 0;               // which pass over the replay, from 0
     double timeOfDay_h = 12.0;
     CameraSample camera;
     const SkyLighting* sky = nullptr;
@@ -52,8 +54,10 @@ class AmbienceStages {
 };
 
 struct FrameRecord {
-    int index = 0;
-    double time_s = 0.0, timeOfDay_h = 0.0;
+    int index = 0, loop = 0;
+    double time_s = 0.0, replayTime_s = 0.0, timeOfDay_h = 0.0;
+    bool cut = false;            // the camera was cut (teleported) before this frame
+    std::size_t rss_kB = 0;      // resident memory of the process after the frame (0: unknown)
     std::array<double, kFrameStages> stageMs{};  // CPU wall time per stage
     double frameMs = 0.0;                        // all stages
     RenderStats render;
@@ -74,10 +78,16 @@ struct FrameRecord {
 
 class FrameLoop {
   public:
-    // Frames are `stride` replay steps apart (fixed dt = stride * replay.step_s).
-    FrameLoop(const Replay& replay, Renderer& renderer, AmbienceStages& ambience, int stride = 1);
+    // Frames are `stride` replay steps apart (fixed dt = stride * replay.step_s). With `loops`
+    // > 1 the replay is played that many times back to back: the clock and the time of day keep
+    // advancing (at the replay's time rate) and each jump back to the start is a camera cut.
+    FrameLoop(const Replay& replay, Renderer& renderer, AmbienceStages& ambience, int stride = 1,
+              int loops = 1);
 
+    // Frames of one pass over `replay` at `stride` (its start and end included).
+    static int framesPerPass(const Replay& replay, int stride);
     int frameCount() const { return frameCount_; }
+    int framesPerLoop() const { return framesPerLoop_; }
     double frameStep_s() const { return step_s_; }
     bool done() const { return next_ >= frameCount_; }
     // Runs every stage of the next frame, in order. The draw stage waits for the GPU (glFinish),
@@ -92,6 +102,7 @@ class FrameLoop {
     Renderer& renderer_;
     AmbienceStages& ambience_;
     double step_s_;
+    int framesPerLoop_;
     int frameCount_;
     int next_ = 0;
     long lastSample_ = 0;  // replay sample index of the previous frame

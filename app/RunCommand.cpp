@@ -61,7 +61,13 @@ struct RunOptions {
     bool noFrames = false;
     int measureEvery = 0;
     std::string oracle;
+    int loops = 1;
 };
+
+// Passes over the replay for --loop, and a bound on the run's length: the report keeps a row
+// per frame (a few hundred bytes), so 10^7 frames (92 h at 30 frames/s) is as far as it goes.
+constexpr int kMaxLoops = 10000;
+constexpr long kMaxRunFrames = 10'000'000;
 
 std::string readSettingsFile(const std::string& path, const char* what) {
     return readTextFile(path, what, kMaxSettingsFileBytes);
@@ -90,6 +96,53 @@ void drawLookupStandIn(const CameraSample& camera, std::vector<double>& x, std::
             const bool inCone = r <= kFar && len > 1e-6 && glm::dot(d, ahead) >= kCosCone * r;
             if (near || inCone) x.push_back(px), z.push_back(pz);
         }
+}
+
+// Anchors holding a NaN or an infinity anywhere in what interpolation and blending read. The
+// store refuses such captures on insert; this checks that none got in another way.
+std::size_t nonFiniteAnchors(const AnchorStore& store) {
+    std::size_t bad = 0;
+    auto finite = [](const glm::dvec3& v) {
+        return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+    };
+    store.forEach([&](const Anchor& a) {
+        bool ok = std::isfinite(a.presence) && std::isfinite(a.relight) &&
+                  std::isfinite(a.blendProgress) && finite(a.capturedPosition_m);
+        for (const ShRgb* sh : {&a.current, &a.target, &a.blendFrom})
+            for (const glm::vec3& c : sh->c) ok = ok && finite(glm::dvec3(c));
+        bad += ok ? 0 : 1;
+    });
+    return bad;
+}
+
+void checkLoops(const Replay& replay, const RunOptions& o) {
+    if (o.loops < 1 || o.loops > kMaxLoops)
+        throw InputError("--loop", "expected 1 to " + std::to_string(kMaxLoops) + " passes");
+    long runFrames = long(FrameLoop::framesPerPass(replay, o.stride)) * o.loops;
+    if (o.maxFrames > 0) runFrames = std::min(runFrames, long(o.maxFrames));
+    if (runFrames > kMaxRunFrames) {
+        throw InputError("--loop", std::to_string(o.loops) + " passes would be " +
+                                       std::to_string(runFrames) + " frames (at most " +
+                                       std::to_string(kMaxRunFrames) +
+                                       "): fewer passes, a larger --stride or --max-frames");
+    }
+}
+
+// The store's finiteness and the process's resident memory over the run.
+void printSoakSummary(const RunReport& report, bool scanned) {
+    if (scanned) {
+        const auto& t = report.ambienceTotals;
+        std::printf("  store finite: %s (%lld scans, at most %zu non-finite anchors)\n",
+                    t.nonFiniteAnchorsMax == 0 ? "yes" : "NO", (long long)t.storeScans,
+                    t.nonFiniteAnchorsMax);
+    }
+    if (report.frames.empty()) return;
+    std::size_t rssMax = 0;
+    for (const FrameRecord& f : report.frames) rssMax = std::max(rssMax, f.rss_kB);
+    std::printf("memory: resident %.1f MB at the first frame, %.1f MB at the last, %.1f MB max "
+                "(peak %.1f MB); %d pass(es) over the replay\n",
+                report.frames.front().rss_kB / 1024.0, report.frames.back().rss_kB / 1024.0,
+                rssMax / 1024.0, report.rssPeak_kB / 1024.0, report.loops);
 }
 
 std::string defaultReplayPath() {
@@ -129,6 +182,7 @@ void runReplay(RunOptions o) {
         throw InputError("--faces-per-frame", "expected 1 to 6");
     // One capture budget for every method.
     volumeSettings.facesPerFrame = baselines.facesPerFrame = o.facesPerFrame;
+    checkLoops(replay, o);
     if (o.measureEvery < 0) throw InputError("--measure-every", "must be >= 0");
     if (!o.oracle.empty() && o.measureEvery == 0)
         throw InputError("--oracle", "needs --measure-every K");
@@ -165,7 +219,7 @@ void runReplay(RunOptions o) {
                                                          baselines, o.faceSize);
     AmbienceVolume* volume = stages->volume();
     if (volume && !o.loadAnchors.empty()) volume->loadAnchors(o.loadAnchors);
-    FrameLoop loop(replay, renderer, *stages, o.stride);
+    FrameLoop loop(replay, renderer, *stages, o.stride, o.loops);
     loop.setDrawMainView(!o.noFrames);
 
     // The error measurement: the oracle's captures use the same capture as the method.
@@ -178,7 +232,8 @@ void runReplay(RunOptions o) {
         fs::path(o.replay).filename().string() + " stride=" + std::to_string(o.stride) +
         " every=" + std::to_string(o.measureEvery) + " face=" + std::to_string(o.faceSize) +
         " sunThreshold=" + std::to_string(measureSettings.sunThreshold) +
-        " frames=" + std::to_string(o.maxFrames);
+        " frames=" + std::to_string(o.maxFrames) +
+        (o.loops > 1 ? " loops=" + std::to_string(o.loops) : std::string());
     if (o.measureEvery > 0) {
         meter = std::make_unique<ErrorMeter>(stages->cubeCapture(), stages->environment(),
                                              measureSettings);
@@ -198,6 +253,9 @@ void runReplay(RunOptions o) {
     report.height = size.height;
     report.ambient = o.ambient;
     report.frameStep_s = loop.frameStep_s();
+    report.loops = o.loops;
+    // Rows in one block from the start: no copy of them all when a long run outgrows it.
+    report.frames.reserve(std::size_t(frames));
 
     std::unique_ptr<VideoPipe> video;
     if (!o.video.empty()) {
@@ -232,7 +290,13 @@ void runReplay(RunOptions o) {
             rec.ambience.anchorsPerLevel.assign(st.store.anchorsPerLevel.begin(),
                                                 st.store.anchorsPerLevel.begin() + levels);
         }
-        const CameraSample camera = replay.sampleAt(rec.time_s);
+        if (volume) {
+            auto& t = report.ambienceTotals;
+            t.nonFiniteAnchorsMax =
+                std::max(t.nonFiniteAnchorsMax, nonFiniteAnchors(volume->store()));
+            ++t.storeScans;
+        }
+        const CameraSample camera = replay.sampleAt(rec.replayTime_s);
         if (meter) {
             meter->frame(rec.index, rec.time_s, rec.timeOfDay_h, camera.position_m,
                          glm::length(stages->velocity()), stages->method());
@@ -263,11 +327,14 @@ void runReplay(RunOptions o) {
             }
             if (video) video->write(pixels);
         }
+        // After everything this frame allocated (captures, lookups, frames written).
+        rec.rss_kB = residentMemory_kB();
         report.frames.push_back(rec);
         progress.update(i + 1, rec.frameMs);
     }
     progress.finish();
     report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    report.rssPeak_kB = peakResidentMemory_kB();
     if (video) video->close();
     {
         const MethodStatistics st = stages->method().methodStatistics();
@@ -323,6 +390,7 @@ void runReplay(RunOptions o) {
             (long long)st.rejectedProbes);
         if (!o.saveAnchors.empty()) std::printf("  anchors saved: %s\n", o.saveAnchors.c_str());
     }
+    printSoakSummary(report, volume != nullptr);
     std::printf("output: %s\n", fs::weakly_canonical(o.out).string().c_str());
     if (o.frames != "none") std::printf("  frames: %s (every %d)\n", o.frames.c_str(), o.every);
     if (video) std::printf("  video:  %s\n", o.video.c_str());
@@ -364,6 +432,9 @@ void addRunCommand(CLI::App& app) {
     cmd->add_flag("--no-video", o->noVideo, "do not write a video");
     cmd->add_option("--report", o->report, "report JSON (default <out>/report.json)");
     cmd->add_option("--max-frames", o->maxFrames, "stop after N frames (default: whole replay)");
+    cmd->add_option("--loop", o->loops,
+                    "play the replay N times back to back (1 to 10000, default 1); the clock and "
+                    "the time of day keep going, each jump back to the start is a camera cut");
     cmd->add_option("--stride", o->stride,
                     "replay steps per frame (default 2: 30 frames/s of a 60 Hz replay)");
     cmd->add_option("--ambient", o->ambient, ambienceMethodHelp());

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -111,6 +112,27 @@ void ProgressBar::finish() {
     if (enabled_) std::fprintf(stderr, "\n");
 }
 
+// ---- Memory ----------------------------------------------------------------------------------
+
+std::size_t residentMemory_kB() {
+    // statm: total and resident size in pages; one short read, cheap enough for every frame.
+    std::FILE* f = std::fopen("/proc/self/statm", "r");
+    if (!f) return 0;
+    unsigned long total = 0, resident = 0;
+    const int n = std::fscanf(f, "%lu %lu", &total, &resident);
+    std::fclose(f);
+    const long page = sysconf(_SC_PAGESIZE);
+    return n == 2 && page > 0 ? std::size_t(resident) * std::size_t(page) / 1024 : 0;
+}
+
+std::size_t peakResidentMemory_kB() {
+    std::ifstream in("/proc/self/status");
+    std::string line;
+    while (std::getline(in, line))
+        if (line.rfind("VmHWM:", 0) == 0) return std::strtoull(line.c_str() + 6, nullptr, 10);
+    return 0;
+}
+
 // ---- Report ----------------------------------------------------------------------------------
 
 TimingStats timingStats(std::vector<double> v) {
@@ -156,6 +178,7 @@ void RunReport::write(const std::string& path) const {
     j["ambient"] = ambient;
     j["frameStep_s"] = frameStep_s;
     j["frameCount"] = frames.size();
+    j["loops"] = loops;
     j["wall_s"] = wall_s;
     j["shadows"] = "none";
     j["toneMapping"] = "exposure (white Lambertian at 0.6), ACES filmic fit (Narkowicz 2015), sRGB";
@@ -177,6 +200,25 @@ void RunReport::write(const std::string& path) const {
     j["triangles"] = statsJson(tris);
     const double median = timingStats(frameMs).median;
     j["fps_median"] = median > 0 ? 1000.0 / median : 0.0;
+    {
+        // Resident memory after each frame, for soak runs: bounded if nothing leaks. The rows
+        // of this report (kept until the end) are part of it.
+        std::vector<double> rss;
+        std::size_t cuts = 0;
+        for (const FrameRecord& f : frames) rss.push_back(double(f.rss_kB)), cuts += f.cut;
+        j["cameraCuts"] = cuts;
+        // What one row of this report holds in memory (without the allocator's overhead).
+        const std::size_t rowBytes =
+            sizeof(FrameRecord) +
+            (frames.empty() ? 0
+                            : frames.front().ambience.anchorsPerLevel.capacity() *
+                                  sizeof(std::size_t));
+        j["memory"] = {{"rssStart_kB", frames.empty() ? 0 : frames.front().rss_kB},
+                       {"rssEnd_kB", frames.empty() ? 0 : frames.back().rss_kB},
+                       {"rss_kB", statsJson(rss)},
+                       {"rssPeak_kB", rssPeak_kB},
+                       {"reportRowBytes", rowBytes}};
+    }
     const bool volume = !frames.empty() && frames.front().ambience.active;
     if (volume) {
         // The ambience's share of frame time: stages 2-5 plus the lookups the draw makes
@@ -221,6 +263,8 @@ void RunReport::write(const std::string& path) const {
             {"anchorsRefreshed", t.refreshed},
             {"anchorsExpired", t.expired},
             {"captureTrianglesPerFace", t.captureTriangles},
+            {"storeScans", t.storeScans},
+            {"nonFiniteAnchorsMax", t.nonFiniteAnchorsMax},
             {"lookup_ms", statsJson(lookupMs)},
             // Stages 2-5 and the draw's lookups, per frame.
             {"ambience_ms", statsJson(perFrameAmbienceMs)},
@@ -230,12 +274,25 @@ void RunReport::write(const std::string& path) const {
             {"shareOfFrameTime", totalMs > 0 ? ambienceMs / totalMs : 0.0},
             {"captureShareOfFrameTime", totalMs > 0 ? captureMs / totalMs : 0.0},
         };
+        // Only a method with an anchor store is scanned.
+        if (t.storeScans > 0) j["ambience"]["storeFinite"] = t.nonFiniteAnchorsMax == 0;
     }
     if (!measurementJson.empty()) j["measurement"] = json::parse(measurementJson);
-    json rows = json::array();
+    std::ofstream out(path);
+    if (!out) throw InputError(path, "cannot write the report");
+    // The rows are written one at a time, each on one line: a JSON tree of an hour's rows would
+    // take hundreds of MB.
+    std::string head = j.dump(1);  // "{\n ... \n}": drop the "\n}" and go on with the rows
+    head.resize(head.size() - 2);
+    out << head << ",\n \"frames\": [";
+    bool firstRow = true;
     for (const FrameRecord& f : frames) {
         json r{{"frame", f.index},
+               {"loop", f.loop},
                {"time_s", f.time_s},
+               {"replayTime_s", f.replayTime_s},
+               {"cut", f.cut},
+               {"rss_kB", f.rss_kB},
                {"timeOfDay_h", f.timeOfDay_h},
                {"frame_ms", f.frameMs},
                {"triangles", f.render.triangles},
@@ -258,12 +315,11 @@ void RunReport::write(const std::string& path) const {
             r["volumeStore_ms"] = f.ambience.storeMs;
             r["anchorsPerLevel"] = f.ambience.anchorsPerLevel;
         }
-        rows.push_back(r);
+        out << (firstRow ? "\n  " : ",\n  ") << r.dump();
+        firstRow = false;
     }
-    j["frames"] = rows;
-    std::ofstream out(path);
+    out << "\n ]\n}\n";
     if (!out) throw InputError(path, "cannot write the report");
-    out << j.dump(1) << "\n";
 
     const std::string csvPath = std::filesystem::path(path).replace_extension(".csv").string();
     std::ofstream csv(csvPath);
@@ -277,7 +333,7 @@ void RunReport::write(const std::string& path) const {
                ",volumePredict_ms,volumeCapture_ms,volumeProject_ms,volumeStore_ms";
         for (std::size_t l = 0; l < csvLevels; ++l) csv << ",anchorsLevel" << l;
     }
-    csv << "\n";
+    csv << ",rss_kB,cut,loop\n";
     for (const FrameRecord& f : frames) {
         csv << f.index << "," << f.time_s << "," << f.timeOfDay_h << "," << f.frameMs;
         for (int s = 0; s < kFrameStages; ++s) csv << "," << f.stageMs[s];
@@ -293,8 +349,9 @@ void RunReport::write(const std::string& path) const {
                 csv << ","
                     << (l < f.ambience.anchorsPerLevel.size() ? f.ambience.anchorsPerLevel[l] : 0);
         }
-        csv << "\n";
+        csv << "," << f.rss_kB << "," << (f.cut ? 1 : 0) << "," << f.loop << "\n";
     }
+    if (!csv) throw InputError(csvPath, "cannot write the report CSV");
 }
 
 // ---- Measurement ---------------------------------------------------------------------------

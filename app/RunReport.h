@@ -52,6 +52,12 @@ class ProgressBar {
 struct TimingStats {
     double median = 0.0, p95 = 0.0, max = 0.0, mean = 0.0;
 };
+
+// Resident memory of this process now (/proc/self/statm) and its peak so far (VmHWM of
+// /proc/self/status) [kB]; 0 where /proc is not available.
+std::size_t residentMemory_kB();
+std::size_t peakResidentMemory_kB();
+
 TimingStats timingStats(std::vector<double> values);
 
 class ErrorMeter;
@@ -72,7 +78,13 @@ struct RunReport {
         std::int64_t facesCaptured = 0, probesCompleted = 0, rejectedProbes = 0, teleports = 0;
         std::size_t captureTriangles = 0;  // triangles per capture face
         std::int64_t inserted = 0, refreshed = 0, expired = 0;
+        // Scans of every anchor's coefficients for NaN or infinity (the store must never hold
+        // one): how many were made, and the most non-finite anchors one of them found.
+        std::int64_t storeScans = 0;
+        std::size_t nonFiniteAnchorsMax = 0;
     } ambienceTotals;
+    int loops = 1;               // passes over the replay (run --loop)
+    std::size_t rssPeak_kB = 0;  // the process's peak resident memory at the end
 
     // The error measurement (ErrorMeter), as JSON text (empty: not measured).
     std::string measurementJson;
