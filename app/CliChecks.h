@@ -31,4 +31,19 @@ public:
     }
 };
 
+// A world seed: a whole number in [0, 2^64 - 1]. CLI11 would otherwise wrap "-1" to 2^64 - 1.
+class SeedValidator : public CLI::Validator {
+public:
+    SeedValidator() {
+        description("INTEGER in [0 - 18446744073709551615]");
+        func_ = [](std::string& text) -> std::string {
+            if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos)
+                return "a seed is a whole number >= 0, got '" + text + "'";
+            if (text.size() > 20 || (text.size() == 20 && text > "18446744073709551615"))
+                return "a seed is at most 18446744073709551615, got '" + text + "'";
+            return {};
+        };
+    }
+};
+
 }  // namespace amb

@@ -13,6 +13,7 @@
 #include <glm/gtc/type_ptr.hpp>
 
 #include "world/Error.h"
+#include "world/TextFile.h"
 
 namespace amb {
 
@@ -74,13 +75,20 @@ std::string shaderDirectory() {
 }
 
 static std::string readText(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) {
+    if (access(path.c_str(), R_OK) != 0)
         throw InputError(path, "cannot read shader file (set AMBIENCE_SHADER_DIR or --shaders)");
+    return readTextFile(path, "shader file", std::size_t(1) << 20);
+}
+
+// The first non-empty line of a GL info log, so that a broken shader is one line on stderr.
+static std::string firstLogLine(const char* log) {
+    std::istringstream in(log);
+    std::string line;
+    while (std::getline(in, line)) {
+        const auto a = line.find_first_not_of(" \t\r"), b = line.find_last_not_of(" \t\r");
+        if (a != std::string::npos) return line.substr(a, b - a + 1);
     }
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
+    return "no log";
 }
 
 static void appendResolved(const std::string& file, std::set<std::string>& seen, std::string& out) {
@@ -124,7 +132,9 @@ static GLuint compile(GLenum stage, const std::string& file) {
         char log[4096] = {};
         glGetShaderInfoLog(s, sizeof(log), nullptr, log);
         glDeleteShader(s);
-        throw std::runtime_error("shader " + file + ": " + log);
+        // The shaders are files read at run time (--shaders): a broken one is bad input.
+        throw InputError(shaderDirectory() + "/" + file,
+                         "shader does not compile: " + firstLogLine(log));
     }
     return s;
 }
@@ -149,7 +159,8 @@ GlProgram::GlProgram(const std::string& vertexFile, const std::string& fragmentF
     if (!ok) {
         char log[4096] = {};
         glGetProgramInfoLog(id(), sizeof(log), nullptr, log);
-        throw std::runtime_error("program " + vertexFile + " + " + fragmentFile + ": " + log);
+        throw InputError(shaderDirectory() + "/" + vertexFile + " + " + fragmentFile,
+                         "shaders do not link: " + firstLogLine(log));
     }
 }
 

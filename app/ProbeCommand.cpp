@@ -6,9 +6,11 @@
 
 #include <CLI/CLI.hpp>
 
+#include "app/CliChecks.h"
 #include "app/Commands.h"
 #include "app/CubeCaptureGl.h"
 #include "app/Gl.h"
+#include "app/OutputPaths.h"
 #include "app/Platform.h"
 #include "lighting/CubeMapFile.h"
 #include "world/Error.h"
@@ -53,6 +55,12 @@ void runProbe(const ProbeOptions& o) {
     ws.seed = o.seed;
     if (!o.replay.empty()) ws = readReplay(o.replay).world;
     const Backend backend = parseBackend(o.backend, "--backend");
+    {
+        FilePlan files;
+        files.input("--replay", o.replay);
+        files.output("--out", o.out);
+        files.check();
+    }
 
     const World world(ws);
     auto platform = createOffscreenPlatform(backend, 16, 16);
@@ -81,7 +89,8 @@ void addProbeCommand(CLI::App& app) {
     cmd->add_option("--at", o->at, "probe position X,Z [m]")->required();
     cmd->add_option("--height", o->height_m, "height above the ground [m] (default 2)");
     cmd->add_option("--time", o->time_h, "time of day [hours] (default 12)");
-    auto* seed = cmd->add_option("--seed", o->seed, "world seed (default 1)");
+    auto* seed =
+        cmd->add_option("--seed", o->seed, "world seed (default 1)")->check(SeedValidator());
     cmd->add_option("--replay", o->replay, "take the world settings from this replay")
         ->excludes(seed);
     cmd->add_option("--size", o->size, "face size N in texels (default 16)");

@@ -139,7 +139,7 @@ void addReplayCommand(CLI::App& app) {
     make->add_option("--out", o.out, "Output replay file (.json)")->required();
     make->add_option("--name", o.name, "Short name stored in the file");
     make->add_option("--description", o.description, "One line stored in the file");
-    make->add_option("--seed", o.world.seed, "World seed")->capture_default_str();
+    make->add_option("--seed", o.world.seed, "World seed")->check(SeedValidator())->capture_default_str();
     make->add_option("--latitude", o.world.latitude_deg, "Latitude [deg]")
         ->check(FiniteRange(-90.0, 90.0))->capture_default_str();
     make->add_option("--day", o.world.dayOfYear, "Day of year (1-366)")
@@ -170,7 +170,8 @@ void addReplayCommand(CLI::App& app) {
         ->check(FiniteRange(0.0, 1.0e5))->capture_default_str();
     make->add_option("--turn-radius", o.turnRadius_m, "fly: radius of turns [m]")
         ->check(FiniteRange(1.0, 1.0e5))->capture_default_str();
-    make->add_option("--flight-seed", o.flightSeed, "fly: seed of the procedural flight plan");
+    make->add_option("--flight-seed", o.flightSeed, "fly: seed of the procedural flight plan")
+        ->check(SeedValidator());
     make->add_option("--start", o.start, "fly: start point X,Z [m]")
         ->delimiter(',')->expected(2)->check(FiniteRange(-1.0e7, 1.0e7));
     make->add_option("--heading", o.heading_deg, "fly/static: heading [deg], 0 = north (-Z), 90 = east")

@@ -24,6 +24,7 @@
 #include "app/FrameLoop.h"
 #include "app/Gl.h"
 #include "app/Platform.h"
+#include "app/OutputPaths.h"
 #include "app/RunReport.h"
 #include "app/VolumeAmbience.h"
 #include "lighting/Baselines.h"
@@ -199,13 +200,34 @@ void runReplay(RunOptions o) {
     if (o.every < 1) throw InputError("--every", "must be at least 1");
     if (o.stride < 1) throw InputError("--stride", "must be at least 1");
     if (o.maxFrames < 0) throw InputError("--max-frames", "must be >= 0");
+    // The replay's name is only a label: as a file name it is reduced to a safe stem, so a
+    // replay cannot make a run write outside its output folder.
     const std::string name = replay.name.empty() ? fs::path(o.replay).stem().string() : replay.name;
-    if (o.out.empty()) o.out = "out/run-" + name;
+    const std::string stem = safeFileStem(name);
+    if (o.out.empty()) o.out = "out/run-" + stem;
     ensureDirectory(o.out, "--out");
     if (o.frames.empty()) o.frames = o.out + "/frames";
     if (o.frames != "none") ensureDirectory(o.frames, "--frames");
-    if (o.video.empty() && !o.noVideo) o.video = o.out + "/" + name + ".mp4";
+    if (o.video.empty() && !o.noVideo) o.video = o.out + "/" + stem + ".mp4";
     if (o.report.empty()) o.report = o.out + "/report.json";
+    {
+        // Before any work: no output may overwrite an input or another output, and every
+        // output must be writable.
+        FilePlan files;
+        files.input("--replay", o.replay);
+        files.input("--config", o.ambienceConfig);
+        files.input("--baseline-config", o.baselineConfig);
+        files.input("--load-anchors", o.loadAnchors);
+        files.output("--report", o.report);
+        files.output("--report (CSV)", fs::path(o.report).replace_extension(".csv").string());
+        if (o.measureEvery > 0)
+            files.output("--report (measure.csv)",
+                         (fs::path(o.report).parent_path() / "measure.csv").string());
+        files.output("--video", o.video);
+        files.output("--save-anchors", o.saveAnchors);
+        files.output("--oracle", o.oracle);
+        files.check();
+    }
 
     // (2) platform and renderer
     auto platform = createOffscreenPlatform(backend, size.width, size.height);

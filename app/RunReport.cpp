@@ -3,7 +3,13 @@
 
 #include "lighting/Metrics.h"
 
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
 #include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 
 #include <algorithm>
 #include <chrono>
@@ -18,6 +24,8 @@
 #include <nlohmann/json.hpp>
 
 #include "world/Error.h"
+
+extern char** environ;
 
 namespace amb {
 
@@ -44,46 +52,84 @@ void writeImageRgb8(const std::string& path, int w, int h, const std::vector<uns
 
 // ---- VideoPipe -------------------------------------------------------------------------------
 
-static bool haveFfmpeg() {
-    return std::system("command -v ffmpeg >/dev/null 2>&1") == 0;
-}
-
+// ffmpeg is started with an argument vector (posix_spawnp), never through a shell, so no
+// character of the output path (which may come from a replay's name) is interpreted. The path
+// is passed as "file:<path>" so that ffmpeg reads it as a file name, not an option or protocol.
 VideoPipe::VideoPipe(const std::string& path, int width, int height, double fps)
     : path_(path), frameBytes_(size_t(width) * height * 3) {
-    if (!haveFfmpeg()) {
-        throw InputError("--video",
-                         "ffmpeg not found on PATH (install the 'ffmpeg' package, or "
-                         "pass --no-video)");
-    }
     std::signal(SIGPIPE, SIG_IGN);
-    char cmd[1024];
+    char rate[32];
+    std::snprintf(rate, sizeof(rate), "%.6f", fps);
     // One encoder thread and a fast preset: the renderer shares the CPU with the encoder.
-    std::snprintf(cmd, sizeof(cmd),
-                  "ffmpeg -loglevel error -y -f rawvideo -pix_fmt rgb24 -s %dx%d -r %.6f -i - "
-                  "-c:v libx264 -preset ultrafast -crf 20 -threads 1 -pix_fmt yuv420p '%s'",
-                  width, height, fps, path.c_str());
-    pipe_ = popen(cmd, "w");
-    if (!pipe_) throw InputError(path, "cannot start ffmpeg");
+    const std::vector<std::string> args = {
+        "ffmpeg", "-nostdin", "-loglevel", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24",
+        "-s", std::to_string(width) + "x" + std::to_string(height), "-r", rate, "-i", "pipe:0",
+        "-c:v", "libx264", "-preset", "ultrafast", "-crf", "20", "-threads", "1", "-pix_fmt",
+        "yuv420p", "file:" + path};
+    std::vector<char*> argv;
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+
+    int fds[2];
+    if (pipe2(fds, O_CLOEXEC) != 0) throw InputError(path, "cannot create a pipe for ffmpeg");
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, fds[0], 0);  // dup2 clears O_CLOEXEC on fd 0
+    pid_t pid = 0;
+    const int rc = posix_spawnp(&pid, "ffmpeg", &actions, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    ::close(fds[0]);
+    if (rc != 0) {
+        ::close(fds[1]);
+        if (rc == ENOENT) {
+            throw InputError("--video",
+                             "ffmpeg not found on PATH (install the 'ffmpeg' package, or pass "
+                             "--no-video)");
+        }
+        throw InputError(path, std::string("cannot start ffmpeg: ") + std::strerror(rc));
+    }
+    pid_ = pid;
+    fd_ = fds[1];
 }
 
 VideoPipe::~VideoPipe() {
-    if (pipe_) pclose(pipe_);
+    try {
+        finish();
+    } catch (...) {
+    }
+}
+
+int VideoPipe::finish() {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = -1;
+    if (pid_ <= 0) return 0;
+    int status = 0;
+    while (waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
+    }
+    pid_ = -1;
+    return status;
 }
 
 void VideoPipe::write(const std::vector<unsigned char>& rgb) {
-    if (!pipe_ || rgb.size() != frameBytes_) return;
-    if (std::fwrite(rgb.data(), 1, rgb.size(), pipe_) != rgb.size()) {
-        pclose(pipe_);
-        pipe_ = nullptr;
-        throw InputError(path_, "ffmpeg stopped accepting frames (see its message above)");
+    if (fd_ < 0 || rgb.size() != frameBytes_) return;
+    const unsigned char* p = rgb.data();
+    std::size_t left = rgb.size();
+    while (left > 0) {
+        const ssize_t n = ::write(fd_, p, left);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) {
+            finish();
+            throw InputError(path_, "ffmpeg stopped accepting frames (see its message above)");
+        }
+        p += n;
+        left -= std::size_t(n);
     }
 }
 
 void VideoPipe::close() {
-    if (!pipe_) return;
-    const int status = pclose(pipe_);
-    pipe_ = nullptr;
-    if (status != 0) throw InputError(path_, "ffmpeg failed to write the video");
+    const int status = finish();
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+        throw InputError(path_, "ffmpeg failed to write the video");
 }
 
 // ---- ProgressBar -----------------------------------------------------------------------------

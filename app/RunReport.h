@@ -21,18 +21,23 @@ Size parseSize(const std::string& text, const std::string& where);
 void writeImageRgb8(const std::string& path, int width, int height,
                     const std::vector<unsigned char>& rgb);
 
-// Raw RGB frames piped to the ffmpeg command-line tool (H.264 in MP4). Throws InputError with a
-// clear message when ffmpeg is not installed.
+// Raw RGB frames piped to the ffmpeg command-line tool (H.264 in MP4), started with an argument
+// vector (no shell). Throws InputError with a clear message when ffmpeg is not installed.
 class VideoPipe {
   public:
     VideoPipe(const std::string& path, int width, int height, double fps);
     ~VideoPipe();
+    VideoPipe(const VideoPipe&) = delete;
+    VideoPipe& operator=(const VideoPipe&) = delete;
     void write(const std::vector<unsigned char>& rgb);
+    // Ends the stream and waits for ffmpeg; throws InputError when it failed.
     void close();
 
   private:
+    int finish();  // closes the pipe, waits for ffmpeg, returns its wait status
     std::string path_;
-    std::FILE* pipe_ = nullptr;
+    int fd_ = -1;
+    int pid_ = -1;
     size_t frameBytes_;
 };
 

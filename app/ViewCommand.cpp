@@ -13,7 +13,9 @@
 #include <CLI/CLI.hpp>
 #include <glm/geometric.hpp>
 
+#include "app/CliChecks.h"
 #include "app/Commands.h"
+#include "app/OutputPaths.h"
 #include "app/DebugOverlay.h"
 #include "app/FrameLoop.h"
 #include "app/Gl.h"
@@ -81,7 +83,24 @@ void runView(const ViewOptions& o) {
         throw InputError("--screenshot", "needs --frames N (the frame to save)");
     }
 
-    auto platform = createGlfwPlatform(size.width, size.height, "ambience", true);
+    {
+        FilePlan files;
+        files.input("--replay", o.replay);
+        files.output("--screenshot", o.screenshot);
+        files.check();
+        if (!o.replay.empty() && resolvedPath(o.record) == resolvedPath(o.replay))
+            throw InputError("--record", "'" + o.record + "' is also the input --replay");
+    }
+
+    std::unique_ptr<Platform> platform;
+    try {
+        platform = createGlfwPlatform(size.width, size.height, "ambience", true);
+    } catch (const PlatformUnavailable& e) {
+        // Almost always a machine without a display: say what to do instead.
+        throw InputError("view", std::string(e.what()) +
+                                     "; 'view' opens a window: run it on a display, under "
+                                     "'xvfb-run', or use 'ambience run' to render headless");
+    }
     GLFWwindow* window = static_cast<GLFWwindow*>(platform->nativeWindow());
     const World world(replay.world);
     RenderSettings rs;
@@ -234,7 +253,8 @@ void addViewCommand(CLI::App& app) {
     auto o = std::make_shared<ViewOptions>();
     cmd->add_option("--replay", o->replay, "replay to follow (its world is shown)");
     cmd->add_option("--size", o->size, "window size WxH (default 960x540)");
-    cmd->add_option("--time", o->time_h, "fixed time of day [hours] (default: the replay's)");
+    cmd->add_option("--time", o->time_h, "fixed time of day [hours] (default: the replay's)")
+        ->check(FiniteRange(0.0, 24.0));
     cmd->add_option("--ambient", o->ambient, ambienceMethodHelp());
     cmd->add_flag("--debug-overlay", o->debugOverlay,
                   "mark anchors and the probe being captured on screen and on screenshots");

@@ -21,7 +21,9 @@
 #include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
 
+#include "app/CliChecks.h"
 #include "app/Commands.h"
+#include "app/OutputPaths.h"
 #include "world/Error.h"
 #include "world/Replay.h"
 #include "world/Vegetation.h"
@@ -77,8 +79,32 @@ void writeImage(const std::string& path, int w, int h, int channels, const std::
 }
 
 // Draws a line of width ~2 px with a colour into an RGB8 image.
+// Segments are clipped to the image (grown by the radius) first, so a line far outside a small
+// map costs nothing and the step count stays within the image's size.
+bool clipSegment(glm::dvec2& a, glm::dvec2& b, glm::dvec2 lo, glm::dvec2 hi) {
+    double t0 = 0.0, t1 = 1.0;
+    const glm::dvec2 d = b - a;
+    for (int k = 0; k < 2; ++k) {
+        if (d[k] == 0.0) {
+            if (a[k] < lo[k] || a[k] > hi[k]) return false;
+            continue;
+        }
+        double ta = (lo[k] - a[k]) / d[k], tb = (hi[k] - a[k]) / d[k];
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+        if (!(t0 <= t1)) return false;
+    }
+    const glm::dvec2 a0 = a;
+    a = a0 + d * t0;
+    b = a0 + d * t1;
+    return true;
+}
+
 void drawLine(std::vector<unsigned char>& img, int w, int h, glm::dvec2 a, glm::dvec2 b,
               const unsigned char colour[3], int radius) {
+    const double margin = radius + 1.0;
+    if (!clipSegment(a, b, glm::dvec2(-margin), glm::dvec2(w + margin, h + margin))) return;
     const double len = glm::length(b - a);
     const int steps = std::max(1, static_cast<int>(std::ceil(len * 2.0)));
     for (int s = 0; s <= steps; ++s) {
@@ -101,8 +127,16 @@ void runWorldMap(const WorldMapOptions& o) {
         throw InputError("--pixels",
                          "expected an image size in [16, 8192], got " + std::to_string(o.pixels));
     }
-    if (o.size_m < 0.0 || !std::isfinite(o.size_m) || o.size_m > 1e7) {
-        throw InputError("--size", "expected a map size in metres in (0, 1e7]");
+    // 0 means "default"; below 1 m a map shows nothing a terrain sandbox models.
+    if (!std::isfinite(o.size_m) || (o.size_m != 0.0 && (o.size_m < 1.0 || o.size_m > 1e7))) {
+        throw InputError("--size", "expected a map size in metres in [1, 1e7]");
+    }
+    {
+        FilePlan files;
+        files.input("--replay", o.replayPath);
+        files.output("--map", o.mapPath);
+        files.output("--heightmap", o.heightmapPath);
+        files.check();
     }
     WorldSettings settings;
     settings.seed = o.seed;
@@ -248,7 +282,8 @@ void runWorldMap(const WorldMapOptions& o) {
 void addWorldCommand(CLI::App& app) {
     auto opts = std::make_shared<WorldMapOptions>();
     auto* cmd = app.add_subcommand("world", "Write a top-down map (and heightmap) of a world");
-    auto* seed = cmd->add_option("--seed", opts->seed, "World seed (default 1)");
+    auto* seed =
+        cmd->add_option("--seed", opts->seed, "World seed (default 1)")->check(SeedValidator());
     auto* replay = cmd->add_option("--replay", opts->replayPath,
                                    "Take the world from a replay and draw its path");
     seed->excludes(replay);

@@ -4,6 +4,7 @@
 //   1  an internal failure (a bug or an unavailable platform)
 #include <cstdio>
 #include <exception>
+#include <string>
 
 #include <CLI/CLI.hpp>
 
@@ -24,6 +25,28 @@ int main(int argc, char** argv) {
     amb::addShCommand(app);
     amb::addBenchCommand(app);
 
+    // An unknown subcommand is an error even with --help (CLI11 would print the parent's help
+    // and exit 0): walk the leading words down the subcommand tree first.
+    {
+        CLI::App* level = &app;
+        for (int i = 1; i < argc; ++i) {
+            const std::string word = argv[i];
+            if (word.empty() || word[0] == '-') break;
+            const auto subs = level->get_subcommands([](CLI::App*) { return true; });
+            if (subs.empty()) break;
+            CLI::App* next = nullptr;
+            for (CLI::App* sub : subs)
+                if (sub->check_name(word)) next = sub;
+            if (!next) {
+                std::fprintf(stderr, "ambience: error: unknown subcommand '%s' of '%s' (see '%s --help')\n",
+                             word.c_str(), level->get_name().c_str(),
+                             level == &app ? "ambience" : ("ambience " + level->get_name()).c_str());
+                return 2;
+            }
+            level = next;
+        }
+    }
+
     try {
         app.parse(argc, argv);
         if (app.get_subcommands().empty()) {
@@ -42,6 +65,9 @@ int main(int argc, char** argv) {
     } catch (const amb::InputError& e) {
         std::fprintf(stderr, "ambience: error: %s\n", e.what());
         return 2;
+    } catch (const amb::RunFailure& e) {
+        std::fprintf(stderr, "ambience: error: %s\n", e.what());
+        return 1;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "ambience: internal error: %s\n", e.what());
         return 1;

@@ -419,7 +419,12 @@ FlightPlan makeFlightPlan(const ProceduralFlight& s) {
     auto direction = [](double heading) {
         return glm::dvec2(std::sin(heading), -std::cos(heading));
     };
-    auto towardOrigin = [](const glm::dvec2& p) { return std::atan2(-p.x, p.y); };
+    // The flight stays within region_m of its start (for a start at the origin, the world's
+    // road region), so a flight that starts far away stays there, cuts included.
+    const glm::dvec2 centre = s.start_m;
+    auto towardStart = [&centre](const glm::dvec2& p) {
+        return std::atan2(-(p.x - centre.x), p.y - centre.y);
+    };
     FlightPlan plan;
     plan.legs.push_back({s.start_m});
     glm::dvec2 pos = s.start_m;
@@ -437,14 +442,14 @@ FlightPlan makeFlightPlan(const ProceduralFlight& s) {
             // Teleport: a jump in a random direction, then a new heading.
             ++cutsDone;
             pos += s.cutJump_m * direction(2.0 * kPi * uniform());
-            pos = glm::clamp(pos, glm::dvec2(-s.region_m), glm::dvec2(s.region_m));
-            heading = towardOrigin(pos) + (uniform() - 0.5) * kPi;
+            pos = glm::clamp(pos, centre - glm::dvec2(s.region_m), centre + glm::dvec2(s.region_m));
+            heading = towardStart(pos) + (uniform() - 0.5) * kPi;
             plan.legs.push_back({pos});
             continue;
         }
         const glm::dvec2 ahead = pos + s.segmentMax_m * direction(heading);
-        if (std::abs(ahead.x) > s.region_m || std::abs(ahead.y) > s.region_m)
-            heading = towardOrigin(pos) + (uniform() - 0.5) * 0.6;  // steer back inside
+        if (std::abs(ahead.x - centre.x) > s.region_m || std::abs(ahead.y - centre.y) > s.region_m)
+            heading = towardStart(pos) + (uniform() - 0.5) * 0.6;  // steer back inside
         else
             heading += (2.0 * uniform() - 1.0) * s.maxTurn_rad;
     }

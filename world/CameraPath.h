@@ -72,8 +72,9 @@ struct FlySettings {
 std::vector<CameraSample> makeFlyPath(const World& world, const FlySettings& settings);
 
 // A procedural plan of straight legs and turns: from `start_m` at `heading_rad`, segments of
-// random length with random turns, steering back towards the origin when leaving
-// [-region_m, region_m]^2; `cuts` teleports of about cutJump_m spread evenly over the length.
+// random length with random turns, steering back towards the start when leaving the square of
+// half-width region_m around it; `cuts` teleports of about cutJump_m (clamped to that square)
+// spread evenly over the length.
 struct ProceduralFlight {
     std::uint64_t seed = 1;
     glm::dvec2 start_m{0.0};

@@ -18,6 +18,12 @@ public:
         : std::runtime_error(where.empty() ? what : where + ": " + what) {}
 };
 
+// A command whose own work failed (not its input, not a bug): one line, exit code 1.
+class RunFailure : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
 }  // namespace amb
 
 #define AMB_CHECK(cond)                                                                    \
