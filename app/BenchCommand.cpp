@@ -33,7 +33,9 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "app/BenchSweep.h"
 #include "app/Commands.h"
+#include "app/Platform.h"
 #include "app/VolumeAmbience.h"
 #include "world/Error.h"
 
@@ -99,7 +101,9 @@ std::vector<ReplayRef> resolveReplays(const std::string& list) {
         for (const auto& f : files) out.push_back({f.stem().string(), f.string()});
         return out;
     }
-    for (const std::string& item : splitList(list)) {
+    const std::vector<std::string> items = splitList(list);
+    if (items.empty()) throw InputError("--replays", "no replay named in '" + list + "'");
+    for (const std::string& item : items) {
         fs::path p = item;
         if (p.extension() != ".json")
             p = fs::path(dir.empty() ? "replays" : dir) / (item + ".json");
@@ -111,14 +115,7 @@ std::vector<ReplayRef> resolveReplays(const std::string& list) {
     return out;
 }
 
-// A parameter point: settings files handed to `run`, and the methods it applies to.
-struct Point {
-    std::string label = "default";
-    std::set<std::string> methods;  // empty: every method
-    json volume = json::object(), baseline = json::object();
-    int facesPerFrame = 1;
-    std::string params;  // "key=value;..." for the CSV
-};
+using Point = SweepPoint;  // app/BenchSweep.h
 
 void flatten(const json& j, const std::string& prefix, std::string& out) {
     for (auto it = j.begin(); it != j.end(); ++it) {
@@ -130,57 +127,6 @@ void flatten(const json& j, const std::string& prefix, std::string& out) {
             out += key + "=" + it->dump();
         }
     }
-}
-
-std::vector<Point> readSweep(const std::string& path) {
-    std::vector<Point> points(1);  // the default point always runs
-    if (path.empty()) return points;
-    std::ifstream in(path);
-    if (!in) throw InputError(path, "cannot open the sweep file");
-    json j;
-    try {
-        j = json::parse(in);
-    } catch (const json::exception& e) {
-        throw InputError(path, std::string("malformed JSON: ") + e.what());
-    }
-    if (!j.is_object() || !j.contains("points") || !j["points"].is_array())
-        throw InputError(path, "expected {\"points\": [ {\"label\": ..., ...}, ... ]}");
-    std::set<std::string> labels{"default"};
-    for (std::size_t i = 0; i < j["points"].size(); ++i) {
-        const json& p = j["points"][i];
-        const std::string where = path + ": points[" + std::to_string(i) + "]";
-        if (!p.is_object()) throw InputError(where, "expected an object");
-        Point point;
-        for (auto it = p.begin(); it != p.end(); ++it) {
-            const std::string& key = it.key();
-            if (key == "label" && it->is_string()) {
-                point.label = it->get<std::string>();
-            } else if (key == "methods" && it->is_array()) {
-                for (const auto& m : *it) {
-                    if (!m.is_string()) throw InputError(where, "methods: expected names");
-                    checkAmbienceMethod(m.get<std::string>(), where + ": methods");
-                    point.methods.insert(m.get<std::string>());
-                }
-            } else if (key == "volume" && it->is_object()) {
-                point.volume = *it;
-            } else if (key == "baseline" && it->is_object()) {
-                point.baseline = *it;
-            } else if (key == "facesPerFrame" && it->is_number_integer()) {
-                point.facesPerFrame = it->get<int>();
-                if (point.facesPerFrame < 1 || point.facesPerFrame > 6)
-                    throw InputError(where, "facesPerFrame: expected 1 to 6");
-            } else {
-                throw InputError(where, "unknown key or wrong type: '" + key +
-                                            "' (label, methods, volume, baseline, facesPerFrame)");
-            }
-        }
-        if (point.label.empty() || point.label.find_first_of("/ _,;") != std::string::npos)
-            throw InputError(where, "label: a short name without '/', ' ', '_', ',' or ';'");
-        if (!labels.insert(point.label).second)
-            throw InputError(where, "label '" + point.label + "' is used twice");
-        points.push_back(point);
-    }
-    return points;
 }
 
 std::string pointParams(const Point& p) {
@@ -787,8 +733,11 @@ void runBench(const BenchOptions& o, const std::string& commandLine) {
         throw InputError("--tune-min-gain", "expected 0 to 1");
     std::vector<std::string> methods =
         o.methods.empty() ? ambienceMethodNames() : splitList(o.methods);
+    if (methods.empty()) throw InputError("--methods", "no method named in '" + o.methods + "'");
     for (const auto& m : methods) checkAmbienceMethod(m, "--methods");
-    const auto points = readSweep(o.sweep);
+    if (parseBackend(o.backend, "--backend") == Backend::Glfw)
+        throw InputError("--backend", "bench runs headless: auto, egl or osmesa");
+    const auto points = readSweep(o.sweep, ambienceMethodNames());
     const int workers = o.jobs > 0 ? o.jobs : std::max(1, int(std::thread::hardware_concurrency()));
     std::error_code ec;
     fs::create_directories(fs::path(o.out) / "oracle", ec);
@@ -865,6 +814,9 @@ void runBench(const BenchOptions& o, const std::string& commandLine) {
                 wall / 60.0, workers);
     std::printf("  results: %s\n  summary: %s\n", results.c_str(),
                 (fs::path(o.out) / "summary.md").string().c_str());
+    // A sweep goes on past a failed run, but a bench in which nothing ran is a failure.
+    if (!jobs.empty() && failed == int(jobs.size()))
+        throw RunFailure("bench: every run failed (see error_message in " + results + ")");
 }
 
 }  // namespace
