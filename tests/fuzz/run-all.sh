@@ -41,7 +41,9 @@ for t in "${targets[@]}"; do
   before=$(find "$work/corpus/$t" -type f | wc -l)
   crashes_before=$(find "$work/crashes/$t" -type f | wc -l)
   dict=()
-  [[ "$json_targets" == *" $t "* ]] && dict=(-dict=tests/fuzz/json.dict)
+  # JSON targets: the dictionary, and inputs up to 8 kB (libFuzzer's default limit is the
+  # largest seed, a few hundred bytes for the settings).
+  [[ "$json_targets" == *" $t "* ]] && dict=(-dict=tests/fuzz/json.dict -max_len=8192)
   "$build/bin/$t" "${dict[@]}" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
     -print_final_stats=1 -artifact_prefix="$work/crashes/$t/" \
     "$work/corpus/$t" "tests/fuzz/corpus/$t" >"$work/$t.log" 2>&1
