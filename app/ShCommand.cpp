@@ -4,7 +4,10 @@
 // texel solid angles and prints JSON:
 //   {"n": N, "coefficients": [[r,g,b] x 9], "irradiance": [[r,g,b] per normal]}
 // "coefficients" are the raw projection (before any window); "irradiance" is evaluated from the
-// windowed coefficients at the given normals (normalised here) and is not clamped. Windows:
+// windowed coefficients at the given normals (normalised here) and is not clamped.
+// "reference" holds the irradiance taken straight from the texels at the same normals (no SH;
+// lighting/ReferenceIrradiance.h) and "truncationError", the relative distance over the sphere
+// of normals between the (windowed) order-2 SH irradiance and that reference. Windows:
 // none (default), hanning:W, lanczos:W, auto (lighting/SH.h). Bad texels (NaN, Inf, negative)
 // count as black, with a note on stderr.
 #include <cmath>
@@ -20,6 +23,7 @@
 #include "app/Commands.h"
 #include "lighting/CubeMapFile.h"
 #include "lighting/CubeMapProjector.h"
+#include "lighting/ReferenceIrradiance.h"
 #include "lighting/SH.h"
 #include "world/Error.h"
 
@@ -135,6 +139,25 @@ void runProject(const ProjectOptions& o) {
     for (const glm::dvec3& n : normals) {
         out["irradiance"].push_back(rgbArray(shIrradiance(windowed, n)));
     }
+    // The reference: irradiance straight from the texels (no SH), and the error the order-2
+    // truncation (and the window) makes against it over the sphere of normals.
+    std::vector<float> clean = image.rgb;
+    for (float& v : clean)
+        if (!std::isfinite(v) || v < 0.0f) v = 0.0f;
+    const CubeIrradiance direct(image.n, clean);
+    const IrradianceField directField = [&direct](const glm::dvec3& n) { return direct.at(n); };
+    const IrradianceField shFieldD = [&windowed](const glm::dvec3& n) {
+        return shIrradiance(windowed, n);
+    };
+    const SphereRule rule = sphereProductRule();
+    const double norm = irradianceNorm(directField, rule);
+    nlohmann::ordered_json reference;
+    reference["irradiance"] = nlohmann::ordered_json::array();
+    for (const glm::dvec3& n : normals) reference["irradiance"].push_back(rgbArray(direct.at(n)));
+    reference["quadratureNormals"] = rule.directions.size();
+    reference["truncationError"] =
+        norm > 0.0 ? irradianceDistance(shFieldD, directField, rule) / norm : 0.0;
+    out["reference"] = reference;
     std::printf("%s\n", out.dump(2).c_str());
 }
 
