@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "app/Renderer.h"
+#include "lighting/AnchorStore.h"
 #include "world/Replay.h"
 
 namespace amb {
@@ -58,6 +59,7 @@ struct FrameRecord {
     double time_s = 0.0, replayTime_s = 0.0, timeOfDay_h = 0.0;
     bool cut = false;            // the camera was cut (teleported) before this frame
     std::size_t rss_kB = 0;      // resident memory of the process after the frame (0: unknown)
+    std::size_t heap_kB = 0;     // of which malloc has handed out and not had back (0: unknown)
     std::array<double, kFrameStages> stageMs{};  // CPU wall time per stage
     double frameMs = 0.0;                        // all stages
     RenderStats render;
@@ -72,7 +74,10 @@ struct FrameRecord {
         double captureMs = 0.0;   // of which GL capture (inside the capture stage)
         // The volume's own timings of its stages [ms] (project = SH projection of the faces).
         double predictMs = 0.0, projectMs = 0.0, storeMs = 0.0;
-        std::vector<std::size_t> anchorsPerLevel;  // alive, coarsest level first
+        // Alive anchors per level, coarsest first: the first `levels` entries (0 without an
+        // anchor store). Inline, so that the rows of a long run allocate nothing per frame.
+        std::array<std::size_t, kMaxAnchorLevels> anchorsPerLevel{};
+        int levels = 0;
     } ambience;
 };
 

@@ -308,9 +308,8 @@ void runReplay(RunOptions o) {
         if (volume) {
             const AmbienceStatistics& st = volume->statistics();
             rec.ambience.finestLevel = st.finestLevel;
-            const int levels = volume->store().levels();
-            rec.ambience.anchorsPerLevel.assign(st.store.anchorsPerLevel.begin(),
-                                                st.store.anchorsPerLevel.begin() + levels);
+            rec.ambience.levels = volume->store().levels();
+            rec.ambience.anchorsPerLevel = st.store.anchorsPerLevel;
         }
         if (volume) {
             auto& t = report.ambienceTotals;
@@ -351,6 +350,7 @@ void runReplay(RunOptions o) {
         }
         // After everything this frame allocated (captures, lookups, frames written).
         rec.rss_kB = residentMemory_kB();
+        rec.heap_kB = heapInUse_kB();
         report.frames.push_back(rec);
         progress.update(i + 1, rec.frameMs);
     }

@@ -6,6 +6,7 @@
 #include <fcntl.h>
 #include <spawn.h>
 #include <sys/wait.h>
+#include <malloc.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -171,6 +172,15 @@ std::size_t residentMemory_kB() {
     return n == 2 && page > 0 ? std::size_t(resident) * std::size_t(page) / 1024 : 0;
 }
 
+std::size_t heapInUse_kB() {
+#if defined(__GLIBC__) && (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 33))
+    const struct mallinfo2 m = mallinfo2();
+    return (m.uordblks + m.hblkhd) / 1024;  // in use in the arenas, plus mmapped blocks
+#else
+    return 0;
+#endif
+}
+
 std::size_t peakResidentMemory_kB() {
     std::ifstream in("/proc/self/status");
     std::string line;
@@ -253,16 +263,14 @@ void RunReport::write(const std::string& path) const {
         std::size_t cuts = 0;
         for (const FrameRecord& f : frames) rss.push_back(double(f.rss_kB)), cuts += f.cut;
         j["cameraCuts"] = cuts;
-        // What one row of this report holds in memory (without the allocator's overhead).
-        const std::size_t rowBytes =
-            sizeof(FrameRecord) +
-            (frames.empty() ? 0
-                            : frames.front().ambience.anchorsPerLevel.capacity() *
-                                  sizeof(std::size_t));
+        // What one row of this report holds in memory (rows allocate nothing of their own).
+        const std::size_t rowBytes = sizeof(FrameRecord);
         j["memory"] = {{"rssStart_kB", frames.empty() ? 0 : frames.front().rss_kB},
                        {"rssEnd_kB", frames.empty() ? 0 : frames.back().rss_kB},
                        {"rss_kB", statsJson(rss)},
                        {"rssPeak_kB", rssPeak_kB},
+                       {"heapStart_kB", frames.empty() ? 0 : frames.front().heap_kB},
+                       {"heapEnd_kB", frames.empty() ? 0 : frames.back().heap_kB},
                        {"reportRowBytes", rowBytes}};
     }
     const bool volume = !frames.empty() && frames.front().ambience.active;
@@ -339,6 +347,7 @@ void RunReport::write(const std::string& path) const {
                {"replayTime_s", f.replayTime_s},
                {"cut", f.cut},
                {"rss_kB", f.rss_kB},
+               {"heap_kB", f.heap_kB},
                {"timeOfDay_h", f.timeOfDay_h},
                {"frame_ms", f.frameMs},
                {"triangles", f.render.triangles},
@@ -359,7 +368,9 @@ void RunReport::write(const std::string& path) const {
             r["volumeCapture_ms"] = f.ambience.captureMs;
             r["volumeProject_ms"] = f.ambience.projectMs;
             r["volumeStore_ms"] = f.ambience.storeMs;
-            r["anchorsPerLevel"] = f.ambience.anchorsPerLevel;
+            r["anchorsPerLevel"] =
+                std::vector<std::size_t>(f.ambience.anchorsPerLevel.begin(),
+                                         f.ambience.anchorsPerLevel.begin() + f.ambience.levels);
         }
         out << (firstRow ? "\n  " : ",\n  ") << r.dump();
         firstRow = false;
@@ -373,13 +384,13 @@ void RunReport::write(const std::string& path) const {
     csv << "frame,time_s,timeOfDay_h,frame_ms";
     for (int s = 0; s < kFrameStages; ++s) csv << "," << toString(FrameStage(s)) << "_ms";
     csv << ",triangles,terrainPatches,terrainPatchesDrawn,objectsDrawn,terrainRebuilt";
-    const std::size_t csvLevels = volume ? frames.front().ambience.anchorsPerLevel.size() : 0;
+    const std::size_t csvLevels = volume ? std::size_t(frames.front().ambience.levels) : 0;
     if (volume) {
         csv << ",anchors,anchorBytes,facesCaptured,finestLevel,ambientLookups,ambientLookup_ms"
                ",volumePredict_ms,volumeCapture_ms,volumeProject_ms,volumeStore_ms";
         for (std::size_t l = 0; l < csvLevels; ++l) csv << ",anchorsLevel" << l;
     }
-    csv << ",rss_kB,cut,loop\n";
+    csv << ",rss_kB,heap_kB,cut,loop\n";
     for (const FrameRecord& f : frames) {
         csv << f.index << "," << f.time_s << "," << f.timeOfDay_h << "," << f.frameMs;
         for (int s = 0; s < kFrameStages; ++s) csv << "," << f.stageMs[s];
@@ -391,11 +402,13 @@ void RunReport::write(const std::string& path) const {
                 << "," << f.ambience.finestLevel << "," << f.ambience.lookups << ","
                 << f.ambience.lookupMs << "," << f.ambience.predictMs << "," << f.ambience.captureMs
                 << "," << f.ambience.projectMs << "," << f.ambience.storeMs;
-            for (std::size_t l = 0; l < csvLevels; ++l)
-                csv << ","
-                    << (l < f.ambience.anchorsPerLevel.size() ? f.ambience.anchorsPerLevel[l] : 0);
+            for (std::size_t l = 0; l < csvLevels; ++l) {
+                const bool held = l < std::size_t(f.ambience.levels);
+                csv << "," << (held ? f.ambience.anchorsPerLevel[l] : 0);
+            }
         }
-        csv << "," << f.rss_kB << "," << (f.cut ? 1 : 0) << "," << f.loop << "\n";
+        csv << "," << f.rss_kB << "," << f.heap_kB << "," << (f.cut ? 1 : 0) << "," << f.loop
+            << "\n";
     }
     if (!csv) throw InputError(csvPath, "cannot write the report CSV");
 }

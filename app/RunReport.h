@@ -62,6 +62,10 @@ struct TimingStats {
 // /proc/self/status) [kB]; 0 where /proc is not available.
 std::size_t residentMemory_kB();
 std::size_t peakResidentMemory_kB();
+// Bytes the C heap has handed out and not had back (glibc's mallinfo2) [kB]: what the program
+// holds, as against the pages it has touched (RSS, which also counts freed memory the heap keeps
+// and the GL driver's mappings); 0 where unknown.
+std::size_t heapInUse_kB();
 
 TimingStats timingStats(std::vector<double> values);
 

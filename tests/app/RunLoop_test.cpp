@@ -88,6 +88,9 @@ TEST(RunLoop, LoopsKeepTheClockAndTimeOfDayAndCutAtEachRestart) {
         EXPECT_EQ(row["cut"].get<bool>(), restart) << "frame " << i;
         cuts += row["cut"].get<bool>() ? 1 : 0;
         EXPECT_GT(row["rss_kB"].get<double>(), 1000.0) << "frame " << i;  // at least 1 MB
+        // The heap in use is part of the resident memory (glibc reports it).
+        EXPECT_GT(row["heap_kB"].get<double>(), 100.0) << "frame " << i;
+        EXPECT_LT(row["heap_kB"].get<double>(), row["rss_kB"].get<double>()) << "frame " << i;
     }
     EXPECT_EQ(cuts, 2);
     EXPECT_EQ(j["cameraCuts"], 2);
@@ -105,7 +108,7 @@ TEST(RunLoop, LoopsKeepTheClockAndTimeOfDayAndCutAtEachRestart) {
     std::ifstream csv(dir / "out" / "report.csv");
     std::string header;
     std::getline(csv, header);
-    EXPECT_NE(header.find(",rss_kB,cut,loop"), std::string::npos) << header;
+    EXPECT_NE(header.find(",rss_kB,heap_kB,cut,loop"), std::string::npos) << header;
 }
 
 }  // namespace
