@@ -16,7 +16,7 @@ packages=(
   libegl-dev libegl-mesa0 libgl1-mesa-dri libosmesa6-dev libgles-dev libglfw3-dev
   libglm-dev libopenimageio-dev openimageio-tools libopenvdb-dev libboost-dev
   libboost-iostreams-dev libtbb-dev libgtest-dev libbenchmark-dev libcli11-dev
-  nlohmann-json3-dev xvfb xauth ffmpeg python3-matplotlib
+  nlohmann-json3-dev xvfb xauth ffmpeg python3-matplotlib libtsl-hopscotch-map-dev
 )
 
 missing=()

@@ -5,15 +5,18 @@
 // [SECTION] Storage       Impl: one int32 grid per level, anchor pool with a free list
 // [SECTION] Lattice
 // [SECTION] Insert, remove, advance (blending, presence, expiry, pruning)
-// [SECTION] Interpolation (thesis 9.3, with the 7.6 pattern fade)
+// [SECTION] Interpolation (hierarchical bilinear, AnchorField.h; cache rebuilt on change)
 // [SECTION] Statistics
 // [SECTION] Files (.vdb)
 #include "lighting/AnchorStore.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <optional>
+#include <tuple>
 
 #include <openvdb/io/File.h>
 #include <openvdb/openvdb.h>
@@ -22,6 +25,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "lighting/AnchorField.h"
 #include "world/Error.h"
 
 namespace amb {
@@ -29,7 +33,6 @@ namespace amb {
 namespace {
 
 constexpr std::int32_t kNoAnchor = -1;
-constexpr double kExact_m = 1e-9;  // a query this close to an anchor is "on" it
 constexpr std::int64_t kCoordLimit = 2147483647LL;
 constexpr const char* kFormat = "ambience-anchor-store-v1";
 
@@ -83,6 +86,14 @@ struct AnchorStore::Impl {
     double now = 0.0;
     ShRgb fallback;
     AnchorStoreStatistics counters;
+    // The interpolated field (AnchorField.h), rebuilt by the first lookup after a change that
+    // moves it (values, presences, relight factors, removals, the fallback). A new anchor enters
+    // at presence 0 and a refresh starts from the value shown, so neither moves it.
+    mutable AnchorField field;
+    // Coarsest level whose cells must be rebuilt (levels() or more: none). Stores happen while
+    // no lookup runs, so a plain read-modify-write is enough.
+    mutable std::atomic<int> fieldStaleFrom{0};
+    mutable std::mutex fieldMutex;
 
     explicit Impl(const AnchorStoreSettings& s) : settings(s) {
         openvdb::initialize();
@@ -167,6 +178,14 @@ struct AnchorStore::Impl {
         a.expired = expired;
     }
 
+    // The field moves from `level` on (an anchor of that level, or everything for level 0).
+    void touchField(int level = 0) {
+        if (level < fieldStaleFrom.load(std::memory_order_relaxed))
+            fieldStaleFrom.store(level, std::memory_order_release);
+    }
+    void ensureField() const;
+    void describe(double x, double z, const AnchorField::Hit& hit,
+                  InterpolationDetail& detail) const;
     ShRgb interpolate(double x, double z, InterpolationDetail* detail) const;
 };
 
@@ -252,7 +271,9 @@ AnchorStore::InsertResult AnchorStore::insert(const LatticeKey& key, const ShRgb
     if (index != kNoAnchor) {
         // Refresh (thesis appendix B: the anchor interpolates slowly to the new coefficients).
         Anchor& a = m.pool[index];
+        const float presenceBefore = a.presence;
         a.presence = Impl::presenceAt(a, m.now, m.settings.blendTime_s);
+        if (instant || a.presence != presenceBefore) m.touchField(c.level);
         m.setFadeDirection(a, false);
         // Blend from what interpolation showed (relight included), so a refresh is no pop.
         a.blendFrom = a.relight == 1.0f ? a.current : a.current * a.relight;
@@ -288,6 +309,7 @@ AnchorStore::InsertResult AnchorStore::insert(const LatticeKey& key, const ShRgb
     a.key = c;
     const std::int32_t slot = m.allocate(a);
     m.grids[c.level]->tree().setValueOn(openvdb::Coord(c.i, 0, c.k), slot);
+    if (instant) m.touchField(c.level);  // present at once; otherwise presence 0 moves nothing
     ++m.counters.inserted;
     return InsertResult::Inserted;
 }
@@ -299,6 +321,7 @@ bool AnchorStore::remove(const LatticeKey& key) {
     const std::int32_t index = m.indexOf(c);
     if (index == kNoAnchor) return false;
     m.release(index);
+    m.touchField(c.level);
     openvdb::tools::pruneInactive(m.grids[c.level]->tree());
     ++m.counters.prunes;
     return true;
@@ -311,6 +334,7 @@ void AnchorStore::clear() {
     m.alive.clear();
     m.freeList.clear();
     m.count = 0;
+    m.touchField();
 }
 
 void AnchorStore::advance(double now_s) {
@@ -319,9 +343,12 @@ void AnchorStore::advance(double now_s) {
     m.now = now_s;
     const double blend = m.settings.blendTime_s;
     std::array<bool, kMaxAnchorLevels> removedAt{};
+    int fieldMovesFrom = kMaxAnchorLevels;
     for (std::size_t n = 0; n < m.pool.size(); ++n) {
         if (!m.alive[n]) continue;
         Anchor& a = m.pool[n];
+        const float presenceBefore = a.presence;
+        const bool blending = a.blendProgress < 1.0f;
         // Blending current -> target; exact at the end of the blend time.
         if (a.blendProgress < 1.0f) {
             const double t = blend > 0.0 ? (now_s - a.blendStart_s) / blend : 1.0;
@@ -343,12 +370,15 @@ void AnchorStore::advance(double now_s) {
             a.presenceChange_s = std::min(now_s, a.captureTime_s + a.lifetime_s);
         }
         a.presence = Impl::presenceAt(a, now_s, blend);
+        if (blending || a.presence != presenceBefore)
+            fieldMovesFrom = std::min(fieldMovesFrom, a.key.level);
         if (a.expired && a.presence <= 0.0f) {
             removedAt[a.key.level] = true;
             m.release(std::int32_t(n));
             ++m.counters.expired;
         }
     }
+    m.touchField(fieldMovesFrom);
     // Prune the branches emptied by removals.
     for (int L = 0; L < m.levels; ++L) {
         if (!removedAt[L]) continue;
@@ -392,128 +422,124 @@ std::vector<LatticeKey> AnchorStore::regenerationRequests() const {
 
 void AnchorStore::setFallback(const ShRgb& sh) {
     // The fallback must never carry NaN into the frame: non-finite values are ignored.
-    if (finiteSh(sh, kMaxCoefficient)) impl_->fallback = sh;
+    if (!finiteSh(sh, kMaxCoefficient)) return;
+    impl_->fallback = sh;
+    impl_->touchField();
 }
 const ShRgb& AnchorStore::fallback() const {
     return impl_->fallback;
 }
 
+void AnchorStore::Impl::ensureField() const {
+    if (fieldStaleFrom.load(std::memory_order_acquire) >= levels) return;
+    std::lock_guard<std::mutex> lock(fieldMutex);
+    const int from = fieldStaleFrom.load(std::memory_order_relaxed);
+    if (from >= levels) return;
+    FieldLattice lattice;
+    lattice.levels = levels;
+    for (int L = 0; L < levels; ++L) {
+        lattice.spacing[L] = spacing[L];
+        lattice.scale[L] = scale[L];
+    }
+    lattice.fineSpacing_m = fineSpacing;
+    lattice.reachCells = settings.searchCells;
+    thread_local std::vector<FieldAnchor> anchors;
+    anchors.clear();
+    for (std::size_t n = 0; n < pool.size(); ++n) {
+        const Anchor& a = pool[n];
+        if (!alive[n] || !(a.presence > 0.0f)) continue;
+        anchors.push_back({a.key.level, a.key.i, a.key.k, std::min(a.presence, 1.0f),
+                           a.relight == 1.0f ? a.current : a.current * a.relight});
+    }
+    field.rebuild(lattice, anchors, fallback, from);
+    fieldStaleFrom.store(kMaxAnchorLevels, std::memory_order_release);
+}
+
+// The anchors at the corners of the cell that answered (debugging, tests).
+void AnchorStore::Impl::describe(double qx, double qz, const AnchorField::Hit& hit,
+                                 InterpolationDetail& detail) const {
+    detail = InterpolationDetail{};
+    detail.level = hit.level;
+    if (hit.level < 0) {
+        detail.fallback = true;
+        return;
+    }
+    const double wx[2] = {1.0 - hit.u, hit.u}, wz[2] = {1.0 - hit.w, hit.w};
+    for (int q = 0; q < 4; ++q) {
+        const LatticeKey point{hit.level, std::int32_t(hit.i + (q & 1)),
+                               std::int32_t(hit.k + (q >> 1))};
+        if (!validKey(point)) continue;
+        const std::int32_t index = indexOf(canonical(point));
+        if (index == kNoAnchor || !(pool[index].presence > 0.0f)) continue;
+        const Anchor& a = pool[index];
+        const double dx = x(a.key) - qx, dz = z(a.key) - qz;
+        const int quadrant = dx >= 0.0 ? (dz >= 0.0 ? 0 : 3) : (dz >= 0.0 ? 1 : 2);
+        const double d = std::sqrt(dx * dx + dz * dz);
+        if (q == hit.corner) {
+            detail.used = {{a.key, quadrant, d, 1.0}};
+            detail.exact = true;
+            return;
+        }
+        const double w = wx[q & 1] * wz[q >> 1];
+        if (w > 0.0) detail.used.push_back({a.key, quadrant, d, w * double(a.presence)});
+    }
+}
+
 ShRgb AnchorStore::Impl::interpolate(double qx, double qz, InterpolationDetail* detail) const {
-    if (detail) *detail = InterpolationDetail{};
-    const double reach = double(kCoordLimit) * fineSpacing;
-    if (!std::isfinite(qx) || !std::isfinite(qz) || std::fabs(qx) > reach ||
-        std::fabs(qz) > reach || count == 0) {
-        if (detail) detail->fallback = true;
-        return fallback;
-    }
-    using ConstAccessor = openvdb::tree::ValueAccessor<const IndexTree, false>;
+    ensureField();
+    if (!detail) return field.at(qx, qz);
+    AnchorField::Hit hit;
+    const ShRgb value = field.at(qx, qz, &hit);
+    describe(qx, qz, hit, *detail);
+    return value;
+}
 
-    struct Candidate {
-        std::int32_t index;
-        double d;
-        int quadrant;
-    };
-    std::array<double, 4> remaining{1.0, 1.0, 1.0, 1.0};
-    std::array<double, 27> numerator{};
-    double denominator = 0.0;
-    // Scratch kept per thread, so a query allocates nothing once warm.
-    thread_local std::vector<std::int32_t> seen;
-    thread_local std::vector<Candidate> candidates;
-    seen.clear();
-
-    // Accessors that do not register with the tree (the store is not modified meanwhile).
-    std::array<std::optional<ConstAccessor>, kMaxAnchorLevels> acc;
-
-    for (int L = levels - 1; L >= 0; --L) {
-        if (remaining[0] <= 0.0 && remaining[1] <= 0.0 && remaining[2] <= 0.0 &&
-            remaining[3] <= 0.0) {
-            break;
-        }
-        const double s = spacing[L];
-        const double radius = settings.searchCells * s;
-        const double i0 = std::ceil((qx - radius) / s), i1 = std::floor((qx + radius) / s);
-        const double k0 = std::ceil((qz - radius) / s), k1 = std::floor((qz + radius) / s);
-        const double limit = double(kCoordLimit / scale[L]);
-        candidates.clear();
+const Anchor* AnchorStore::nearestAnchor(double x_m, double z_m) const {
+    const Impl& m = *impl_;
+    const double reach = double(kCoordLimit) * m.fineSpacing;
+    if (!std::isfinite(x_m) || !std::isfinite(z_m) || std::fabs(x_m) > reach ||
+        std::fabs(z_m) > reach || m.count == 0)
+        return nullptr;
+    for (int L = m.levels - 1; L >= 0; --L) {
+        const double s = m.spacing[L];
+        const double radius = m.settings.searchCells * s;
+        const double i0 = std::ceil((x_m - radius) / s), i1 = std::floor((x_m + radius) / s);
+        const double k0 = std::ceil((z_m - radius) / s), k1 = std::floor((z_m + radius) / s);
+        const double limit = double(kCoordLimit / m.scale[L]);
+        const Anchor* best = nullptr;
+        double bestD = radius;
         for (double di = i0; di <= i1; di += 1.0) {
-            if (std::fabs(di) > limit) continue;
             for (double dk = k0; dk <= k1; dk += 1.0) {
-                if (std::fabs(dk) > limit) continue;
-                const LatticeKey c = canonical({L, std::int32_t(di), std::int32_t(dk)});
-                if (!acc[c.level]) acc[c.level].emplace(grids[c.level]->tree());
-                const std::int32_t index = acc[c.level]->getValue(openvdb::Coord(c.i, 0, c.k));
-                if (index == kNoAnchor) continue;
-                if (std::find(seen.begin(), seen.end(), index) != seen.end()) continue;
-                const Anchor& a = pool[index];
-                // Anchor minus query, from the exact lattice position.
-                const double dx = x(c) - qx, dz = z(c) - qz;
-                const double d = std::sqrt(dx * dx + dz * dz);
-                if (d > radius) continue;
-                seen.push_back(index);
-                if (a.presence <= 0.0f) continue;
-                if (d < kExact_m) {
-                    // On an anchor: that anchor (thesis 9.3, "if one, use it").
-                    if (detail) {
-                        detail->used = {{a.key, 0, d, 1.0}};
-                        detail->exact = true;
-                    }
-                    return a.relight == 1.0f ? a.current : a.current * a.relight;
+                if (std::fabs(di) > limit || std::fabs(dk) > limit) continue;
+                const LatticeKey c = m.canonical({L, std::int32_t(di), std::int32_t(dk)});
+                const std::int32_t index = m.indexOf(c);
+                if (index == kNoAnchor || !(m.pool[index].presence > 0.0f)) continue;
+                const double d = std::hypot(m.x(c) - x_m, m.z(c) - z_m);
+                // Nearest first; ties to the smaller key, so pool slots do not matter.
+                if (d < bestD || (d == bestD && best &&
+                                  std::tie(c.level, c.i, c.k) <
+                                      std::tie(best->key.level, best->key.i, best->key.k))) {
+                    best = &m.pool[index];
+                    bestD = d;
                 }
-                const int q = dx >= 0.0 ? (dz >= 0.0 ? 0 : 3) : (dz >= 0.0 ? 1 : 2);
-                candidates.push_back({index, d, q});
             }
         }
-        // Nearest first within this level's pass; a quadrant takes shares until one present
-        // anchor (presence 1) closes it.
-        // (Ties by key, so the order does not depend on pool slots.)
-        std::sort(candidates.begin(), candidates.end(),
-                  [this](const Candidate& a, const Candidate& b) {
-                      if (a.d != b.d) return a.d < b.d;
-                      const LatticeKey& ka = pool[a.index].key;
-                      const LatticeKey& kb = pool[b.index].key;
-                      if (ka.level != kb.level) return ka.level < kb.level;
-                      return ka.i != kb.i ? ka.i < kb.i : ka.k < kb.k;
-                  });
-        for (const Candidate& cand : candidates) {
-            double& rest = remaining[cand.quadrant];
-            if (rest <= 0.0) continue;
-            const Anchor& a = pool[cand.index];
-            const double share = a.presence >= 1.0f ? rest : rest * double(a.presence);
-            rest = a.presence >= 1.0f ? 0.0 : rest - share;
-            const double w = share / cand.d;
-            const double wr = w * double(a.relight);
-            for (int k = 0; k < kShCoefficients; ++k) {
-                for (int ch = 0; ch < 3; ++ch)
-                    numerator[3 * k + ch] += wr * double(a.current.c[k][ch]);
-            }
-            denominator += w;
-            if (detail) detail->used.push_back({a.key, cand.quadrant, cand.d, w});
-        }
+        if (best) return best;
     }
-    if (!(denominator > 0.0)) {
-        if (detail) {
-            detail->used.clear();
-            detail->fallback = true;
-        }
-        return fallback;
-    }
-    ShRgb out;
-    for (int k = 0; k < kShCoefficients; ++k) {
-        for (int ch = 0; ch < 3; ++ch) out.c[k][ch] = float(numerator[3 * k + ch] / denominator);
-    }
-    if (detail) {
-        for (auto& u : detail->used) u.weight /= denominator;
-    }
-    return out;
+    return nullptr;
 }
 
 void AnchorStore::relight(const std::function<float(const Anchor&)>& factor) {
     Impl& m = *impl_;
+    int changedFrom = kMaxAnchorLevels;
     for (std::size_t n = 0; n < m.pool.size(); ++n) {
         if (!m.alive[n]) continue;
         const float f = factor(m.pool[n]);
-        m.pool[n].relight = std::isfinite(f) && f > 0.0f ? f : 1.0f;
+        const float r = std::isfinite(f) && f > 0.0f ? f : 1.0f;
+        if (r != m.pool[n].relight) changedFrom = std::min(changedFrom, m.pool[n].key.level);
+        m.pool[n].relight = r;
     }
+    m.touchField(changedFrom);
 }
 
 ShRgb AnchorStore::interpolate(double x_m, double z_m, InterpolationDetail* detail) const {
@@ -522,12 +548,24 @@ ShRgb AnchorStore::interpolate(double x_m, double z_m, InterpolationDetail* deta
 
 void AnchorStore::interpolateMany(std::size_t count, const double* x_m, const double* z_m,
                                   ShRgb* out) const {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256),
+    impl_->ensureField();
+    const AnchorField& field = impl_->field;
+    // A lookup is ~0.1 us: threads pay off only for large batches.
+    constexpr std::size_t kGrain = 4096;
+    if (count <= kGrain) {
+        for (std::size_t i = 0; i < count; ++i) out[i] = field.at(x_m[i], z_m[i]);
+        return;
+    }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, kGrain),
                       [&](const tbb::blocked_range<std::size_t>& r) {
-                          for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                              out[i] = impl_->interpolate(x_m[i], z_m[i], nullptr);
-                          }
+                          for (std::size_t i = r.begin(); i != r.end(); ++i)
+                              out[i] = field.at(x_m[i], z_m[i]);
                       });
+}
+
+std::size_t AnchorStore::interpolationCacheBytes() const {
+    impl_->ensureField();
+    return impl_->field.bytes();
 }
 
 // ---- Statistics ---------------------------------------------------------------------------------

@@ -1,6 +1,6 @@
 // AnchorStore.h — the sparse, hierarchical store of ambience anchors along the ground plane
-// (thesis 7.5, 8.4, 9.3; DESIGN.md "Anchor store"), with blending and four-quadrant
-// interpolation.
+// (thesis 7.5, 7.6, 8.4, 9.3; DESIGN.md "Anchor store"), with blending and continuous
+// (hierarchical bilinear) interpolation.
 //
 // [SECTION] Lattice        Level L has spacing s_L = s_0 / 3^L (3 x 3 subdivision, the thesis'
 //                          SHGraph restricted to the ground). A level-L point (i, k) lies at
@@ -15,7 +15,10 @@
 //                          and expiry on the store's simulation clock (seconds, monotonic; the
 //                          time of day is only recorded, so its wrap at 24 h does not matter).
 // [SECTION] Lifetime       anchorLifetime_s(): how long a capture stays valid while the sun moves.
-// [SECTION] Interpolation  interpolate(x, z): the four-quadrant rule of thesis 9.3.
+// [SECTION] Interpolation  interpolate(x, z): bilinear in the finest cell whose corners the
+//                          store covers, missing corners from the coarser levels (thesis 7.6's
+//                          bilinear example, made hierarchical; see AnchorStore::interpolate).
+
 // [SECTION] Files          save()/load() as .vdb (OpenVDB grids, inspectable with vdb_print).
 //
 // OpenVDB is used only inside AnchorStore.cpp (one int32 grid per level mapping (i, 0, k) to an
@@ -58,7 +61,8 @@ struct AnchorStoreSettings {
     double maxLifetime_s = 600.0;  // upper clamp (also the lifetime when time stands still) [s]
     // An anchor asks for regeneration once this fraction of its lifetime has passed.
     double regenerateFraction = 0.75;
-    // Four-quadrant search: at level L, anchors within searchCells x s_L of the query point.
+    // Reach into holes: at level L, the level's anchors fill its missing lattice points within
+    // searchCells x s_L (AnchorField.h, G_L); nearestAnchor() searches the same window.
     int searchCells = 2;
 };
 
@@ -104,18 +108,21 @@ struct Anchor {
 double anchorLifetime_s(const AnchorStoreSettings& settings, double sunSpeed_radPerHour,
                         double timeRate_hPerS);
 
-// Which anchors the four-quadrant rule chose for a point, for tests and debug overlays.
+// Where interpolate() answered a point, for tests and debug overlays: the level of the cell
+// used and the anchors at its corners.
 struct InterpolationDetail {
     struct Used {
         LatticeKey key;
         int quadrant = 0;  // 0: dx >= 0, dz >= 0; 1: dx < 0, dz >= 0; 2: dx < 0, dz < 0;
                            // 3: dx >= 0, dz < 0 (dx, dz = anchor - query)
         double distance_m = 0.0;
-        double weight = 0.0;  // normalised; the weights sum to 1 unless `fallback`
+        double weight = 0.0;  // its corner's bilinear weight x its presence: the share of its
+                              // own value (the rest comes from the coarser levels' fill)
     };
-    std::vector<Used> used;
-    bool exact = false;     // the query lies on a present anchor, whose value is returned
-    bool fallback = false;  // no anchor in reach: the store's fallback value is returned
+    std::vector<Used> used;  // present anchors at the corners of the cell used (or the one hit)
+    int level = -1;          // level of the cell used; -1 with `fallback`
+    bool exact = false;      // the query lies on a present anchor: `used` is that one alone
+    bool fallback = false;   // no anchor in reach: the store's fallback value is returned
 };
 
 struct AnchorStoreStatistics {
@@ -197,31 +204,42 @@ class AnchorStore {
     // first.
     std::vector<LatticeKey> regenerationRequests() const;
 
-    // ---- Interpolation (thesis 9.3) ----
+    // ---- Interpolation (thesis 7.6, 9.3) ----
     // Value used where no anchor is in reach (e.g. the sky-only SH, see AmbienceVolume.h).
     void setFallback(const ShRgb& sh);
     const ShRgb& fallback() const;
-    // The four-quadrant rule at ground point (x, z):
-    //  1. For each quadrant around the point (quadrants as in InterpolationDetail), take the
-    //     nearest anchor, searching the finest level first: at level L the candidates are the
-    //     anchors on the level-L lattice (which includes every coarser anchor) within
-    //     searchCells x s_L; a quadrant without a candidate is searched again one level coarser.
-    //  2. Weights are inverse distances, normalised over the 1-4 quadrants that found one.
-    //  3. A query exactly on (within 1e-9 m of) a present anchor returns that anchor's value.
-    //  4. No candidate anywhere returns fallback().
-    //  Fades: an anchor with presence p < 1 takes the share p of its quadrant and passes 1 - p on
-    //  to the next candidate of that quadrant (the next nearest, then coarser levels), so a new
-    //  anchor (p = 0) changes nothing and the pattern moves from old to new as p grows — the
-    //  old-pattern/new-pattern blend proposed in thesis 7.6.
-    //  Where the result may jump (the rule itself changes): when the query crosses the line
-    //  x = const or z = const through a selected anchor (the anchor changes quadrant), when it
-    //  crosses the bisector between two candidates of one quadrant (the nearest changes), and
-    //  when a candidate enters or leaves the search radius of its level. Between such places the
-    //  result is continuous (Lipschitz). The result is always finite.
+    // The interpolated SH at ground point (x, z) (AnchorField.h has the formulas):
+    //  1. Level by level, coarsest first, the field is bilinear in each level-L cell between its
+    //     four corner values. A corner holding a level-L anchor of presence p has the value
+    //     p x (current x relight) + (1 - p) x (the value without it); a corner without one takes
+    //     the coarser levels' interpolated value there (the fallback below level 0), corrected
+    //     by the weighted mean of the residuals (anchor minus coarser value) of this level's
+    //     anchors within searchCells x s_L, in part where they cover it thinly.
+    //  2. The result is the finest level's value: bilinear in the finest cell in reach of
+    //     anchors, with the missing corners filled from the coarser levels and the neighbours.
+    //  Properties: continuous everywhere (across lattice lines, partly present cells and levels;
+    //  piecewise bilinear, so Lipschitz with a gradient of at most (corner value range) / s_L in
+    //  each axis); exact on a present anchor (within 1e-9 m: its value bit for bit); a new
+    //  anchor (p = 0) changes nothing, and as its presence grows the pattern moves from the old
+    //  to the new one (thesis 7.6); a field bilinear on a complete lattice is reproduced; the
+    //  result is a convex mix of anchor values and the fallback, always finite; a lookup reads
+    //  one cell per level, finest first (bounded), from a cache rebuilt by the first lookup
+    //  after the anchors change.
+    //  Relation to the thesis: 9.3's four-quadrant rule keeps the nearest anchor per quadrant
+    //  to find a neighbourhood when the lattice is incomplete, and weights it by inverse
+    //  distance, which jumps whenever the chosen set changes; 7.6's worked example weights the
+    //  four surrounding sets bilinearly. Here the four corners are the cell's own and a missing
+    //  corner is filled from the next coarser level, so the lattice's holes need no search.
     // Safe to call from several threads at once while nothing modifies the store.
     ShRgb interpolate(double x_m, double z_m, InterpolationDetail* detail = nullptr) const;
-    // interpolate() at `count` points (x_m[i], z_m[i]) into out[i], in parallel (TBB).
+    // interpolate() at `count` points (x_m[i], z_m[i]) into out[i]: one cache check for the
+    // batch, then the lookups (in parallel with TBB for large batches). The per-frame path.
     void interpolateMany(std::size_t count, const double* x_m, const double* z_m, ShRgb* out) const;
+    // The nearest anchor of presence > 0 on the level-L lattice within searchCells x s_L,
+    // finest level first (ties to the smaller key), or nullptr: the `nearest` baseline.
+    const Anchor* nearestAnchor(double x_m, double z_m) const;
+    // Memory of the interpolation cache (derived from the anchors, not counted in bytes()).
+    std::size_t interpolationCacheBytes() const;
 
     // ---- Memory ----
     AnchorStoreStatistics statistics() const;

@@ -664,15 +664,8 @@ NearestAnchorMethod::NearestAnchorMethod(CubeCapture& capture, const ProbeEnviro
 
 ShRgb NearestAnchorMethod::shAt(double x_m, double z_m) const {
     const AnchorStore& store = volume_.store();
-    InterpolationDetail detail;
-    const ShRgb interpolated = store.interpolate(x_m, z_m, &detail);
-    if (detail.exact || detail.fallback || detail.used.empty()) return interpolated;
-    const InterpolationDetail::Used* nearest = &detail.used.front();
-    for (const InterpolationDetail::Used& u : detail.used) {
-        if (u.distance_m < nearest->distance_m) nearest = &u;
-    }
-    const Anchor* anchor = store.find(nearest->key);
-    if (!anchor) return interpolated;
+    const Anchor* anchor = store.nearestAnchor(x_m, z_m);
+    if (!anchor) return store.interpolate(x_m, z_m);
     return anchor->relight == 1.0f ? anchor->current : anchor->current * anchor->relight;
 }
 

@@ -337,9 +337,9 @@ class PerObjectMethod final : public CapturingBaseline {
 
 // Ours without blending: an AmbienceVolume with the given settings but a blend time of 1e-6 s
 // (new anchors are present from the next frame on, refreshes replace at once), read as the
-// single nearest anchor the four-quadrant rule found: of the anchors AnchorStore::interpolate
-// used, the one at the smallest distance (the first of equals), its current value times its
-// relight factor. On an anchor, or where the store falls back, the interpolated value as is.
+// single nearest anchor (AnchorStore::nearestAnchor: within searchCells x s_L on the level-L
+// lattice, finest level first), its current value times its relight factor. Where none is in
+// reach, the interpolated value (the store's fallback there).
 class NearestAnchorMethod final : public AmbienceMethod {
   public:
     static constexpr double kBlendTime_s = 1e-6;
