@@ -435,6 +435,7 @@ std::string measurementJson(const ErrorMeter& meter) {
            {"error", summaryJson(summarize(meter.errors()))},
            {"errorByRing", rings},
            {"pop", summaryJson(summarize(meter.pops()))},
+           {"pop_move", summaryJson(summarize(meter.movingPops()))},
            {"meanSpeed_mps", n ? speed / double(n) : 0.0},
            {"oracle_s", meter.oracleSeconds()},
            {"oracleCaptures", meter.oracleCaptures()},

@@ -165,6 +165,7 @@ ShRgb ErrorMeter::oracle(int frameIndex, double x_m, double z_m, double timeOfDa
 void ErrorMeter::frame(int index, double time_s, double timeOfDay_h, const glm::dvec3& camera_m,
                        double speed_mps, const AmbienceMethod& method) {
     if (settings_.every <= 0) return;
+    movingPop(camera_m, method);
     // Pop: this frame's change at the held points.
     if (!popPoints_.empty()) {
         for (std::size_t i = 0; i < popPoints_.size(); ++i) {
@@ -215,6 +216,23 @@ void ErrorMeter::frame(int index, double time_s, double timeOfDay_h, const glm::
         popPrevious_.push_back(method.shAt(mf.witnesses[i].x_m, mf.witnesses[i].z_m));
     }
     measured_.push_back(std::move(mf));
+}
+
+void ErrorMeter::movingPop(const glm::dvec3& camera_m, const AmbienceMethod& method) {
+    const ShRgb here = method.shAt(camera_m.x, camera_m.z);
+    if (movingSeen_ > 0 &&
+        std::hypot(camera_m.x - movingX_m_, camera_m.z - movingZ_m_) > kMoveCut_m) {
+        movingSeen_ = 0;  // a cut: the path starts again
+    }
+    if (movingSeen_ >= 2) {
+        movingPops_.push_back(popValue(here - movingPrevious_[0],
+                                       movingPrevious_[0] - movingPrevious_[1],
+                                       movingPrevious_[0]));
+    }
+    movingPrevious_[1] = movingPrevious_[0];
+    movingPrevious_[0] = here;
+    movingX_m_ = camera_m.x, movingZ_m_ = camera_m.z;
+    movingSeen_ = std::min(movingSeen_ + 1, 2);
 }
 
 double ErrorMeter::MeasuredFrame::mean() const {

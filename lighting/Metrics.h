@@ -15,6 +15,19 @@
 //   The oracle is captured only on measured frames, so its per-frame change is taken as linear
 //   between two measured frames (its change there comes from the time of day alone: the captured
 //   scene is static).
+// [SECTION] Pop along a moving point
+//   The camera's ground point moves (on drives the car stands there). Applied there, A_t (the
+//   value at frame t's point on frame t) changes because the point crosses the field and
+//   because the field changes; both are smooth for a smooth field crossed at a steady speed, so
+//   a pop is the part of a frame's change that the previous frame's change does not predict,
+//   the second difference along the path, relative to the applied value:
+//       pop_move = ||(A_t - A_{t-1}) - (A_{t-1} - A_{t-2})|| / ||A_{t-1}||.
+//   A step J in one frame counts twice (J / ||A|| as it comes, again as it is not repeated); a
+//   gradient g crossed at speed v gives nothing, a change of gradient g1 -> g2 (a bilinear
+//   field's cell boundary) |g1 - g2| v dt, a blend at a steady rate nothing but its start and
+//   end. The oracle's own change (the time of day) is smooth and cancels. Measured every frame
+//   of a run with a measurement; a frame moving the point more than kMoveCut_m (a camera cut)
+//   restarts it.
 // [SECTION] Witness points
 //   On a measured frame: the camera's ground point (ring 0) and, for each ring r >= 1 with
 //   radius band [R_{r-1}, R_r), `perRing` terrain patch corners (a 32 m lattice, the corners of
@@ -119,6 +132,9 @@ class ErrorMeter {
     std::vector<double> errors() const;  // every witness of every measured frame
     std::vector<double> ringErrors(int ring) const;
     const std::vector<double>& pops() const { return pops_; }
+    // Pop along the camera's ground point, one per frame from the third on (see above).
+    const std::vector<double>& movingPops() const { return movingPops_; }
+    static constexpr double kMoveCut_m = 100.0;
     const MeasureSettings& settings() const { return settings_; }
     double oracleSeconds() const { return oracle_s_; }  // wall time spent capturing the oracle
     std::int64_t oracleCaptures() const { return oracleCaptures_; }
@@ -132,12 +148,18 @@ class ErrorMeter {
 
   private:
     ShRgb oracle(int frameIndex, double x_m, double z_m, double timeOfDay_h);
+    void movingPop(const glm::dvec3& camera_m, const AmbienceMethod& method);
 
     CubeCapture& capture_;
     const ProbeEnvironment& environment_;
     MeasureSettings settings_;
     std::vector<MeasuredFrame> measured_;
     std::vector<double> pops_;
+    std::vector<double> movingPops_;
+    // The last two values along the moving point (newest first), and where it was.
+    ShRgb movingPrevious_[2];
+    double movingX_m_ = 0.0, movingZ_m_ = 0.0;
+    int movingSeen_ = 0;
     // Oracle values by (frame, x, z) (the cache).
     struct Key {
         int frame;

@@ -201,5 +201,52 @@ TEST(Metrics, ErrorMeterClosedFormsAndOracleFile) {
     std::filesystem::remove_all(dir);
 }
 
+// A field g(x) c along x (c a fixed coefficient set): linear, with a step of 0.5 at x = 50.5 m.
+class StepFieldMethod final : public AmbienceMethod {
+  public:
+    std::string methodName() const override { return "step"; }
+    void predictStage(const glm::dvec3&, const glm::dvec3&, double, double) override {}
+    void captureStage() override {}
+    void storeStage() override {}
+    ShRgb shAt(double x, double) const override { return c() * float(g(x)); }
+    MethodStatistics methodStatistics() const override { return {}; }
+    static double g(double x) { return 2.0 + 0.01 * x + (x > 50.5 ? 0.5 : 0.0); }
+    static ShRgb c() {
+        ShRgb sh;
+        for (int k = 0; k < kShCoefficients; ++k) sh.c[k] = glm::vec3(1.0f, 0.8f - 0.05f * k, 0.3f);
+        return sh;
+    }
+};
+
+// Pop along the moving point: a linear field crossed at 1 m a frame reads 0; the step reads
+// 0.5 / g at the frame it is crossed and once more at the next (Metrics.h: the second
+// difference); a camera cut restarts the path instead of reading as a pop.
+TEST(Metrics, PopAlongTheMovingPointIsTheSecondDifference) {
+    FakeCubeCapture capture(8);
+    FlatProbeEnvironment env;
+    MeasureSettings s;
+    s.every = 1000;  // one measured frame: the moving pop does not need the oracle
+    StepFieldMethod method;
+    ErrorMeter meter(capture, env, s);
+    for (int f = 0; f < 100; ++f) meter.frame(f, f / 30.0, 12.0, {double(f), 2.0, 7.0}, 30.0, method);
+    const auto& pops = meter.movingPops();
+    ASSERT_EQ(pops.size(), 98u);  // from the third frame on
+    for (std::size_t i = 0; i < pops.size(); ++i) {
+        const int f = int(i) + 2;  // pops[i] is frame f's
+        if (f == 51) {
+            EXPECT_NEAR(pops[i], 0.5 / StepFieldMethod::g(50.0), 1e-5);
+        } else if (f == 52) {
+            EXPECT_NEAR(pops[i], 0.5 / StepFieldMethod::g(51.0), 1e-5);
+        } else {
+            EXPECT_LT(pops[i], 1e-5) << "frame " << f;
+        }
+    }
+    // A cut 500 m away: two frames to restart, no pop from the jump.
+    for (int f = 100; f < 104; ++f)
+        meter.frame(f, f / 30.0, 12.0, {600.0 + f, 2.0, 7.0}, 30.0, method);
+    ASSERT_EQ(meter.movingPops().size(), 98u + 2u);
+    for (std::size_t i = 98; i < 100; ++i) EXPECT_LT(meter.movingPops()[i], 1e-5);
+}
+
 }  // namespace
 }  // namespace amb
