@@ -186,7 +186,7 @@ void RendererScene::updateTerrain(const glm::dvec3& eye_m) {
 
 static TerrainDraw patchDraw(const GlMesh& mesh, const TerrainPatchDraw& p,
                              const glm::dvec3& meshOrigin_m, const glm::dvec3& eye_m,
-                             const AmbientSource& ambient) {
+                             const glm::vec3* cornerIrradiance) {
     TerrainDraw d;
     d.mesh = &mesh;
     d.firstIndex = p.firstIndex;
@@ -195,9 +195,7 @@ static TerrainDraw patchDraw(const GlMesh& mesh, const TerrainPatchDraw& p,
     const glm::dvec3 c0 = p.corners_m[0] - meshOrigin_m;
     const double size = p.corners_m[1].x - p.corners_m[0].x;
     d.rect = glm::vec4(float(c0.x), float(c0.z), float(1.0 / size), float(1.0 / size));
-    for (int k = 0; k < 4; ++k) {
-        d.cornerIrradiance[k] = ambient.cornerIrradiance(p.corners_m[k], p.cornerNormals[k]);
-    }
+    for (int k = 0; k < 4; ++k) d.cornerIrradiance[k] = cornerIrradiance[k];
     return d;
 }
 
@@ -217,9 +215,19 @@ void RendererScene::buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj
         visible.emplace_back(glm::length(nearest - eye_m), i);
     }
     std::sort(visible.begin(), visible.end());
+    // The visible patches' corners in one batch (the frame's largest set of lookups).
+    std::vector<glm::dvec3> cornerAt, cornerNormal;
     for (const auto& [distance, i] : visible) {
-        out.terrain.push_back(
-            patchDraw(terrainGl_, terrainMesh_.patches[i], terrainMesh_.origin_m, eye_m, ambient));
+        const TerrainPatchDraw& p = terrainMesh_.patches[i];
+        cornerAt.insert(cornerAt.end(), p.corners_m.begin(), p.corners_m.end());
+        cornerNormal.insert(cornerNormal.end(), p.cornerNormals.begin(), p.cornerNormals.end());
+    }
+    std::vector<glm::vec3> irradiance(cornerAt.size());
+    ambient.cornerIrradianceBatch(cornerAt.size(), cornerAt.data(), cornerNormal.data(),
+                                  irradiance.data());
+    for (std::size_t v = 0; v < visible.size(); ++v) {
+        out.terrain.push_back(patchDraw(terrainGl_, terrainMesh_.patches[visible[v].second],
+                                        terrainMesh_.origin_m, eye_m, &irradiance[4 * v]));
     }
     const std::size_t drawnPatches = visible.size();
     addRoads(eye_m, &viewProj, settings_.terrain.viewRadius_m, ambient, out);

@@ -31,6 +31,14 @@ class AmbientSource {
     virtual ~AmbientSource() = default;
     virtual glm::vec3 cornerIrradiance(const glm::dvec3& position_m,
                                        const glm::dvec3& normal) const = 0;
+    // The same at `count` corners at once (a frame's terrain corners): out[i] for position i
+    // and normal i. One by one by default; a source over an interpolated volume answers the
+    // batch with one cache check and no per-call overhead.
+    virtual void cornerIrradianceBatch(std::size_t count, const glm::dvec3* positions_m,
+                                       const glm::dvec3* normals, glm::vec3* out) const {
+        for (std::size_t i = 0; i < count; ++i)
+            out[i] = cornerIrradiance(positions_m[i], normals[i]);
+    }
     // Appends the set for an object at `position_m` to `sets` if needed; returns its index.
     virtual std::uint32_t objectSet(const glm::dvec3& position_m,
                                     std::vector<AmbientSet>& sets) const = 0;

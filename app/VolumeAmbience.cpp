@@ -61,6 +61,23 @@ glm::vec3 MethodAmbient::cornerIrradiance(const glm::dvec3& position_m,
     return e;
 }
 
+void MethodAmbient::cornerIrradianceBatch(std::size_t count, const glm::dvec3* positions_m,
+                                          const glm::dvec3* normals, glm::vec3* out) const {
+    const auto t0 = Clock::now();
+    batchX_.resize(count), batchZ_.resize(count), batchSh_.resize(count);
+    for (std::size_t i = 0; i < count; ++i) {
+        batchX_[i] = positions_m[i].x;
+        batchZ_[i] = positions_m[i].z;
+    }
+    method_.shAt(count, batchX_.data(), batchZ_.data(), batchSh_.data());
+    for (std::size_t i = 0; i < count; ++i) {
+        out[i] = glm::max(shIrradiance(batchSh_[i], glm::vec3(normals[i])), glm::vec3(0.0f));
+        note(positions_m[i]);
+    }
+    lookups_ += count;
+    lookupMs_ += msSince(t0);
+}
+
 std::uint32_t MethodAmbient::objectSet(const glm::dvec3& position_m,
                                        std::vector<AmbientSet>& sets) const {
     const auto t0 = Clock::now();

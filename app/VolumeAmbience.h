@@ -32,6 +32,9 @@ class MethodAmbient final : public AmbientSource {
     explicit MethodAmbient(const AmbienceMethod& method) : method_(method) {}
     glm::vec3 cornerIrradiance(const glm::dvec3& position_m,
                                const glm::dvec3& normal) const override;
+    // The batch through the method's batch shAt (AnchorStore::interpolateMany for ours).
+    void cornerIrradianceBatch(std::size_t count, const glm::dvec3* positions_m,
+                               const glm::dvec3* normals, glm::vec3* out) const override;
     std::uint32_t objectSet(const glm::dvec3& position_m,
                             std::vector<AmbientSet>& sets) const override;
     // Lookups and CPU time spent answering them since the last reset (they run inside the draw
@@ -48,6 +51,8 @@ class MethodAmbient final : public AmbientSource {
     mutable std::size_t lookups_ = 0;
     mutable double lookupMs_ = 0.0;
     mutable std::vector<double> x_, z_;
+    mutable std::vector<double> batchX_, batchZ_;  // scratch of the batch
+    mutable std::vector<ShRgb> batchSh_;
 };
 
 // The SH of the fixed ambients (AmbientMode): the same at every point, from the sky model.

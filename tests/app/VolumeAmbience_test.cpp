@@ -6,11 +6,13 @@
 #include <string>
 
 #include <OpenImageIO/imagebuf.h>
+#include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include "RunAmbience.h"
+#include "app/VolumeAmbience.h"
 
 namespace amb {
 namespace {
@@ -24,6 +26,42 @@ nlohmann::json readJson(const std::string& path) {
 }
 
 const std::string kReplay = sourcePath("replays/highway-drive.json");
+
+// A method whose SH varies with the point, to compare the batch with single lookups.
+class SlopedMethod final : public AmbienceMethod {
+  public:
+    std::string methodName() const override { return "sloped"; }
+    void predictStage(const glm::dvec3&, const glm::dvec3&, double, double) override {}
+    void captureStage() override {}
+    void storeStage() override {}
+    ShRgb shAt(double x, double z) const override {
+        ShRgb sh;
+        for (int k = 0; k < kShCoefficients; ++k)
+            sh.c[k] = glm::vec3(float(1.0 + 0.01 * x), float(0.5 - 0.002 * z), 0.1f * float(k));
+        return sh;
+    }
+    MethodStatistics methodStatistics() const override { return {}; }
+};
+
+// The renderer's terrain corners go through the batch: the same values as one by one, and the
+// same lookup count.
+TEST(MethodAmbient, CornerBatchEqualsSingleLookups) {
+    SlopedMethod method;
+    MethodAmbient single(method), batch(method);
+    std::vector<glm::dvec3> at, normal;
+    for (int i = 0; i < 50; ++i) {
+        at.push_back({3.7 * i, 1.0, -2.1 * i});
+        normal.push_back(glm::normalize(glm::dvec3(0.1 * (i % 5), 1.0, -0.05 * i)));
+    }
+    std::vector<glm::vec3> out(at.size());
+    batch.cornerIrradianceBatch(at.size(), at.data(), normal.data(), out.data());
+    for (std::size_t i = 0; i < at.size(); ++i) {
+        const glm::vec3 e = single.cornerIrradiance(at[i], normal[i]);
+        EXPECT_EQ(e, out[i]) << i;
+    }
+    EXPECT_EQ(batch.lookups(), at.size());
+    EXPECT_EQ(single.lookups(), at.size());
+}
 
 TEST(VolumeRun, CapturesStoresAndReports) {
     const std::string dir = testing::TempDir() + "volume_run";
