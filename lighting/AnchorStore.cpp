@@ -13,12 +13,16 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
 #include <limits>
 #include <mutex>
 #include <optional>
+#include <sstream>
 #include <tuple>
 
-#include <openvdb/io/File.h>
+#include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Prune.h>
 #include <openvdb/tree/ValueAccessor.h>
@@ -26,7 +30,9 @@
 #include <tbb/parallel_for.h>
 
 #include "lighting/AnchorField.h"
+#include "lighting/AnchorStoreFile.h"
 #include "world/Error.h"
+#include "world/TextFile.h"
 
 namespace amb {
 
@@ -34,7 +40,7 @@ namespace {
 
 constexpr std::int32_t kNoAnchor = -1;
 constexpr std::int64_t kCoordLimit = 2147483647LL;
-constexpr const char* kFormat = "ambience-anchor-store-v1";
+constexpr const char* kFormat = "ambience-anchor-store-v2";
 
 // In memory, the per-level index grids use smaller nodes than the standard Int32Grid
 // (internal nodes 16^3 and 8^3 instead of 32^3 and 16^3, leaves 4^3 instead of 8^3): the
@@ -256,12 +262,14 @@ AnchorStore::InsertResult AnchorStore::insert(const LatticeKey& key, const ShRgb
                                               const glm::dvec3& capturedPosition_m,
                                               double lifetime_s, double timeOfDay_h) {
     Impl& m = *impl_;
-    AMB_CHECK(m.validKey(key));
+    AMB_CHECK(key.level >= 0 && key.level < m.levels);
     const bool positionOk = std::isfinite(capturedPosition_m.x) &&
                             std::isfinite(capturedPosition_m.y) &&
                             std::isfinite(capturedPosition_m.z);
-    if (!finiteSh(sh, kMaxCoefficient) || !positionOk || !std::isfinite(lifetime_s) ||
-        lifetime_s <= 0.0) {
+    // A point beyond the integer range of the finest lattice (a camera further out than the
+    // settings can number) is refused like a bad capture: the store keeps its fallback there.
+    if (!m.validKey(key) || !finiteSh(sh, kMaxCoefficient) || !positionOk ||
+        !std::isfinite(lifetime_s) || lifetime_s <= 0.0) {
         ++m.counters.rejected;
         return InsertResult::Rejected;
     }
@@ -595,6 +603,41 @@ std::string shGridName(const char* what, int k) {
     return std::string(what) + "_" + std::to_string(k);
 }
 
+// The grids as OpenVDB's stream writer lays them out, with mask compression only (no Blosc or
+// zlib blocks, whose declared sizes the loader would have to trust), sealed with the checksum
+// (AnchorStoreFile.h) and written next to `path` first, so a failed save leaves the old file.
+void writeStoreFile(const std::string& path, const openvdb::GridPtrVec& grids,
+                    const openvdb::MetaMap& meta) {
+    std::string bytes;
+    try {
+        std::ostringstream os(std::ios::binary);
+        openvdb::io::Stream stream(os);
+        stream.setCompression(openvdb::io::COMPRESS_ACTIVE_MASK);
+        stream.write(grids, meta);
+        bytes = sealAnchorStoreFile(os.str(), "anchor store");
+    } catch (const std::exception& e) {
+        throw InputError(path, std::string("cannot write anchor store: ") + e.what());
+    }
+    if (bytes.size() > kMaxAnchorStoreFileBytes) {
+        throw InputError(path, "cannot write anchor store: " + std::to_string(bytes.size()) +
+                                   " bytes, more than a store file may hold");
+    }
+    const std::string part = path + ".part";
+    {
+        std::ofstream out(part, std::ios::binary | std::ios::trunc);
+        out.write(bytes.data(), std::streamsize(bytes.size()));
+        out.close();
+        if (!out) {
+            std::remove(part.c_str());
+            throw InputError(path, "cannot write anchor store");
+        }
+    }
+    if (std::rename(part.c_str(), path.c_str()) != 0) {
+        std::remove(part.c_str());
+        throw InputError(path, "cannot write anchor store");
+    }
+}
+
 template <typename GridT>
 typename GridT::Ptr makePayloadGrid(const std::string& name, double fineSpacing,
                                     const typename GridT::ValueType& background) {
@@ -676,13 +719,8 @@ void AnchorStore::save(const std::string& path) const {
     meta.insertMeta("levels", openvdb::Int32Metadata(m.levels));
     meta.insertMeta("anchors", openvdb::Int32Metadata(number));
     meta.insertMeta("clock_s", openvdb::DoubleMetadata(m.now));
-    try {
-        openvdb::io::File file(path);
-        file.write(grids, meta);
-        file.close();
-    } catch (const std::exception& e) {
-        throw InputError(path, std::string("cannot write anchor store: ") + e.what());
-    }
+    meta.insertMeta(kAnchorStoreChecksumKey, openvdb::StringMetadata("00000000"));
+    writeStoreFile(path, grids, meta);
 }
 
 namespace {
@@ -708,13 +746,6 @@ typename GridT::Ptr requireGrid(const openvdb::GridPtrVec& grids, const std::str
     throw InputError(path, "grid '" + name + "' is missing");
 }
 
-template <typename T>
-T requireMeta(const openvdb::MetaMap& meta, const std::string& name, const std::string& path) {
-    auto value = meta.getMetadata<openvdb::TypedMetadata<T>>(name);
-    if (!value) throw InputError(path, "metadata '" + name + "' is missing or has the wrong type");
-    return value->value();
-}
-
 template <typename GridT>
 typename GridT::ValueType requireVoxel(const GridT& grid, const openvdb::Coord& c,
                                        const std::string& path) {
@@ -726,60 +757,218 @@ typename GridT::ValueType requireVoxel(const GridT& grid, const openvdb::Coord& 
     return v;
 }
 
-}  // namespace
+// A file-level metadata value of the checked bytes (the walk checked its size).
+template <typename T>
+T metaValue(const VdbFileSummary& file, const char* name, const char* type,
+            const std::string& path) {
+    const auto it = file.metadata.find(name);
+    if (it == file.metadata.end() || it->second.type != type) {
+        throw InputError(path, std::string("metadata '") + name + "' is missing or not " + type);
+    }
+    T v;
+    std::memcpy(&v, it->second.bytes.data(), sizeof(T));
+    return v;
+}
 
-void AnchorStore::load(const std::string& path) {
-    openvdb::GridPtrVecPtr grids;
-    openvdb::MetaMap::Ptr meta;
+struct StoreFileHeader {
+    std::int32_t anchors = 0;
+};
+
+// Everything that can be known before OpenVDB parses the bytes: the checksum (corruption and
+// truncation stop here), the stream structure (AnchorStoreFile.h), the lattice and the anchor
+// count, and the grids — each expected one present once with its type and voxel size, nothing
+// else, the level grids holding `anchors` voxels together and every payload grid one per anchor.
+StoreFileHeader checkStoreFile(const std::string& bytes, const std::string& path, double s0,
+                               const std::vector<double>& spacing) {
+    const VdbFileSummary header = readVdbHeader(bytes, path);
+    const auto format = header.metadata.find("format");
+    if (format == header.metadata.end() || format->second.type != "string" ||
+        format->second.bytes != kFormat) {
+        const std::string found =
+            format == header.metadata.end() ? "missing" : "'" + format->second.bytes + "'";
+        throw InputError(path, std::string("not an anchor store of format ") + kFormat +
+                                   " (metadata 'format' is " + found + ")");
+    }
+    verifyAnchorStoreChecksum(bytes, header, path);
+    const VdbFileSummary file = checkVdbFile(bytes, path);
+
+    StoreFileHeader h;
+    const double fileS0 = metaValue<double>(file, "coarsest_spacing_m", "double", path);
+    const std::int32_t levels = metaValue<std::int32_t>(file, "levels", "int32", path);
+    h.anchors = metaValue<std::int32_t>(file, "anchors", "int32", path);
+    const double clock = metaValue<double>(file, "clock_s", "double", path);
+    if (fileS0 != s0 || levels != std::int32_t(spacing.size())) {
+        throw InputError(path, "lattice (s0 " + std::to_string(fileS0) + " m, " +
+                                   std::to_string(levels) + " levels) differs from this store's");
+    }
+    if (!std::isfinite(clock)) throw InputError(path, "metadata 'clock_s' is not finite");
+    if (h.anchors < 0) throw InputError(path, "metadata 'anchors' is negative");
+
+    struct Expected {
+        std::string name, type;
+        double voxel_m;
+    };
+    std::vector<Expected> expected;
+    for (std::size_t L = 0; L < spacing.size(); ++L)
+        expected.push_back({"anchor_index_L" + std::to_string(L), "Tree_int32_5_4_3", spacing[L]});
+    const std::size_t payloadFrom = expected.size();
+    const double fine = spacing.back();
+    for (const char* sh : {"sh_current", "sh_target", "sh_blend_from"}) {
+        for (int k = 0; k < kShCoefficients; ++k)
+            expected.push_back({shGridName(sh, k), "Tree_vec3s_5_4_3", fine});
+    }
+    expected.push_back({"captured_position", "Tree_vec3d_5_4_3", fine});
+    for (const char* f : {"age_s", "lifetime_s", "blend_elapsed_s", "presence", "since_birth_s",
+                          "capture_time_of_day_h"})
+        expected.push_back({f, "Tree_float_5_4_3", fine});
+    expected.push_back({"flags", "Tree_int32_5_4_3", fine});
+
+    if (file.grids.size() != expected.size()) {
+        throw InputError(path, std::to_string(file.grids.size()) + " grids, expected " +
+                                   std::to_string(expected.size()));
+    }
+    std::uint64_t levelVoxels = 0;
+    for (std::size_t e = 0; e < expected.size(); ++e) {
+        const Expected& x = expected[e];
+        const auto g = std::find_if(file.grids.begin(), file.grids.end(),
+                                    [&](const VdbGridSummary& s) { return s.name == x.name; });
+        if (g == file.grids.end()) throw InputError(path, "grid '" + x.name + "' is missing");
+        if (g->type != x.type) {
+            throw InputError(path,
+                             "grid '" + x.name + "' has type " + g->type + ", expected " + x.type);
+        }
+        if (g->voxelSize_m != x.voxel_m) {
+            throw InputError(path, "grid '" + x.name + "' has voxel size " +
+                                       std::to_string(g->voxelSize_m) + " m, expected " +
+                                       std::to_string(x.voxel_m));
+        }
+        if (e < payloadFrom) {
+            levelVoxels += g->activeVoxels;
+        } else if (g->activeVoxels != std::uint64_t(h.anchors)) {
+            throw InputError(path, "grid '" + x.name + "' holds " +
+                                       std::to_string(g->activeVoxels) + " values for " +
+                                       std::to_string(h.anchors) + " anchors");
+        }
+    }
+    if (levelVoxels != std::uint64_t(h.anchors)) {
+        throw InputError(path, "metadata 'anchors' is " + std::to_string(h.anchors) +
+                                   " but the level grids hold " + std::to_string(levelVoxels));
+    }
+    return h;
+}
+
+// OpenVDB parses the checked bytes from memory, all at once (no delayed loading, so nothing is
+// read after load() returns); a read past the end throws instead of yielding zeros.
+openvdb::GridPtrVecPtr parseStoreGrids(const std::string& bytes, const std::string& path) {
     try {
-        openvdb::io::File file(path);
-        file.open();
-        grids = file.getGrids();
-        meta = file.getMetadata();
-        file.close();
+        std::istringstream is(bytes, std::ios::binary);
+        is.exceptions(std::ios::failbit | std::ios::badbit | std::ios::eofbit);
+        openvdb::io::Stream stream(is, /*delayLoad=*/false);
+        openvdb::GridPtrVecPtr grids = stream.getGrids();
+        if (!grids) throw InputError(path, "no grids");
+        return grids;
     } catch (const InputError&) {
         throw;
     } catch (const std::exception& e) {
         throw InputError(path, std::string("cannot read anchor store: ") + e.what());
     }
-    if (!grids || !meta) throw InputError(path, "not an anchor store file");
+}
 
-    if (requireMeta<std::string>(*meta, "format", path) != kFormat) {
-        throw InputError(path, std::string("metadata 'format' is not ") + kFormat);
+// The payload grids (AnchorStore::save), found by name and type.
+struct PayloadGrids {
+    std::array<openvdb::Vec3SGrid::Ptr, kShCoefficients> current, target, from;
+    openvdb::Vec3DGrid::Ptr position;
+    openvdb::FloatGrid::Ptr age, lifetime, blendElapsed, presence, sinceBirth, tod;
+    openvdb::Int32Grid::Ptr flags;
+
+    PayloadGrids(const openvdb::GridPtrVec& grids, const std::string& path) {
+        for (int k = 0; k < kShCoefficients; ++k) {
+            current[k] = requireGrid<openvdb::Vec3SGrid>(grids, shGridName("sh_current", k), path);
+            target[k] = requireGrid<openvdb::Vec3SGrid>(grids, shGridName("sh_target", k), path);
+            from[k] = requireGrid<openvdb::Vec3SGrid>(grids, shGridName("sh_blend_from", k), path);
+        }
+        position = requireGrid<openvdb::Vec3DGrid>(grids, "captured_position", path);
+        age = requireGrid<openvdb::FloatGrid>(grids, "age_s", path);
+        lifetime = requireGrid<openvdb::FloatGrid>(grids, "lifetime_s", path);
+        blendElapsed = requireGrid<openvdb::FloatGrid>(grids, "blend_elapsed_s", path);
+        presence = requireGrid<openvdb::FloatGrid>(grids, "presence", path);
+        sinceBirth = requireGrid<openvdb::FloatGrid>(grids, "since_birth_s", path);
+        tod = requireGrid<openvdb::FloatGrid>(grids, "capture_time_of_day_h", path);
+        flags = requireGrid<openvdb::Int32Grid>(grids, "flags", path);
     }
-    const double s0 = requireMeta<double>(*meta, "coarsest_spacing_m", path);
-    const int levels = requireMeta<std::int32_t>(*meta, "levels", path);
-    const int anchors = requireMeta<std::int32_t>(*meta, "anchors", path);
-    const double clock = requireMeta<double>(*meta, "clock_s", path);
-    if (s0 != impl_->settings.coarsestSpacing_m || levels != impl_->levels) {
-        throw InputError(path, "lattice (s0 " + std::to_string(s0) + " m, " +
-                                   std::to_string(levels) + " levels) differs from this store's");
+};
+
+// The anchor stored at fine voxel `fine`, its times relative to the clock `now`; every value
+// checked (finite coefficients within AnchorStore::kMaxCoefficient, finite position, positive
+// lifetime, non-negative ages, presence in [0, 1], known flags).
+Anchor readAnchor(const PayloadGrids& g, const openvdb::Coord& fine, double now, double blendTime_s,
+                  const std::string& where, const std::string& path) {
+    Anchor a;
+    for (int k = 0; k < kShCoefficients; ++k) {
+        const auto cv = requireVoxel(*g.current[k], fine, path);
+        const auto tv = requireVoxel(*g.target[k], fine, path);
+        const auto fv = requireVoxel(*g.from[k], fine, path);
+        a.current.c[k] = {cv.x(), cv.y(), cv.z()};
+        a.target.c[k] = {tv.x(), tv.y(), tv.z()};
+        a.blendFrom.c[k] = {fv.x(), fv.y(), fv.z()};
     }
-    if (!std::isfinite(clock) || anchors < 0) throw InputError(path, "bad clock or anchor count");
+    if (!finiteSh(a.current, AnchorStore::kMaxCoefficient) ||
+        !finiteSh(a.target, AnchorStore::kMaxCoefficient) ||
+        !finiteSh(a.blendFrom, AnchorStore::kMaxCoefficient)) {
+        throw InputError(path, where + ": coefficients not finite or out of range");
+    }
+    const auto p = requireVoxel(*g.position, fine, path);
+    a.capturedPosition_m = {p.x(), p.y(), p.z()};
+    const double ageV = requireVoxel(*g.age, fine, path);
+    const double lifeV = requireVoxel(*g.lifetime, fine, path);
+    const double blendV = requireVoxel(*g.blendElapsed, fine, path);
+    const double presV = requireVoxel(*g.presence, fine, path);
+    const double birthV = requireVoxel(*g.sinceBirth, fine, path);
+    const double todV = requireVoxel(*g.tod, fine, path);
+    const int flagV = requireVoxel(*g.flags, fine, path);
+    const auto finiteNonNegative = [](double v) { return std::isfinite(v) && v >= 0.0; };
+    if (!std::isfinite(p.x()) || !std::isfinite(p.y()) || !std::isfinite(p.z()) ||
+        !finiteNonNegative(ageV) || !std::isfinite(lifeV) || !(lifeV > 0.0) ||
+        !finiteNonNegative(blendV) || !(presV >= 0.0 && presV <= 1.0) ||
+        !finiteNonNegative(birthV) || !std::isfinite(todV) ||
+        (flagV & ~(kFlagRegenerate | kFlagExpired)) != 0) {
+        throw InputError(path, where + ": anchor state out of range");
+    }
+    a.captureTime_s = now - ageV;
+    a.birth_s = now - birthV;
+    a.lifetime_s = lifeV;
+    a.captureTimeOfDay_h = todV;
+    a.blendStart_s = now - blendV;
+    a.blendProgress = float(blendTime_s > 0.0 ? clamp01(blendV / blendTime_s) : 1.0);
+    a.presence = float(presV);
+    a.presenceFrom = a.presence;
+    a.presenceChange_s = now;
+    a.regenerationRequested = (flagV & kFlagRegenerate) != 0;
+    a.expired = (flagV & kFlagExpired) != 0;
+    return a;
+}
+
+}  // namespace
+
+void AnchorStore::load(const std::string& path) {
+    // The whole file, bounded, checked byte by byte before OpenVDB sees it (AnchorStoreFile.h).
+    const std::string bytes = readTextFile(path, "anchor store file", kMaxAnchorStoreFileBytes);
+    const std::vector<double> spacing(impl_->spacing.begin(),
+                                      impl_->spacing.begin() + impl_->levels);
+    const StoreFileHeader header =
+        checkStoreFile(bytes, path, impl_->settings.coarsestSpacing_m, spacing);
+    const std::int32_t anchors = header.anchors;
+    const openvdb::GridPtrVecPtr grids = parseStoreGrids(bytes, path);
 
     auto fresh = std::make_unique<Impl>(impl_->settings);
     Impl& m = *fresh;
     m.now = impl_->now;
     m.fallback = impl_->fallback;
     m.counters = impl_->counters;
-
-    std::array<openvdb::Vec3SGrid::Ptr, kShCoefficients> current, target, from;
-    for (int k = 0; k < kShCoefficients; ++k) {
-        current[k] = requireGrid<openvdb::Vec3SGrid>(*grids, shGridName("sh_current", k), path);
-        target[k] = requireGrid<openvdb::Vec3SGrid>(*grids, shGridName("sh_target", k), path);
-        from[k] = requireGrid<openvdb::Vec3SGrid>(*grids, shGridName("sh_blend_from", k), path);
-    }
-    auto position = requireGrid<openvdb::Vec3DGrid>(*grids, "captured_position", path);
-    auto age = requireGrid<openvdb::FloatGrid>(*grids, "age_s", path);
-    auto lifetime = requireGrid<openvdb::FloatGrid>(*grids, "lifetime_s", path);
-    auto blendElapsed = requireGrid<openvdb::FloatGrid>(*grids, "blend_elapsed_s", path);
-    auto presence = requireGrid<openvdb::FloatGrid>(*grids, "presence", path);
-    auto sinceBirth = requireGrid<openvdb::FloatGrid>(*grids, "since_birth_s", path);
-    auto tod = requireGrid<openvdb::FloatGrid>(*grids, "capture_time_of_day_h", path);
-    auto flags = requireGrid<openvdb::Int32Grid>(*grids, "flags", path);
+    const PayloadGrids payload(*grids, path);
 
     std::vector<std::uint8_t> numberSeen(std::size_t(anchors), 0);
-    for (int L = 0; L < levels; ++L) {
+    for (int L = 0; L < m.levels; ++L) {
         const auto levelGrid =
             requireGrid<openvdb::Int32Grid>(*grids, "anchor_index_L" + std::to_string(L), path);
         for (auto it = levelGrid->cbeginValueOn(); it; ++it) {
@@ -792,65 +981,21 @@ void AnchorStore::load(const std::string& path) {
                 throw InputError(path, where + ": not a canonical level-" + std::to_string(L) +
                                            " lattice point");
             }
-            if (number < 0 || number >= anchors || numberSeen[number]) {
+            if (number < 0 || number >= anchors || numberSeen[std::size_t(number)]) {
                 throw InputError(path, where + ": anchor number out of range or repeated");
             }
-            numberSeen[number] = 1;
+            numberSeen[std::size_t(number)] = 1;
             const openvdb::Coord fine(std::int32_t(std::int64_t(key.i) * m.scale[L]), 0,
                                       std::int32_t(std::int64_t(key.k) * m.scale[L]));
-            Anchor a;
+            Anchor a = readAnchor(payload, fine, m.now, m.settings.blendTime_s, where, path);
             a.key = key;
-            for (int k = 0; k < kShCoefficients; ++k) {
-                const auto cv = requireVoxel(*current[k], fine, path);
-                const auto tv = requireVoxel(*target[k], fine, path);
-                const auto fv = requireVoxel(*from[k], fine, path);
-                a.current.c[k] = {cv.x(), cv.y(), cv.z()};
-                a.target.c[k] = {tv.x(), tv.y(), tv.z()};
-                a.blendFrom.c[k] = {fv.x(), fv.y(), fv.z()};
-            }
-            if (!finiteSh(a.current, kMaxCoefficient) || !finiteSh(a.target, kMaxCoefficient) ||
-                !finiteSh(a.blendFrom, kMaxCoefficient)) {
-                throw InputError(path, where + ": coefficients not finite");
-            }
-            const auto p = requireVoxel(*position, fine, path);
-            a.capturedPosition_m = {p.x(), p.y(), p.z()};
-            const double ageV = requireVoxel(*age, fine, path);
-            const double lifeV = requireVoxel(*lifetime, fine, path);
-            const double blendV = requireVoxel(*blendElapsed, fine, path);
-            const double presV = requireVoxel(*presence, fine, path);
-            const double birthV = requireVoxel(*sinceBirth, fine, path);
-            const double todV = requireVoxel(*tod, fine, path);
-            const int flagV = requireVoxel(*flags, fine, path);
-            if (!std::isfinite(p.x()) || !std::isfinite(p.y()) || !std::isfinite(p.z()) ||
-                !std::isfinite(ageV) || !std::isfinite(lifeV) || !(lifeV > 0.0) ||
-                !std::isfinite(blendV) || blendV < 0.0 || !(presV >= 0.0 && presV <= 1.0) ||
-                !std::isfinite(birthV) || !std::isfinite(todV)) {
-                throw InputError(path, where + ": anchor state out of range");
-            }
-            a.captureTime_s = m.now - ageV;
-            a.birth_s = m.now - birthV;
-            a.lifetime_s = lifeV;
-            a.captureTimeOfDay_h = todV;
-            a.blendStart_s = m.now - blendV;
-            const double blend = m.settings.blendTime_s;
-            a.blendProgress = float(blend > 0.0 ? clamp01(blendV / blend) : 1.0);
-            a.presence = float(presV);
-            a.presenceFrom = a.presence;
-            a.presenceChange_s = m.now;
-            a.regenerationRequested = (flagV & kFlagRegenerate) != 0;
-            a.expired = (flagV & kFlagExpired) != 0;
             const std::int32_t slot = m.allocate(a);
             m.grids[L]->tree().setValueOn(openvdb::Coord(key.i, 0, key.k), slot);
         }
     }
     if (m.count != std::size_t(anchors)) {
         throw InputError(path, "metadata 'anchors' is " + std::to_string(anchors) +
-                                   " but the "
-                                   "level grids hold " +
-                                   std::to_string(m.count));
-    }
-    if (current[0]->activeVoxelCount() != openvdb::Index64(anchors)) {
-        throw InputError(path, "payload grids hold values where no anchor is");
+                                   " but the level grids hold " + std::to_string(m.count));
     }
     impl_ = std::move(fresh);
 }

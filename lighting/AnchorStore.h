@@ -66,6 +66,18 @@ struct AnchorStoreSettings {
     int searchCells = 2;
 };
 
+// Spacing of the finest level, s_0 / 3^(levels - 1) [m].
+inline double finestSpacing_m(const AnchorStoreSettings& settings) {
+    double cells = 1.0;
+    for (int L = 1; L < settings.levels; ++L) cells *= 3.0;
+    return settings.coarsestSpacing_m / cells;
+}
+// The smallest finest spacing the settings readers accept [m]. Keys are int32 on the finest
+// lattice, and every point up to 1e8 m from the origin (the largest coordinate a replay may
+// hold) must have one: 1e8 m / (2^31 - 1) = 0.047 m. (OpenVDB transforms also need spacings
+// above ~1.4e-5 m.)
+inline constexpr double kMinFinestSpacing_m = 0.05;
+
 // A lattice point: level and integer coordinates on that level's lattice.
 struct LatticeKey {
     int level = 0;
@@ -178,8 +190,9 @@ class AnchorStore {
     // to `sh` over blendTime_s while fading into the interpolation (presence 0 -> 1), so the
     // insertion changes nothing anywhere at this instant (thesis 7.6). Existing point: its
     // current value blends to `sh` over blendTime_s and its lifetime restarts.
-    // Any coefficient that is NaN, infinite or above kMaxCoefficient, a non-finite position or a
-    // non-positive lifetime rejects the capture (counted in statistics().rejected).
+    // Any coefficient that is NaN, infinite or above kMaxCoefficient, a non-finite position, a
+    // non-positive lifetime or a key outside the lattice's integer range (|i|, |k| x 3^(F-L)
+    // above 2^31 - 1) rejects the capture (counted in statistics().rejected).
     InsertResult insert(const LatticeKey& key, const ShRgb& sh,
                         const glm::dvec3& capturedPosition_m, double lifetime_s,
                         double timeOfDay_h = 0.0);
@@ -250,12 +263,20 @@ class AnchorStore {
     // (voxel (I, 0, K), transform scaled by the finest spacing): Vec3SGrids "sh_current_<k>",
     // "sh_target_<k>", "sh_blend_from_<k>" (k = 0..8, RGB), a Vec3DGrid "captured_position",
     // FloatGrids "age_s", "lifetime_s", "blend_elapsed_s", "presence", "since_birth_s",
-    // "capture_time_of_day_h", Int32Grid "flags". File metadata: format, lattice and clock.
-    // Throws InputError if the file cannot be written.
+    // "capture_time_of_day_h", Int32Grid "flags". File metadata: "format"
+    // ("ambience-anchor-store-v2"), "coarsest_spacing_m", "levels", "anchors" (int32), "clock_s"
+    // and "checksum_crc32": 8 hex digits, the CRC-32 of the whole file with these digits as '0'
+    // (AnchorStoreFile.h). Grids are compressed with OpenVDB's "active values" only (no Blosc or
+    // zlib blocks) and carry no delayed-load metadata; the file is written beside `path` and
+    // renamed over it. Throws InputError if the file cannot be written.
     void save(const std::string& path) const;
     // Replaces the contents by a file written by save(). The file's lattice (s_0, levels) must
     // equal this store's; ages are kept relative to the current clock. Throws InputError (and
-    // leaves the store unchanged) for a missing, unreadable or inconsistent file.
+    // leaves the store and the file unchanged) for a missing, unreadable, corrupt, truncated,
+    // oversized or inconsistent file: the file is read whole (at most kMaxAnchorStoreFileBytes),
+    // its checksum verified and its OpenVDB structure walked (AnchorStoreFile.h) before OpenVDB
+    // parses it from memory with delayed loading off; then every grid, count and value is
+    // checked (coefficients finite and within kMaxCoefficient, so no NaN enters the store).
     void load(const std::string& path);
 
   private:

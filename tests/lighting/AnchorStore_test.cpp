@@ -11,12 +11,16 @@
 #include <iostream>
 #include <limits>
 #include <random>
+#include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
 #include <openvdb/io/File.h>
+#include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
+#include <openvdb/tools/Prune.h>
 
+#include "lighting/AnchorStoreFile.h"
 #include "world/Error.h"
 
 namespace amb {
@@ -159,6 +163,27 @@ TEST(AnchorStore, NanAndInfNeverEnter) {
 }
 
 // ---- Lifetime, expiry, pruning ----------------------------------------------------------------
+
+// A key beyond the lattice's int32 range on the finest level (|i| x 3^(F-L) > 2^31 - 1) is a
+// capture the store cannot number: refused and counted, never an abort (it used to be an
+// AMB_CHECK, reached from far-off cameras with a fine lattice).
+TEST(AnchorStore, KeysOutsideTheLatticeRangeAreRejected) {
+    AnchorStore store;  // 5 levels: level 0 keys are multiplied by 81 on the finest lattice
+    const std::int32_t beyond = std::int32_t(2147483647LL / 81 + 1);
+    for (const LatticeKey& k :
+         {LatticeKey{0, beyond, 0}, LatticeKey{0, 0, -beyond}, LatticeKey{2, 2147483647, 5}}) {
+        EXPECT_EQ(store.insert(k, makeSh(1.0f), {0, 0, 0}, 10.0),
+                  AnchorStore::InsertResult::Rejected);
+        EXPECT_EQ(store.find(k), nullptr);
+    }
+    EXPECT_EQ(store.size(), 0u);
+    EXPECT_EQ(store.statistics().rejected, 3);
+    // The last representable point still works.
+    const LatticeKey edge{0, beyond - 1, 0};
+    EXPECT_EQ(store.insert(edge, makeSh(1.0f), {0, 0, 0}, 10.0),
+              AnchorStore::InsertResult::Inserted);
+    EXPECT_NE(store.find(edge), nullptr);
+}
 
 TEST(AnchorStoreLifetime, FormulaAndClamps) {
     AnchorStoreSettings s;           // 0.0349 rad, [5, 600] s
@@ -498,8 +523,12 @@ TEST(AnchorStoreFile, StandardOpenVdbReadsTheFile) {
         }
         return nullptr;
     };
-    EXPECT_EQ(meta->metaValue<std::string>("format"), "ambience-anchor-store-v1");
+    EXPECT_EQ(meta->metaValue<std::string>("format"), "ambience-anchor-store-v2");
     EXPECT_EQ(meta->metaValue<std::int32_t>("anchors"), 3);
+    // The checksum is plain metadata too: 8 hex digits.
+    const std::string checksum = meta->metaValue<std::string>("checksum_crc32");
+    EXPECT_EQ(checksum.size(), 8u);
+    EXPECT_EQ(checksum.find_first_not_of("0123456789abcdef"), std::string::npos) << checksum;
     // One Int32Grid per level; voxel (i, 0, k) of level L, index-space transform scaled by s_L.
     for (int L = 0; L < 5; ++L) {
         auto g =
@@ -534,19 +563,25 @@ TEST(AnchorStoreFile, InconsistentContentsAreInputErrors) {
     const std::string good = tempPath("AnchorStore_consistent.vdb");
     store.save(good);
     openvdb::initialize();
-    // Rewrites the good file after `edit` changed its grids.
+    // Rewrites the good file after `edit` changed its grids (and `editMeta` its metadata) the
+    // way save() writes (stream layout, mask compression only, sealed with a fresh checksum),
+    // so that only the edit is wrong.
     auto variant = [&](const std::string& name,
-                       const std::function<void(openvdb::GridPtrVec&)>& edit) {
+                       const std::function<void(openvdb::GridPtrVec&)>& edit,
+                       const std::function<void(openvdb::MetaMap&)>& editMeta = {}) {
         openvdb::io::File in(good);
         in.open();
         openvdb::GridPtrVecPtr grids = in.getGrids();
         openvdb::MetaMap::Ptr meta = in.getMetadata();
         in.close();
         edit(*grids);
+        if (editMeta) editMeta(*meta);
+        std::ostringstream os(std::ios::binary);
+        openvdb::io::Stream stream(os);
+        stream.setCompression(openvdb::io::COMPRESS_ACTIVE_MASK);
+        stream.write(*grids, *meta);
         const std::string path = tempPath(name);
-        openvdb::io::File out(path);
-        out.write(*grids, *meta);
-        out.close();
+        std::ofstream(path, std::ios::binary) << sealAnchorStoreFile(os.str(), name);
         return path;
     };
     auto grid = [](openvdb::GridPtrVec& grids, const std::string& name) {
@@ -567,6 +602,7 @@ TEST(AnchorStoreFile, InconsistentContentsAreInputErrors) {
             level4->tree().setValueOff(openvdb::Coord(7, 0, -2));
             level4->tree().setValueOn(openvdb::Coord(3, 0, 3),
                                       n);  // (3, 3) is level-3 point (1, 1)
+            openvdb::tools::pruneInactive(level4->tree());  // as save() has no empty leaves
         });
     const std::string missing = variant("AnchorStore_missing.vdb", [&](openvdb::GridPtrVec& g) {
         g.erase(std::remove_if(g.begin(), g.end(),
@@ -580,16 +616,52 @@ TEST(AnchorStoreFile, InconsistentContentsAreInputErrors) {
             if (p->getName() == "flags") p = replacement;
         }
     });
-    for (const std::string& path : {nan, nonCanonical, missing, wrongType}) {
+    // Values beyond the store's own limits, one field at a time.
+    auto setVoxel = [&](const std::string& file, const std::string& gridName, auto value) {
+        return variant(file, [=](openvdb::GridPtrVec& g) {
+            using GridT =
+                openvdb::Grid<typename openvdb::tree::Tree4<decltype(value), 5, 4, 3>::Type>;
+            openvdb::gridPtrCast<GridT>(grid(g, gridName))
+                ->tree()
+                .setValueOn(openvdb::Coord(7, 0, -2), value);
+        });
+    };
+    const std::string huge =
+        setVoxel("AnchorStore_huge.vdb", "sh_target_0", openvdb::Vec3s(1e30f, 0.0f, 0.0f));
+    const std::string negativeAge = setVoxel("AnchorStore_negage.vdb", "age_s", -1.0f);
+    const std::string zeroLife = setVoxel("AnchorStore_zerolife.vdb", "lifetime_s", 0.0f);
+    const std::string presence = setVoxel("AnchorStore_presence.vdb", "presence", 1.5f);
+    const std::string flags = setVoxel("AnchorStore_flags.vdb", "flags", std::int32_t(8));
+    const std::string infPosition =
+        setVoxel("AnchorStore_infpos.vdb", "captured_position",
+                 openvdb::Vec3d(std::numeric_limits<double>::infinity(), 0.0, 0.0));
+    // A payload value where no anchor is, and an anchor count the grids do not hold.
+    const std::string strayAt = variant("AnchorStore_strayat.vdb", [&](openvdb::GridPtrVec& g) {
+        openvdb::gridPtrCast<openvdb::FloatGrid>(grid(g, "since_birth_s"))
+            ->tree()
+            .setValueOn(openvdb::Coord(30, 0, 30), 1.0f);
+    });
+    const std::string count = variant(
+        "AnchorStore_count.vdb", [](openvdb::GridPtrVec&) {},
+        [](openvdb::MetaMap& meta) {
+            meta.removeMeta("anchors");
+            meta.insertMeta("anchors", openvdb::Int32Metadata(std::numeric_limits<int>::max()));
+        });
+    // Control: the same path with no edit loads.
+    const std::string unchanged = variant("AnchorStore_unchanged.vdb", [](openvdb::GridPtrVec&) {});
+    for (const std::string& path : {nan, nonCanonical, missing, wrongType, huge, negativeAge,
+                                    zeroLife, presence, flags, infPosition, strayAt, count}) {
         AnchorStore target;
         EXPECT_THROW(target.load(path), InputError) << path;
         EXPECT_EQ(target.size(), 0u);
         std::remove(path.c_str());
     }
-    AnchorStore target;
-    EXPECT_NO_THROW(target.load(good));
-    EXPECT_EQ(target.size(), 2u);
-    std::remove(good.c_str());
+    for (const std::string& path : {unchanged, good}) {
+        AnchorStore target;
+        EXPECT_NO_THROW(target.load(path)) << path;
+        EXPECT_EQ(target.size(), 2u);
+        std::remove(path.c_str());
+    }
 }
 
 }  // namespace
