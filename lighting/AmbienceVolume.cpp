@@ -43,57 +43,61 @@ double dayDifference_h(double a, double b) {
 
 AmbienceVolumeSettings ambienceSettingsFromJson(const std::string& jsonText,
                                                 const std::string& where) {
-    nlohmann::json root;
-    try {
-        root = nlohmann::json::parse(jsonText);
-    } catch (const nlohmann::json::exception& e) {
-        throw InputError(where, std::string("not valid JSON: ") + e.what());
-    }
     constexpr double kBig = 1e9;
     AmbienceVolumeSettings s;
-    JsonFields f(root, where);
-    f.object("store", [&](JsonFields& o) {
-        AnchorStoreSettings& t = s.store;
-        o.number("coarsestSpacing_m", t.coarsestSpacing_m, 1e-3, 1e6);
-        o.integer("levels", t.levels, 1, kMaxAnchorLevels);
-        o.number("blendTime_s", t.blendTime_s, 0.0, 3600.0);
-        o.number("allowedSunAngle_rad", t.allowedSunAngle_rad, 1e-6, kPi);
-        o.number("minLifetime_s", t.minLifetime_s, 1e-3, kBig);
-        o.number("maxLifetime_s", t.maxLifetime_s, 1e-3, kBig);
-        o.number("regenerateFraction", t.regenerateFraction, 0.0, 1.0);
-        o.integer("searchCells", t.searchCells, 1, 16);
+    readJsonSettings(jsonText, where, [&](JsonFields& f) {
+        f.object("store", [&](JsonFields& o) {
+            AnchorStoreSettings& t = s.store;
+            o.number("coarsestSpacing_m", t.coarsestSpacing_m, kMinFinestSpacing_m, 1e6);
+            o.integer("levels", t.levels, 1, kMaxAnchorLevels);
+            o.number("blendTime_s", t.blendTime_s, 0.0, 3600.0);
+            o.number("allowedSunAngle_rad", t.allowedSunAngle_rad, 1e-6, kPi);
+            o.number("minLifetime_s", t.minLifetime_s, 1e-3, kBig);
+            o.number("maxLifetime_s", t.maxLifetime_s, 1e-3, kBig);
+            o.number("regenerateFraction", t.regenerateFraction, 0.0, 1.0);
+            o.integer("searchCells", t.searchCells, 1, 16);
+        });
+        f.object("scheduler", [&](JsonFields& o) {
+            ProbeSchedulerSettings& t = s.scheduler;
+            o.number("velocityTimeConstant_s", t.velocityTimeConstant_s, 0.0, 60.0);
+            o.number("horizon_s", t.horizon_s, 0.0, 60.0);
+            o.number("pathStep_s", t.pathStep_s, 0.01, 60.0);
+            o.number("historyLength_s", t.historyLength_s, 0.0, 600.0);
+            o.number("roadSnap_m", t.roadSnap_m, 0.0, 1000.0);
+            o.number("roadAlignment", t.roadAlignment, 0.0, 1.0);
+            o.number("teleportDistance_m", t.teleportDistance_m, 0.0, kBig);
+            o.number("corridorCells", t.corridorCells, 0.01, 100.0);
+            o.integer("maxLevel", t.maxLevel, 0, kMaxAnchorLevels - 1);
+            o.number("finestRingCells", t.finestRingCells, 0.0, 100.0);
+            o.number("coarseRingCells", t.coarseRingCells, 0.0, 100.0);
+            o.integer("maxWiden", t.maxWiden, 0, 8);
+            o.number("minReachSpeed_mps", t.minReachSpeed_mps, 1e-3, 1e6);
+            o.number("gapBonus_s", t.gapBonus_s, -1e3, 1e3);
+            o.number("staleBias_s", t.staleBias_s, -1e3, 1e3);
+        });
+        f.integer("facesPerFrame", s.facesPerFrame, 1, 64);
+        f.number("nominalFrameTime_s", s.nominalFrameTime_s, 1e-4, 10.0);
+        f.number("defaultTimeRate_hPerS", s.defaultTimeRate_hPerS, -10.0, 10.0);
+        f.number("timeJump_h", s.timeJump_h, 0.0, 12.0);
+        f.number("sunThreshold", s.sunThreshold, 0.0, std::numeric_limits<double>::infinity());
+        f.integer("fallbackFaceSize", s.fallbackFaceSize, 1, 256);
+        f.number("fallbackRefresh_h", s.fallbackRefresh_h, 0.0, 24.0);
+        f.number("asideFraction", s.asideFraction, 0.0, 10.0);
+        f.number("maxAside_m", s.maxAside_m, 0.0, 1000.0);
+        f.boolean("relightBySkyLevel", s.relightBySkyLevel);
     });
-    f.object("scheduler", [&](JsonFields& o) {
-        ProbeSchedulerSettings& t = s.scheduler;
-        o.number("velocityTimeConstant_s", t.velocityTimeConstant_s, 0.0, 60.0);
-        o.number("horizon_s", t.horizon_s, 0.0, 60.0);
-        o.number("pathStep_s", t.pathStep_s, 0.01, 60.0);
-        o.number("historyLength_s", t.historyLength_s, 0.0, 600.0);
-        o.number("roadSnap_m", t.roadSnap_m, 0.0, 1000.0);
-        o.number("roadAlignment", t.roadAlignment, 0.0, 1.0);
-        o.number("teleportDistance_m", t.teleportDistance_m, 0.0, kBig);
-        o.number("corridorCells", t.corridorCells, 0.01, 100.0);
-        o.integer("maxLevel", t.maxLevel, 0, kMaxAnchorLevels - 1);
-        o.number("finestRingCells", t.finestRingCells, 0.0, 100.0);
-        o.number("coarseRingCells", t.coarseRingCells, 0.0, 100.0);
-        o.integer("maxWiden", t.maxWiden, 0, 8);
-        o.number("minReachSpeed_mps", t.minReachSpeed_mps, 1e-3, 1e6);
-        o.number("gapBonus_s", t.gapBonus_s, -1e3, 1e3);
-        o.number("staleBias_s", t.staleBias_s, -1e3, 1e3);
-    });
-    f.integer("facesPerFrame", s.facesPerFrame, 1, 64);
-    f.number("nominalFrameTime_s", s.nominalFrameTime_s, 1e-4, 10.0);
-    f.number("defaultTimeRate_hPerS", s.defaultTimeRate_hPerS, -10.0, 10.0);
-    f.number("timeJump_h", s.timeJump_h, 0.0, 12.0);
-    f.number("sunThreshold", s.sunThreshold, 0.0, std::numeric_limits<double>::infinity());
-    f.integer("fallbackFaceSize", s.fallbackFaceSize, 1, 256);
-    f.number("fallbackRefresh_h", s.fallbackRefresh_h, 0.0, 24.0);
-    f.number("asideFraction", s.asideFraction, 0.0, 10.0);
-    f.number("maxAside_m", s.maxAside_m, 0.0, 1000.0);
-    f.boolean("relightBySkyLevel", s.relightBySkyLevel);
-    f.finish();
     if (s.store.minLifetime_s > s.store.maxLifetime_s) {
         throw InputError(where, "'store': minLifetime_s exceeds maxLifetime_s");
+    }
+    // Every point a replay may hold (|x|, |z| up to 1e8 m) must have an integer key on the
+    // finest lattice (AnchorStore.h "Lattice").
+    // (With a relative margin, so that 4.05 m over 5 levels, 0.05 m up to rounding, passes.)
+    const double finest_m = finestSpacing_m(s.store);
+    if (!(finest_m >= kMinFinestSpacing_m * (1.0 - 1e-9))) {
+        throw InputError(where,
+                         "'store': the finest spacing coarsestSpacing_m / 3^(levels - 1) is " +
+                             jsonNumber(finest_m) + " m, below " + jsonNumber(kMinFinestSpacing_m) +
+                             " m (raise coarsestSpacing_m or lower levels)");
     }
     return s;
 }

@@ -54,6 +54,9 @@ constexpr double kFallbackRefresh_h = 1.0 / 60.0;
 // far out get the fallback).
 constexpr double kMaxCell = 1.0e15;
 
+// objectRange_m / objectSize_m at most: 64 scans 129^2 objects per probe choice.
+constexpr double kMaxObjectRangeCells = 64.0;
+
 bool finite(const glm::dvec3& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
@@ -133,29 +136,29 @@ bool bilinear(double x_m, double z_m, double spacing_m, const Lookup& lookup, Sh
 // ---- Settings from JSON -------------------------------------------------------------------------
 
 BaselineSettings baselineSettingsFromJson(const std::string& jsonText, const std::string& where) {
-    nlohmann::json root;
-    try {
-        root = nlohmann::json::parse(jsonText);
-    } catch (const nlohmann::json::exception& e) {
-        throw InputError(where, std::string("not valid JSON: ") + e.what());
-    }
     constexpr double kBig = 1e9;
     BaselineSettings s;
-    JsonFields f(root, where);
-    f.integer("facesPerFrame", s.facesPerFrame, 1, 64);
-    f.number("sunThreshold", s.sunThreshold, 0.0, std::numeric_limits<double>::infinity());
-    f.number("maxAside_m", s.maxAside_m, 0.0, 1000.0);
-    f.number("defaultTimeRate_hPerS", s.defaultTimeRate_hPerS, -10.0, 10.0);
-    f.number("timeJump_h", s.timeJump_h, 0.0, 12.0);
-    f.number("teleportDistance_m", s.teleportDistance_m, 0.0, kBig);
-    f.integer("gridSize", s.gridSize, 2, 256);
-    f.number("gridSpacing_m", s.gridSpacing_m, 1e-3, 1e6);
-    f.number("hysteresis", s.hysteresis, 0.0, 1.0);
-    f.number("cacheSpacing_m", s.cacheSpacing_m, 1e-3, 1e6);
-    f.number("unusedTimeout_s", s.unusedTimeout_s, 1e-3, kBig);
-    f.number("objectSize_m", s.objectSize_m, 1e-3, 1e6);
-    f.number("objectRange_m", s.objectRange_m, 0.0, 1e6);
-    f.finish();
+    readJsonSettings(jsonText, where, [&](JsonFields& f) {
+        f.integer("facesPerFrame", s.facesPerFrame, 1, 64);
+        f.number("sunThreshold", s.sunThreshold, 0.0, std::numeric_limits<double>::infinity());
+        f.number("maxAside_m", s.maxAside_m, 0.0, 1000.0);
+        f.number("defaultTimeRate_hPerS", s.defaultTimeRate_hPerS, -10.0, 10.0);
+        f.number("timeJump_h", s.timeJump_h, 0.0, 12.0);
+        f.number("teleportDistance_m", s.teleportDistance_m, 0.0, kBig);
+        f.integer("gridSize", s.gridSize, 2, 256);
+        f.number("gridSpacing_m", s.gridSpacing_m, 1e-3, 1e6);
+        f.number("hysteresis", s.hysteresis, 0.0, 1.0);
+        f.number("cacheSpacing_m", s.cacheSpacing_m, 1e-3, 1e6);
+        f.number("unusedTimeout_s", s.unusedTimeout_s, 1e-3, kBig);
+        f.number("objectSize_m", s.objectSize_m, 1e-3, 1e6);
+        f.number("objectRange_m", s.objectRange_m, 0.0, 1e6);
+    });
+    // Each choice of the next object scans the (2 range / size + 1)^2 objects around the camera.
+    if (s.objectRange_m > kMaxObjectRangeCells * s.objectSize_m) {
+        throw InputError(
+            where, "'objectRange_m' may be at most " + std::to_string(int(kMaxObjectRangeCells)) +
+                       " x objectSize_m (each probe choice scans the objects in range)");
+    }
     return s;
 }
 

@@ -80,6 +80,7 @@ struct BaselineSettings {
     // PerObjectMethod.
     double objectSize_m = 256.0;   // objects are terrain squares of this size [m]
     double objectRange_m = 400.0;  // objects whose centre lies this close to the camera [m]
+                                   // (at most 64 x objectSize_m)
 };
 
 // Parses settings from JSON text: an object whose keys are the field names above; missing keys
