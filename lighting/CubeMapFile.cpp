@@ -2,6 +2,7 @@
 #include "lighting/CubeMapFile.h"
 
 #include <cstddef>
+#include <cstdint>
 
 #include <OpenImageIO/imageio.h>
 
@@ -10,7 +11,25 @@
 
 namespace amb {
 
+namespace {
+
+// OpenImageIO refuses, before decoding, any image whose uncompressed size exceeds its global
+// "limits:imagesize_MB": lowered (never raised) to what the largest cube map needs, so a decoder
+// never allocates for a header's absurd size either.
+void limitImageSize() {
+    const int needed_MB =
+        int(std::size_t(kMaxCubeMapFace) * kMaxCubeMapFace * kCubeFaces * 4 * 4 >> 20) + 1;
+    int current_MB = 0;
+    if (!OIIO::getattribute("limits:imagesize_MB", current_MB) || current_MB <= 0 ||
+        current_MB > needed_MB) {
+        OIIO::attribute("limits:imagesize_MB", needed_MB);
+    }
+}
+
+}  // namespace
+
 CubeMapImage readCubeMap(const std::string& path) {
+    limitImageSize();
     // Colour is radiance: keep it as stored, never multiplied by an alpha channel.
     OIIO::ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha", 1);
@@ -18,13 +37,16 @@ CubeMapImage readCubeMap(const std::string& path) {
     if (!in) throw InputError(path, "cannot read the cube map: " + OIIO::geterror());
     const OIIO::ImageSpec& spec = in->spec();
     if (spec.depth > 1) throw InputError(path, "a cube map must be a 2-D image, not a volume");
-    if (spec.width < 1 || spec.height != kCubeFaces * spec.width) {
+    // The header's size decides the allocation below: checked against the limit first.
+    if (spec.width < 1 || spec.width > kMaxCubeMapFace ||
+        std::int64_t(spec.height) != std::int64_t(kCubeFaces) * spec.width) {
         throw InputError(path,
-                         "a cube map must be N wide and 6N high (faces stacked vertically)"
-                         ", got " +
+                         "a cube map must be N wide and 6N high (faces stacked vertically, "
+                         "N from 1 to " +
+                             std::to_string(kMaxCubeMapFace) + "), got " +
                              std::to_string(spec.width) + " x " + std::to_string(spec.height));
     }
-    if (spec.nchannels != 1 && spec.nchannels < 3) {
+    if ((spec.nchannels != 1 && spec.nchannels < 3) || spec.nchannels > kMaxCubeMapChannels) {
         throw InputError(path, "a cube map needs 3 channels (RGB) or 1 (grey), got " +
                                    std::to_string(spec.nchannels));
     }

@@ -16,8 +16,15 @@ struct CubeMapImage {
     std::vector<float> rgb;  // 6 N^2 texels: face-major, row-major, 3 floats per texel
 };
 
+// Largest face a cube-map file may have (2048: 6 x 2048^2 RGB floats, 288 MB) and most channels.
+inline constexpr int kMaxCubeMapFace = 2048;
+inline constexpr int kMaxCubeMapChannels = 16;
+
 // Reads a vertical-strip cube map. Throws InputError naming the file and the problem (cannot be
-// opened or decoded, height != 6 x width, fewer than 3 channels and not grey).
+// opened or decoded, height != 6 x width, width above kMaxCubeMapFace — refused from the header,
+// before anything is allocated —, fewer than 3 channels and not grey, more than
+// kMaxCubeMapChannels). Sets OpenImageIO's global "limits:imagesize_MB" to at most what the
+// largest cube map needs.
 CubeMapImage readCubeMap(const std::string& path);
 
 // Writes `rgb` (layout as CubeMapImage::rgb, AMB_CHECKed size) as a vertical-strip image of

@@ -1,7 +1,10 @@
 // CubeMapFile_test.cpp — vertical-strip cube-map files: round trip, layout on disk (checked with
-// OpenImageIO directly), 8-bit and grey input, and bad files named in the error.
+// OpenImageIO directly), 8-bit and grey input, bad files named in the error, and tiny files whose
+// headers declare huge images refused before anything is allocated.
 #include "lighting/CubeMapFile.h"
 
+#include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -12,6 +15,7 @@
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
+#include <boost/crc.hpp>
 
 #include "world/Error.h"
 
@@ -147,6 +151,88 @@ TEST(CubeMapFile, BadFilesNameFileAndProblem) {
 
     const std::string unwritable = tempPath("no_such_dir") + "/map.exr";
     EXPECT_THROW(writeCubeMap(unwritable, 1, std::vector<float>(18, 1.0f)), InputError);
+}
+
+// A PNG of `width` x `height` 8-bit RGB whose only image data is an empty deflate stream: the
+// header (IHDR, with its CRC) is valid, the pixels are not there.
+std::string pngHeaderOnly(std::uint32_t width, std::uint32_t height) {
+    auto be32 = [](std::string& s, std::uint32_t v) {
+        for (int shift = 24; shift >= 0; shift -= 8) s.push_back(char((v >> shift) & 0xFF));
+    };
+    auto chunk = [&](std::string& file, const std::string& type, const std::string& data) {
+        be32(file, std::uint32_t(data.size()));
+        boost::crc_32_type crc;
+        crc.process_bytes(type.data(), type.size());
+        crc.process_bytes(data.data(), data.size());
+        file += type + data;
+        be32(file, crc.checksum());
+    };
+    std::string ihdr;
+    be32(ihdr, width);
+    be32(ihdr, height);
+    ihdr +=
+        std::string("\x08\x02\x00\x00\x00", 5);  // 8 bits, RGB, deflate, no filter, no interlace
+    std::string file("\x89PNG\r\n\x1a\n", 8);
+    chunk(file, "IHDR", ihdr);
+    chunk(file, "IDAT", std::string("\x78\x9c\x03\x00\x00\x00\x00\x01", 8));
+    chunk(file, "IEND", "");
+    return file;
+}
+
+// A 65-byte PNG declaring 100000 x 600000 pixels (1.4e11 texels) and one declaring 8000 x 48000
+// (4.6 GB of floats) are refused from their headers with InputError naming the size, quickly
+// and without allocating (before, the first gave bad_alloc and the second allocated 4.6 GB);
+// 2049 x 12294, one above the limit, too. The same for a Radiance .hdr header.
+TEST(CubeMapFile, HugeDeclaredSizesAreRefusedFromTheHeader) {
+    struct Case {
+        std::uint32_t w, h;
+    };
+    for (const Case c : {Case{100000, 600000}, Case{8000, 48000}, Case{2049, 12294}}) {
+        const std::string png = tempPath("huge.png");
+        const std::string bytes = pngHeaderOnly(c.w, c.h);
+        EXPECT_LT(bytes.size(), 100u);
+        std::ofstream(png, std::ios::binary) << bytes;
+        const auto t0 = std::chrono::steady_clock::now();
+        try {
+            readCubeMap(png);
+            ADD_FAILURE() << "no error for " << c.w << " x " << c.h;
+        } catch (const InputError& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find(std::to_string(c.w) + " x " + std::to_string(c.h)),
+                      std::string::npos)
+                << what;
+            EXPECT_NE(what.find("2048"), std::string::npos) << what;
+        }
+        EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(),
+                  2.0);
+        std::filesystem::remove(png);
+    }
+    const std::string hdr = tempPath("huge.hdr");
+    std::ofstream(hdr, std::ios::binary)
+        << "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 600000 +X 100000\n"
+        << std::string(16, '\0');
+    EXPECT_THROW(readCubeMap(hdr), InputError);
+    std::filesystem::remove(hdr);
+}
+
+// The limit is on the face: a 2048-wide strip would be accepted (checked from the header of a
+// 2048 x 12288 PNG, which then fails only because its pixels are missing).
+TEST(CubeMapFile, LargestFaceIsAcceptedByTheSizeCheck) {
+    const std::string png = tempPath("largest.png");
+    std::ofstream(png, std::ios::binary) << pngHeaderOnly(2048, 12288);
+    try {
+        readCubeMap(png);
+        ADD_FAILURE() << "a PNG without pixels was read";
+    } catch (const InputError& e) {
+        const std::string what = e.what();
+        EXPECT_EQ(what.find("6N high"), std::string::npos) << what;
+        EXPECT_NE(what.find("cannot decode"), std::string::npos) << what;
+    }
+    std::filesystem::remove(png);
+    int limit_MB = 0;
+    ASSERT_TRUE(OIIO::getattribute("limits:imagesize_MB", limit_MB));
+    EXPECT_GT(limit_MB, 0);
+    EXPECT_LE(limit_MB, 400);  // 6 x 2048^2 x 4 channels x 4 bytes = 384 MB, plus one
 }
 
 }  // namespace
