@@ -3,7 +3,9 @@
 #include "lighting/Metrics.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
+#include <climits>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -16,6 +18,7 @@
 #include "lighting/CubeMapProjector.h"
 #include "lighting/ProbeEnvironment.h"
 #include "world/Error.h"
+#include "world/TextFile.h"
 
 namespace amb {
 
@@ -297,42 +300,105 @@ void ErrorMeter::saveOracle(const std::string& path, const std::string& signatur
 }
 
 void ErrorMeter::loadOracle(const std::string& path, const std::string& signature) {
-    std::ifstream in(path);
-    if (!in) throw InputError(path, "cannot open the oracle file");
+    loadOracleText(readTextFile(path, "oracle file", kMaxOracleFileBytes), path, signature);
+}
+
+namespace {
+
+const nlohmann::json& requireField(const nlohmann::json& object, const char* key,
+                                   const std::string& where) {
+    const auto it = object.find(key);
+    if (it == object.end()) throw InputError(where, std::string("'") + key + "' is missing");
+    return *it;
+}
+
+double oracleNumber(const nlohmann::json& v, const std::string& where, const std::string& field) {
+    if (!v.is_number()) throw InputError(where, field + ": expected a number");
+    const double x = v.get<double>();
+    if (!std::isfinite(x)) throw InputError(where, field + ": not finite");
+    return x;
+}
+
+// One cache entry: {"frame": int >= 0, "x": number, "z": number, "sh": 27 numbers}.
+std::pair<int, std::array<double, 2>> oracleKey(const nlohmann::json& item,
+                                                const std::string& where) {
+    if (!item.is_object()) throw InputError(where, "expected an object");
+    const nlohmann::json& frame = requireField(item, "frame", where);
+    if (!frame.is_number_integer() ||
+        (frame.is_number_unsigned()
+             ? frame.get<std::uint64_t>() > std::uint64_t(INT_MAX)
+             : (frame.get<std::int64_t>() < 0 || frame.get<std::int64_t>() > INT_MAX))) {
+        throw InputError(where, "frame: expected an integer from 0 to " + std::to_string(INT_MAX));
+    }
+    return {int(frame.get<std::int64_t>()),
+            {oracleNumber(requireField(item, "x", where), where, "x"),
+             oracleNumber(requireField(item, "z", where), where, "z")}};
+}
+
+ShRgb oracleCoefficients(const nlohmann::json& item, const std::string& where) {
+    const nlohmann::json& coefficients = requireField(item, "sh", where);
+    if (!coefficients.is_array() || coefficients.size() != 3 * kShCoefficients)
+        throw InputError(where, "sh: expected 27 numbers");
+    ShRgb sh;
+    for (int k = 0; k < kShCoefficients; ++k) {
+        for (int c = 0; c < 3; ++c) {
+            const std::string field = "sh[" + std::to_string(3 * k + c) + "]";
+            const double v = oracleNumber(coefficients[std::size_t(3 * k + c)], where, field);
+            if (!(std::fabs(v) <= ErrorMeter::kMaxOracleCoefficient)) {
+                throw InputError(where, field + ": " + std::to_string(v) + " is beyond +-" +
+                                            std::to_string(ErrorMeter::kMaxOracleCoefficient));
+            }
+            sh.c[k][c] = float(v);
+        }
+    }
+    return sh;
+}
+
+}  // namespace
+
+void ErrorMeter::loadOracleText(const std::string& text, const std::string& where,
+                                const std::string& signature) {
     nlohmann::json j;
     try {
-        j = nlohmann::json::parse(in);
+        j = nlohmann::json::parse(text);
     } catch (const nlohmann::json::exception& e) {
-        throw InputError(path, std::string("malformed oracle file: ") + e.what());
+        throw InputError(where, std::string("malformed oracle file: ") + e.what());
     }
-    if (!j.is_object() || j.value("format", "") != "ambience-oracle" || j.value("version", 0) != 1)
-        throw InputError(path, "not an ambience oracle file (format/version)");
-    if (j.value("signature", "") != signature)
-        throw InputError(path, "oracle made for other settings: '" + j.value("signature", "") +
-                                   "', this run is '" + signature + "'");
+    try {
+        parseOracle(j, where, signature);
+    } catch (const nlohmann::json::exception& e) {  // not expected: every access is checked
+        throw InputError(where, std::string("malformed oracle file: ") + e.what());
+    }
+}
+
+void ErrorMeter::parseOracle(const nlohmann::json& j, const std::string& where,
+                             const std::string& signature) {
+    const auto stringField = [&](const char* key) -> std::string {
+        const auto it = j.find(key);
+        if (it == j.end() || !it->is_string())
+            throw InputError(where, std::string("'") + key + "' must be a string");
+        return it->get<std::string>();
+    };
+    if (!j.is_object()) throw InputError(where, "not an ambience oracle file (not a JSON object)");
+    const auto version = j.find("version");
+    if (stringField("format") != "ambience-oracle" || version == j.end() ||
+        !version->is_number_integer() || version->get<std::int64_t>() != 1) {
+        throw InputError(where, "not an ambience oracle file (format/version)");
+    }
+    const std::string fileSignature = stringField("signature");
+    if (fileSignature != signature) {
+        throw InputError(where, "oracle made for other settings: '" + fileSignature +
+                                    "', this run is '" + signature + "'");
+    }
+    const nlohmann::json& entries = requireField(j, "entries", where);
+    if (!entries.is_array()) throw InputError(where, "'entries' must be an array");
     std::map<Key, ShRgb> loaded;
-    const auto& entries = j.at("entries");
-    if (!entries.is_array()) throw InputError(path, "entries: expected an array");
     for (std::size_t e = 0; e < entries.size(); ++e) {
-        const auto& item = entries[e];
-        const std::string where = path + ": entries[" + std::to_string(e) + "]";
-        try {
-            Key key{item.at("frame").get<int>(), item.at("x").get<double>(),
-                    item.at("z").get<double>()};
-            const auto& coefficients = item.at("sh");
-            if (!coefficients.is_array() || coefficients.size() != 27)
-                throw InputError(where, "sh: expected 27 numbers");
-            ShRgb sh;
-            for (int k = 0; k < kShCoefficients; ++k)
-                for (int c = 0; c < 3; ++c) {
-                    const double v = coefficients[std::size_t(3 * k + c)].get<double>();
-                    if (!std::isfinite(v)) throw InputError(where, "sh: non-finite value");
-                    sh.c[k][c] = float(v);
-                }
-            loaded[key] = sh;
-        } catch (const nlohmann::json::exception& ex) {
-            throw InputError(where, ex.what());
-        }
+        const std::string at = where + ": entries[" + std::to_string(e) + "]";
+        const auto [frame, xz] = oracleKey(entries[e], at);
+        const Key key{frame, xz[0], xz[1]};
+        if (!loaded.emplace(key, oracleCoefficients(entries[e], at)).second)
+            throw InputError(at, "repeats an earlier entry's frame, x and z");
     }
     oracleCache_ = std::move(loaded);
 }

@@ -49,6 +49,7 @@
 #include <vector>
 
 #include <glm/vec3.hpp>
+#include <nlohmann/json_fwd.hpp>
 
 #include "lighting/SH.h"
 
@@ -140,15 +141,28 @@ class ErrorMeter {
     std::int64_t oracleCaptures() const { return oracleCaptures_; }
     std::int64_t oracleCacheHits() const { return oracleHits_; }
 
-    // Oracle cache: JSON keyed by (frame index, x, z) with the settings it was made with; load
-    // throws InputError(path, ...) for a malformed file or one made with other settings
-    // (`signature` names the replay, stride and capture settings).
+    // Oracle cache: JSON keyed by (frame index, x, z) with the settings it was made with:
+    //   {"format": "ambience-oracle", "version": 1, "signature": string,
+    //    "entries": [{"frame": int >= 0, "x": number, "z": number, "sh": [27 numbers]}, ...]}
+    // (`signature` names the replay, stride and capture settings). loadOracle reads the file
+    // (at most kMaxOracleFileBytes, world/TextFile.h) and parses it with loadOracleText, which
+    // throws InputError(where, ...) naming the field for anything else: malformed JSON, a wrong
+    // type anywhere, a missing field, other settings, a repeated entry, or a coefficient beyond
+    // +-kMaxOracleCoefficient. Only InputError, and the cache is unchanged on error.
     void loadOracle(const std::string& path, const std::string& signature);
+    void loadOracleText(const std::string& text, const std::string& where,
+                        const std::string& signature);
+    // Largest oracle coefficient accepted: above anything a capture gives (the sun's radiance,
+    // 2e7, over the whole sphere is ~7e7 per coefficient), far inside float, and small enough
+    // that the error's squared sums stay finite.
+    static constexpr double kMaxOracleCoefficient = 1.0e9;
     void saveOracle(const std::string& path, const std::string& signature) const;
 
   private:
     ShRgb oracle(int frameIndex, double x_m, double z_m, double timeOfDay_h);
     void movingPop(const glm::dvec3& camera_m, const AmbienceMethod& method);
+    void parseOracle(const nlohmann::json& j, const std::string& where,
+                     const std::string& signature);
 
     CubeCapture& capture_;
     const ProbeEnvironment& environment_;

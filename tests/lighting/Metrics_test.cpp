@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <string>
+#include <vector>
 
 #include <unistd.h>
 
@@ -246,6 +248,82 @@ TEST(Metrics, PopAlongTheMovingPointIsTheSecondDifference) {
         meter.frame(f, f / 30.0, 12.0, {600.0 + f, 2.0, 7.0}, 30.0, method);
     ASSERT_EQ(meter.movingPops().size(), 98u + 2u);
     for (std::size_t i = 98; i < 100; ++i) EXPECT_LT(meter.movingPops()[i], 1e-5);
+}
+
+// 27 comma-separated coefficients, the n-th replaced by `value`.
+std::string shList(int n = -1, const std::string& value = "") {
+    std::string out;
+    for (int i = 0; i < 27; ++i) out += (i ? "," : "") + (i == n ? value : std::to_string(i));
+    return "[" + out + "]";
+}
+
+// A wrong type anywhere, a missing field, an out-of-range frame, a coefficient beyond
+// +-kMaxOracleCoefficient or not fitting a float: InputError naming the field (before: raw JSON
+// library exceptions, exit 1; 1e300 loaded and became inf in the error figures). The cache keeps
+// what it held, and the file reader refuses what is not a regular file.
+TEST(Metrics, OracleReaderNamesTheBadField) {
+    FakeCubeCapture capture(8);
+    FlatProbeEnvironment env;
+    MeasureSettings s;
+    s.every = 1;
+    ErrorMeter meter(capture, env, s);
+    const std::string head = R"({"format":"ambience-oracle","version":1,"signature":"s",)";
+    const auto one = [&](const std::string& entry) {
+        return head + "\"entries\":[" + entry + "]}";
+    };
+    const std::string good = R"({"frame":0,"x":0,"z":0,"sh":)" + shList() + "}";
+    meter.loadOracleText(one(good), "o.json", "s");
+
+    struct Case {
+        std::string doc, expected;
+    };
+    const std::vector<Case> cases = {
+        {"[]", "not an ambience oracle file"},
+        {R"({"format":1,"version":1})", "'format'"},
+        {R"({"format":"ambience-oracle","version":"1","signature":"s","entries":[]})",
+         "format/version"},
+        {R"({"format":"ambience-oracle","version":1,"signature":5,"entries":[]})", "'signature'"},
+        {R"({"format":"ambience-oracle","version":1,"signature":"s"})", "'entries' is missing"},
+        {head + R"("entries":{}})", "'entries' must be an array"},
+        {one("5"), "entries[0]: expected an object"},
+        {one(R"({"frame":"x","x":0,"z":0,"sh":)" + shList() + "}"), "frame"},
+        {one(R"({"frame":-1,"x":0,"z":0,"sh":)" + shList() + "}"), "frame"},
+        {one(R"({"frame":1.5,"x":0,"z":0,"sh":)" + shList() + "}"), "frame"},
+        {one(R"({"frame":4294967296,"x":0,"z":0,"sh":)" + shList() + "}"), "frame"},
+        {one(R"({"frame":18446744073709551615,"x":0,"z":0,"sh":)" + shList() + "}"), "frame"},
+        {one(R"({"frame":0,"x":"1","z":0,"sh":)" + shList() + "}"), "x: expected a number"},
+        {one(R"({"frame":0,"x":0,"sh":)" + shList() + "}"), "'z' is missing"},
+        {one(R"({"frame":0,"x":0,"z":0})"), "'sh' is missing"},
+        {one(R"({"frame":0,"x":0,"z":0,"sh":{}})"), "sh: expected 27 numbers"},
+        {one(R"({"frame":0,"x":0,"z":0,"sh":)" + shList(5, "\"a\"") + "}"), "sh[5]"},
+        {one(R"({"frame":0,"x":0,"z":0,"sh":)" + shList(0, "1e300") + "}"), "sh[0]"},
+        {one(R"({"frame":0,"x":0,"z":0,"sh":)" + shList(26, "-2e9") + "}"), "sh[26]"},
+        {one(R"({"frame":0,"x":0,"z":0,"sh":)" + shList(3, "null") + "}"), "sh[3]"},
+        {one(good + "," + good), "entries[1]: repeats"},
+        {one(good) + "x", "malformed"},
+        {head + R"("entries":[)" + good + ",", "malformed"},
+    };
+    for (const Case& c : cases) {
+        try {
+            meter.loadOracleText(c.doc, "o.json", "s");
+            ADD_FAILURE() << "accepted: " << c.doc;
+        } catch (const InputError& e) {
+            const std::string what = e.what();
+            EXPECT_EQ(what.rfind("o.json", 0), 0u) << what;
+            EXPECT_NE(what.find(c.expected), std::string::npos) << what << " / " << c.expected;
+        }
+    }
+    // The bound itself is accepted.
+    meter.loadOracleText(one(R"({"frame":0,"x":0,"z":0,"sh":)" + shList(4, "-1e9") + "}"), "o.json",
+                         "s");
+    meter.loadOracleText(one(good), "o.json", "s");
+    // The good cache survived the failures: the camera's ground point at frame 0 is a hit.
+    ScaledOracleMethod method(capture, env, 1.0f);
+    meter.frame(0, 0.0, 12.0, glm::dvec3(0.0), 0.0, method);
+    EXPECT_EQ(meter.oracleCacheHits(), 1);
+    EXPECT_THROW(meter.loadOracle(std::filesystem::temp_directory_path().string(), "s"),
+                 InputError);
+    EXPECT_THROW(meter.loadOracle("/dev/zero", "s"), InputError);
 }
 
 }  // namespace
