@@ -51,6 +51,8 @@ double Replay::timeOfDayAt_h(double time_s) const {
     const double hours = timeOfDayStart_h + timeRate * time_s / 3600.0;
     double wrapped = std::fmod(hours, 24.0);
     if (wrapped < 0.0) wrapped += 24.0;
+    // A tiny negative remainder (-1e-17) plus 24 rounds to 24.0 itself: that is midnight, 0.
+    if (wrapped >= 24.0) wrapped = 0.0;
     return wrapped;
 }
 
