@@ -397,7 +397,8 @@ const VdbMetadataValue& checksumField(const VdbFileSummary& header, const std::s
     const auto it = header.metadata.find(kAnchorStoreChecksumKey);
     if (it == header.metadata.end()) {
         throw InputError(where, std::string("metadata '") + kAnchorStoreChecksumKey +
-                                    "' is missing (not a file written by this version)");
+                                    "' is missing: the file is corrupt or was not written by "
+                                    "AnchorStore::save");
     }
     if (it->second.type != "string" || it->second.bytes.size() != 8) {
         throw InputError(

@@ -278,6 +278,11 @@ TEST(SettingsRanges, EveryBaselineSettingAtBothEndsFliesFarFromTheOrigin) {
                 FlatProbeEnvironment environment;
                 const auto m = makeCapturingMethod(method, capture, environment, {}, s, nullptr);
                 EXPECT_TRUE(fly(*m, 1.0e6, 1.0e6));
+                // (The reactive cache with a 1 ms timeout, or objects out of range, rightly
+                // capture nothing; the grid always does.)
+                if (std::string(method) == "grid") {
+                    EXPECT_GT(m->methodStatistics().facesCaptured, 0);
+                }
             }
         }
     }
