@@ -18,7 +18,6 @@
 // [SECTION] Interpolation  interpolate(x, z): bilinear in the finest cell whose corners the
 //                          store covers, missing corners from the coarser levels (thesis 7.6's
 //                          bilinear example, made hierarchical; see AnchorStore::interpolate).
-
 // [SECTION] Files          save()/load() as .vdb (OpenVDB grids, inspectable with vdb_print).
 //
 // OpenVDB is used only inside AnchorStore.cpp (one int32 grid per level mapping (i, 0, k) to an

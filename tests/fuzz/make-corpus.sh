@@ -7,7 +7,8 @@
 #   fuzz_baseline_settings
 #   fuzz_sweep              the README's sweep example and a two-point sweep
 #   fuzz_oracle             the oracle of a 30-frame run measured every 10th frame
-#   fuzz_anchor_store       the anchor store after a 60-frame run
+#   fuzz_anchor_store       the anchor store after one frame (every grid, no anchor yet),
+#                           behind the byte that selects the checksum handling in the target
 #   fuzz_cubemap            4 x 4 cube maps from `ambience probe` as .png, .exr and .hdr, each
 #                           behind the byte that selects its extension in the target
 #
@@ -84,8 +85,11 @@ if [[ ! -x "$ambience" ]]; then
   exit 0
 fi
 "$ambience" run --replay replays/highway-drive.json --max-frames 30 --no-frames --no-video \
-  --measure-every 10 --oracle "$tmp/oracle.json" --save-anchors "$tmp/anchors.vdb" \
-  --out "$tmp/run" >/dev/null
+  --measure-every 10 --oracle "$tmp/oracle.json" --out "$tmp/run" >/dev/null
+# A store with one anchor is over 300 kB (a leaf node of every payload grid); the store after
+# one frame has no anchor yet but every grid, the metadata and the checksum, in 19 kB.
+"$ambience" run --replay replays/highway-drive.json --max-frames 1 --no-frames --no-video \
+  --save-anchors "$tmp/anchors.vdb" --out "$tmp/run1" >/dev/null
 # The fuzz target asks for the signature "fuzz"; keep the first 6 entries.
 python3 - "$tmp/oracle.json" "$corpus/fuzz_oracle/highway-30.json" <<'PY'
 import json, sys
@@ -94,7 +98,8 @@ d['signature'] = 'fuzz'
 d['entries'] = d['entries'][:6]
 json.dump(d, open(sys.argv[2], 'w'))
 PY
-cp "$tmp/anchors.vdb" "$corpus/fuzz_anchor_store/highway-30.vdb"
+# The first byte of an anchor-store input selects its checksum handling (fuzz_anchor_store.cpp).
+printf '\x00' | cat - "$tmp/anchors.vdb" >"$corpus/fuzz_anchor_store/highway-1.vdb.bin"
 for ext in png exr hdr; do
   "$ambience" probe --at 0,0 --size 4 --out "$tmp/probe.$ext" >/dev/null
 done
