@@ -1,4 +1,4 @@
-// FrameLoop.cpp — one frame: the seven stages of DESIGN.md in order, each timed.
+// FrameLoop.cpp — one frame: the seven stages of docs/DESIGN.md "The frame" in order, each timed.
 #include "app/FrameLoop.h"
 
 #include <algorithm>

@@ -1,10 +1,11 @@
 // Platform.h — "give me a GL 4.5 core context and a surface": a window, or W x H offscreen.
 //
-// Three small implementations of one interface (STYLE.md: headless is a platform, not a special
-// case): EGL surfaceless or device (PlatformEgl.cpp), OSMesa software (PlatformOsMesa.cpp) and a
-// GLFW window (PlatformGlfw.cpp). Offscreen platforms render into framebuffer objects owned by
-// the renderer; the platform only provides the current context. GL entry points are loaded with
-// glad from the platform's own GetProcAddress once the context is current.
+// Three small implementations of one interface (docs/DESIGN.md "Style": headless is a platform,
+// not a special case): EGL surfaceless or device (PlatformEgl.cpp), OSMesa software
+// (PlatformOsMesa.cpp) and a GLFW window (PlatformGlfw.cpp). Offscreen platforms render into
+// framebuffer objects owned by the renderer; the platform only provides the current context. GL
+// entry points are loaded with glad from the platform's own GetProcAddress once the context is
+// current.
 #pragma once
 
 #include <memory>

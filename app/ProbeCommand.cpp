@@ -1,5 +1,5 @@
 // ProbeCommand.cpp — `ambience probe`: capture one cube map of the static coarse scene at a
-// point and write it as the vertical-strip EXR of DESIGN.md ("Cube maps").
+// point and write it as the vertical-strip EXR of docs/DESIGN.md ("Cube maps").
 #include <cmath>
 #include <cstdio>
 #include <sstream>

@@ -1,7 +1,7 @@
 // Renderer.h — the main view: linear HDR into a float target, then exposure and tone mapping
 // (shaders/tonemap.frag: ACES filmic fit, sRGB) into an 8-bit target that is read back (offscreen)
-// or blitted to the window. Shadows: none (the direct light is unshadowed; DESIGN.md leaves them
-// optional).
+// or blitted to the window. Shadows: none (the direct light is unshadowed; docs/DESIGN.md
+// "Known limits").
 //
 // [SECTION] Ambient    FixedAmbient: constant or sky/ground hemisphere ambient (--ambient)
 // [SECTION] Renderer   one frame of the main view

@@ -234,7 +234,8 @@ void RendererScene::buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj
     std::size_t objects = 0;
     addPlants(eye_m, &viewProj, false, ambient, out, &objects);
     if (vehicle_) {
-        // The camera's own car (DESIGN.md "draw": vegetation and vehicle get per-pixel SH).
+        // The camera's own car (docs/DESIGN.md "Terrain and objects": vegetation and vehicle
+        // get per-pixel SH).
         ObjectInstance inst;
         const glm::dvec3 rel = vehicle_->position_m - eye_m;
         inst.positionScale = glm::vec4(float(rel.x), float(rel.y), float(rel.z), 1.0f);

@@ -23,7 +23,7 @@ namespace amb {
 class World;
 
 // ---- AmbientSource ---------------------------------------------------------------------------
-// What the draw needs from the ambient term (DESIGN.md frame stage 5, "interpolate"): the
+// What the draw needs from the ambient term (docs/DESIGN.md "The frame", stage 5): the
 // irradiance at each terrain-patch corner for its normal, and one set of R&H matrices per object.
 // Constant and hemisphere ambient implement it now; the ambience volume implements it next.
 class AmbientSource {

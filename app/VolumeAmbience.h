@@ -1,5 +1,5 @@
-// VolumeAmbience.h — an ambience method in the frame (DESIGN.md "The frame", 2-5): stages 2-4
-// drive an AmbienceMethod (ours, lighting/AmbienceVolume, or a baseline, lighting/Baselines.h)
+// VolumeAmbience.h — an ambience method in the frame (docs/DESIGN.md "The frame", 2-5): stages
+// 2-4 drive an AmbienceMethod (ours, lighting/AmbienceVolume, or a baseline, lighting/Baselines.h)
 // with captures rendered by CubeCaptureGl from the renderer's own scene; stage 5 answers the
 // draw's questions from the method's SH: terrain corners get E(n) at the corner normal, objects
 // a set of R&H matrices. The places the draw asked about are handed back to the method at the

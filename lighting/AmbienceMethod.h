@@ -1,8 +1,8 @@
 // AmbienceMethod.h — one way of giving ambience to ground points, run frame by frame: ours (the
 // dynamic ambience volume, AmbienceVolume.h) and the baselines it is measured against
-// (Baselines.h; DESIGN.md "Measuring speed against error"). The frame loop drives every method
-// through the same three stages with the same capture budget, and the draw and the measurement
-// read the same shAt, so what is measured is what is drawn.
+// (Baselines.h; docs/DESIGN.md "Measuring speed against error"). The frame loop drives every
+// method through the same three stages with the same capture budget, and the draw and the
+// measurement read the same shAt, so what is measured is what is drawn.
 #pragma once
 
 #include <cstddef>
@@ -33,7 +33,7 @@ class AmbienceMethod {
     // Short name, as given to --ambient.
     virtual std::string methodName() const = 0;
 
-    // The frame's stages 2-4 (DESIGN.md "The frame"). dt_s <= 0 or non-finite: no time passes.
+    // The frame's stages 2-4 (docs/DESIGN.md "The frame"). dt_s <= 0 or non-finite: no time passes.
     virtual void predictStage(const glm::dvec3& cameraPosition_m,
                               const glm::dvec3& cameraVelocity_mps, double timeOfDay_h,
                               double dt_s) = 0;

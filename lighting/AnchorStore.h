@@ -1,5 +1,5 @@
 // AnchorStore.h — the sparse, hierarchical store of ambience anchors along the ground plane
-// (thesis 7.5, 7.6, 8.4, 9.3; DESIGN.md "Anchor store"), with blending and continuous
+// (thesis 7.5, 7.6, 8.4, 9.3; docs/DESIGN.md "Anchor store"), with blending and continuous
 // (hierarchical bilinear) interpolation.
 //
 // [SECTION] Lattice        Level L has spacing s_L = s_0 / 3^L (3 x 3 subdivision, the thesis'
@@ -110,7 +110,7 @@ struct Anchor {
 };
 
 // Lifetime of a capture from how fast the lighting changes (thesis 7.5.3: samples expire at a
-// rate set by how fast the light changes; DESIGN.md "Blending"):
+// rate set by how fast the light changes; docs/DESIGN.md "Blending"):
 //     lifetime = clamp(allowedSunAngle / (sunSpeed x |timeRate|), minLifetime, maxLifetime)
 // with sunSpeed the sun's angular speed across the sky [rad per hour of day] and timeRate the
 // hours of day that pass per simulated second (1/3600 in real time). Time standing still gives

@@ -1,6 +1,6 @@
 // Baselines.h — the ways of giving ambience that the dynamic ambience volume is measured against
-// (DESIGN.md "Measuring speed against error": same capture budget, same replays, same shAt read
-// by the draw and the measurement).
+// (docs/DESIGN.md "Measuring speed against error": same capture budget, same replays, same shAt
+// read by the draw and the measurement).
 //
 // [SECTION] Settings           BaselineSettings, baselineSettingsFromJson
 // [SECTION] Shared machinery   CapturingBaseline: time and time rate, teleports, the fallback,

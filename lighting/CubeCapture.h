@@ -1,10 +1,11 @@
 // CubeCapture.h — the capture interface: a cube map of the static, coarse scene at a point.
 //
 // Declared here, without GL, so the lighting code (scheduler, anchor store, oracle) can ask for
-// captures; the GL implementation lives in app/ (CubeCaptureGl.cpp). What is drawn (DESIGN.md,
-// "Capture"): the terrain proxy mesh, tree proxies, the road, the sky and the sun — nothing
-// dynamic (thesis 8.2). Face order and texel orientation are those of world/Conventions.h
-// (cubeTexelDirection): face f, texel (column i, row j) looks along cubeTexelDirection(f, i, j, N).
+// captures; the GL implementation lives in app/ (CubeCaptureGl.cpp). What is drawn
+// (docs/DESIGN.md, "Capture"): the terrain proxy mesh, tree proxies, the road, the sky and the
+// sun — nothing dynamic (thesis 8.2). Face order and texel orientation are those of
+// world/Conventions.h (cubeTexelDirection): face f, texel (column i, row j) looks along
+// cubeTexelDirection(f, i, j, N).
 #pragma once
 
 #include <array>

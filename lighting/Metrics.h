@@ -1,5 +1,5 @@
-// Metrics.h — how wrong the applied ambience is, and how much it pops (DESIGN.md "Measuring
-// speed against error").
+// Metrics.h — how wrong the applied ambience is, and how much it pops (docs/DESIGN.md
+// "Measuring speed against error").
 //
 // [SECTION] Irradiance distance
 //   For coefficient sets a, b the irradiance difference over the sphere of normals has the closed

@@ -1,7 +1,8 @@
 #version 450 core
 #extension GL_GOOGLE_include_directive : require
-// terrain.frag — Lambertian terrain lit by the main light and the ambient slot of DESIGN.md
-// ("Terrain"): one ambient irradiance per patch corner, bilinear across the patch (thesis 8.6).
+// terrain.frag — Lambertian terrain lit by the main light and the ambient slot of docs/DESIGN.md
+// ("Terrain and objects"): one ambient irradiance per patch corner, bilinear across the patch
+// (thesis 8.6).
 #include "common.glsl"
 
 // Corner irradiance (rgb), corners (x0,z0), (x1,z0), (x0,z1), (x1,z1).

@@ -1,4 +1,4 @@
-// Conventions.h — the project's conventions, stated once (DESIGN.md, "Conventions").
+// Conventions.h — the project's conventions, stated once (docs/DESIGN.md, "Conventions").
 //
 // [SECTION] Axes and units
 //   Right-handed, +Y up, metres, seconds, radians. The ground plane is XZ; heights are h(x, z).

@@ -83,7 +83,8 @@ TEST(ShBasis, OrthonormalByQuadrature) {
         for (int j = 0; j < 9; ++j) EXPECT_NEAR(gram[i][j], i == j ? 1.0 : 0.0, 1e-13) << i << j;
 }
 
-// Values from DESIGN.md's table at hand-picked directions; tolerance 1e-6 (the table's digits).
+// Values from the SH table of docs/DESIGN.md ("Conventions") at hand-picked directions;
+// tolerance 1e-6 (the table's digits).
 TEST(ShBasis, ValuesAtKnownDirections) {
     const auto up = shBasis(glm::dvec3(0, 0, 1));
     const double expectedUp[9] = {0.282095, 0, 0.488603, 0, 0, 0, 0.630783, 0, 0};
