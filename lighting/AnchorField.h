@@ -4,7 +4,8 @@
 // first) and one bilinear blend of four coefficient sets; the cache is rebuilt from the anchors
 // when they change (once a frame: blends and fades move every frame while probes arrive).
 //
-// The field (s_L spacing of level L, v = an anchor's current x relight, p its presence):
+// The field (s_L spacing of level L, v = an anchor's current x relight, p its presence weight
+// easeInOut(presence), AnchorStore.h):
 //   F_{-1}      = the fallback everywhere.
 //   r_a         = v_a - F_{L-1}(a) for each anchor a of canonical level L: what it adds to the
 //                 coarser levels' value at its point (its residual).

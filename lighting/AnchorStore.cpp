@@ -365,7 +365,7 @@ void AnchorStore::advance(double now_s) {
                 a.current = a.target;
             } else {
                 a.blendProgress = float(t);
-                a.current = lerp(a.blendFrom, a.target, float(t));
+                a.current = lerp(a.blendFrom, a.target, easeInOut(float(t)));
             }
         }
         // Regeneration request before expiry, expiry at the end of the lifetime.
@@ -455,8 +455,9 @@ void AnchorStore::Impl::ensureField() const {
     anchors.clear();
     for (std::size_t n = 0; n < pool.size(); ++n) {
         const Anchor& a = pool[n];
-        if (!alive[n] || !(a.presence > 0.0f)) continue;
-        anchors.push_back({a.key.level, a.key.i, a.key.k, std::min(a.presence, 1.0f),
+        const float weight = easeInOut(a.presence);
+        if (!alive[n] || !(weight > 0.0f)) continue;
+        anchors.push_back({a.key.level, a.key.i, a.key.k, weight,
                            a.relight == 1.0f ? a.current : a.current * a.relight});
     }
     field.rebuild(lattice, anchors, fallback, from);
@@ -489,7 +490,7 @@ void AnchorStore::Impl::describe(double qx, double qz, const AnchorField::Hit& h
             return;
         }
         const double w = wx[q & 1] * wz[q >> 1];
-        if (w > 0.0) detail.used.push_back({a.key, quadrant, d, w * double(a.presence)});
+        if (w > 0.0) detail.used.push_back({a.key, quadrant, d, w * double(easeInOut(a.presence))});
     }
 }
 

@@ -86,14 +86,25 @@ struct LatticeKey {
     bool operator!=(const LatticeKey& o) const { return !(*this == o); }
 };
 
+// Blends and fades run linearly in time and are read through smoothstep, 3t^2 - 2t^3: the value
+// and its rate are continuous when a blend starts and ends, so a point moving through the store
+// sees no kink there (a linear blend of a step J over N frames gives a second difference of J / N
+// at each end; smoothstep gives at most 6 J / N^2). Halfway is still halfway.
+inline float easeInOut(float t) {
+    t = t < 0.0f ? 0.0f : (t > 1.0f ? 1.0f : t);
+    return t * t * (3.0f - 2.0f * t);
+}
+
 // One anchor (the thesis' CoefficientAnchor, appendix B). Plain data.
 struct Anchor {
     ShRgb current;    // what interpolation uses now
     ShRgb target;     // the latest capture
     ShRgb blendFrom;  // value of `current` when the blend towards `target` began
     double blendStart_s = 0.0;
-    float blendProgress = 1.0f;     // [0, 1]; current = lerp(blendFrom, target, blendProgress)
-    float presence = 1.0f;          // [0, 1]; weight in interpolation (fade in / fade out)
+    float blendProgress = 1.0f;     // [0, 1], linear in time; current = lerp(blendFrom, target,
+                                    // easeInOut(blendProgress))
+    float presence = 1.0f;          // [0, 1], linear in time (fade in / fade out); its weight in
+                                    // interpolation is easeInOut(presence)
     float presenceFrom = 1.0f;      // fade state: presence at presenceChange_s, from which it
     double presenceChange_s = 0.0;  // rises (or falls, once expired) by dt / blendTime
     double birth_s = 0.0;           // store clock at first insertion
@@ -127,7 +138,7 @@ struct InterpolationDetail {
         int quadrant = 0;  // 0: dx >= 0, dz >= 0; 1: dx < 0, dz >= 0; 2: dx < 0, dz < 0;
                            // 3: dx >= 0, dz < 0 (dx, dz = anchor - query)
         double distance_m = 0.0;
-        double weight = 0.0;  // its corner's bilinear weight x its presence: the share of its
+        double weight = 0.0;  // its corner's bilinear weight x easeInOut(presence): the share of its
                               // own value (the rest comes from the coarser levels' fill)
     };
     std::vector<Used> used;  // present anchors at the corners of the cell used (or the one hit)

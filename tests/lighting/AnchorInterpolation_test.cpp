@@ -160,8 +160,9 @@ TEST(AnchorInterpolation, CoarsestLevelReachesIntoHolesAndFadesToTheFallback) {
     put(store, {0, 2, 0}, 1.0f);
     EXPECT_LT(maxDiff(store.interpolate(243.0, 0.0), makeSh(0.5f * (v + 1.0f))), 1e-5);
 
-    // Fading in (presence p = 0.2, current f + 0.2 (v - f) after 0.4 s of a 2 s blend), the
-    // coverage at d = 1 is 0.5625 p < 0.25: the corner takes 0.5625 p / 0.25 of the residual.
+    // Fading in (presence 0.2 after 0.4 s of a 2 s blend; blends and fades are read through
+    // smoothstep, so its weight is p = easeInOut(0.2) = 0.104 and its current f + p (v - f)),
+    // the coverage at d = 1 is 0.5625 p < 0.25: the corner takes 0.5625 p / 0.25 of the residual.
     AnchorStoreSettings s;
     s.blendTime_s = 2.0;
     AnchorStore fading(s);
@@ -170,8 +171,9 @@ TEST(AnchorInterpolation, CoarsestLevelReachesIntoHolesAndFadesToTheFallback) {
     fading.advance(0.4);
     const Anchor* a = fading.find({0, 0, 0});
     ASSERT_NEAR(a->presence, 0.2f, 1e-6f);
-    const double p = a->presence, residual = scalarOf(a->current) - f;
-    EXPECT_NEAR(residual, 0.2 * (v - f), 1e-5);
+    const double p = 0.2 * 0.2 * (3.0 - 2.0 * 0.2), residual = scalarOf(a->current) - f;
+    EXPECT_NEAR(easeInOut(a->presence), p, 1e-6);
+    EXPECT_NEAR(residual, p * (v - f), 1e-5);
     EXPECT_LT(maxDiff(fading.interpolate(243.0, 0.0),
                       makeSh(float(f + 0.5625 * p * residual / 0.25))),
               1e-5);
@@ -484,7 +486,7 @@ TEST(AnchorInterpolation, ManyPointsInParallelEqualOneByOne) {
 }
 
 TEST(AnchorInterpolation, PartialPresenceBlendsWithTheValueBeneath) {
-    // A fading-in anchor of presence p at a corner gives it p x current + (1 - p) x (the value
+    // A fading-in anchor of presence weight p at a corner gives it p x current + (1 - p) x (the value
     // without it). Without it, (3, 0) shows the fallback f plus the residual 1 - f of the anchor
     // at (6, 0), one cell away (K = 0.5625, above the coverage floor: all of it): 1.
     AnchorStoreSettings s;
@@ -495,12 +497,12 @@ TEST(AnchorInterpolation, PartialPresenceBlendsWithTheValueBeneath) {
     store.insert({4, 2, 0}, makeSh(1.0f), {6, 2, 0}, 1e6);  // (6, 0)
     store.advance(2.0);
     store.insert({4, 1, 0}, makeSh(3.0f), {3, 2, 0}, 1e6);  // (3, 0): starts from 1, shown there
-    store.advance(2.5);                                     // presence 0.25, a quarter blended
+    store.advance(2.5);  // a quarter of the blend time: presence 0.25, read as smoothstep(0.25)
     const Anchor* young = store.find({4, 1, 0});
     ASSERT_NEAR(young->presence, 0.25f, 1e-6f);
-    const double p = young->presence;
+    const double p = 0.25 * 0.25 * (3.0 - 2.0 * 0.25);  // 0.15625
     const double v = scalarOf(young->current);
-    EXPECT_NEAR(v, 1.0 + 0.25 * (3.0 - 1.0), 1e-6);
+    EXPECT_NEAR(v, 1.0 + p * (3.0 - 1.0), 1e-6);
     const double corner = p * v + (1.0 - p) * 1.0;
     EXPECT_LT(maxDiff(store.interpolate(3.0, 0.0), makeSh(float(corner))), 1e-5);
     // Half-way to the present anchor at (6, 0).
@@ -510,7 +512,7 @@ TEST(AnchorInterpolation, PartialPresenceBlendsWithTheValueBeneath) {
     ASSERT_EQ(d.used.size(), 2u);
     double w = 0.0;
     for (const auto& used : d.used) w += used.weight;
-    EXPECT_NEAR(w, 0.5 * p + 0.5, 1e-6);  // bilinear weight x presence
+    EXPECT_NEAR(w, 0.5 * p + 0.5, 1e-6);  // bilinear weight x presence weight
 }
 
 }  // namespace

@@ -355,6 +355,36 @@ TEST(AnchorStoreBlending, RefreshConvergesInTheBlendTime) {
     EXPECT_TRUE(bitwiseEqual(store.find({4, 0, 0})->current, makeSh(3.0f)));
 }
 
+TEST(AnchorStoreBlending, BlendsStartAndEndWithoutAKink) {
+    // A refresh from 1 to 3 over T = 2 s, sampled every dt = 10 ms: the value follows
+    // 1 + 2 smoothstep(t / T), whose second difference is at most J x 6 dt^2 / T^2 = 3e-4 (J = 2),
+    // at the start and end as everywhere; a linear blend would step its rate by J dt / T = 0.01
+    // at both ends. Fading in, the presence weight follows the same curve.
+    AnchorStoreSettings s;
+    s.blendTime_s = 2.0;
+    AnchorStore store(s);
+    store.insert({4, 0, 0}, makeSh(1.0f), {0, 2, 0}, 1e6);
+    store.advance(5.0);
+    store.insert({4, 0, 0}, makeSh(3.0f), {0, 2, 0}, 1e6);
+    std::vector<double> value;
+    for (int n = 0; n <= 220; ++n) {
+        store.advance(5.0 + 0.01 * n);
+        value.push_back(store.find({4, 0, 0})->current.c[0].x);
+    }
+    const double bound = 2.0 * 6.0 * 0.01 * 0.01 / 4.0;
+    double worst = 0.0;
+    for (std::size_t n = 2; n < value.size(); ++n)
+        worst = std::max(worst, std::fabs(value[n] - 2.0 * value[n - 1] + value[n - 2]));
+    EXPECT_LE(worst, bound * 1.01);
+    EXPECT_GT(worst, bound * 0.5);  // the bound is that of smoothstep, not a loose one
+    EXPECT_NEAR(value[100], 2.0, 1e-6);  // halfway in time is halfway in value
+    EXPECT_EQ(value[200], 3.0);
+    for (float t : {0.0f, 0.1f, 0.5f, 0.9f, 1.0f})
+        EXPECT_NEAR(easeInOut(t), t * t * (3.0f - 2.0f * t), 1e-7f);
+    EXPECT_EQ(easeInOut(-1.0f), 0.0f);
+    EXPECT_EQ(easeInOut(2.0f), 1.0f);
+}
+
 TEST(AnchorStoreBlending, NewAnchorStartsFromTheInterpolatedValueAndFadesIn) {
     AnchorStoreSettings s;
     s.blendTime_s = 2.0;
