@@ -11,6 +11,7 @@
 #pragma once
 
 #include <array>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -58,6 +59,8 @@ struct FrameRecord {
     int index = 0, loop = 0;
     double time_s = 0.0, replayTime_s = 0.0, timeOfDay_h = 0.0;
     bool cut = false;            // the camera was cut (teleported) before this frame
+    double popMove = std::numeric_limits<double>::quiet_NaN();  // pop along the camera's ground
+                                                                // point (measured runs; NaN: none)
     std::size_t rss_kB = 0;      // resident memory of the process after the frame (0: unknown)
     std::size_t heap_kB = 0;     // of which malloc has handed out and not had back (0: unknown)
     std::array<double, kFrameStages> stageMs{};  // CPU wall time per stage

@@ -321,6 +321,7 @@ void runReplay(RunOptions o) {
         if (meter) {
             meter->frame(rec.index, rec.time_s, rec.timeOfDay_h, camera.position_m,
                          glm::length(stages->velocity()), stages->method());
+            rec.popMove = meter->lastMovingPop();
         }
         if (o.noFrames) {
             drawLookupStandIn(camera, standInX, standInZ);

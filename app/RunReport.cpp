@@ -390,7 +390,7 @@ void RunReport::write(const std::string& path) const {
                ",volumePredict_ms,volumeCapture_ms,volumeProject_ms,volumeStore_ms";
         for (std::size_t l = 0; l < csvLevels; ++l) csv << ",anchorsLevel" << l;
     }
-    csv << ",rss_kB,heap_kB,cut,loop\n";
+    csv << ",rss_kB,heap_kB,cut,loop,popMove\n";
     for (const FrameRecord& f : frames) {
         csv << f.index << "," << f.time_s << "," << f.timeOfDay_h << "," << f.frameMs;
         for (int s = 0; s < kFrameStages; ++s) csv << "," << f.stageMs[s];
@@ -408,7 +408,9 @@ void RunReport::write(const std::string& path) const {
             }
         }
         csv << "," << f.rss_kB << "," << f.heap_kB << "," << (f.cut ? 1 : 0) << "," << f.loop
-            << "\n";
+            << ",";
+        if (std::isfinite(f.popMove)) csv << f.popMove;  // empty: no pop measured this frame
+        csv << "\n";
     }
     if (!csv) throw InputError(csvPath, "cannot write the report CSV");
 }

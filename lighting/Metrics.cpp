@@ -223,14 +223,15 @@ void ErrorMeter::frame(int index, double time_s, double timeOfDay_h, const glm::
 
 void ErrorMeter::movingPop(const glm::dvec3& camera_m, const AmbienceMethod& method) {
     const ShRgb here = method.shAt(camera_m.x, camera_m.z);
+    lastMovingPop_ = std::numeric_limits<double>::quiet_NaN();
     if (movingSeen_ > 0 &&
         std::hypot(camera_m.x - movingX_m_, camera_m.z - movingZ_m_) > kMoveCut_m) {
         movingSeen_ = 0;  // a cut: the path starts again
     }
     if (movingSeen_ >= 2) {
-        movingPops_.push_back(popValue(here - movingPrevious_[0],
-                                       movingPrevious_[0] - movingPrevious_[1],
-                                       movingPrevious_[0]));
+        lastMovingPop_ = popValue(here - movingPrevious_[0], movingPrevious_[0] - movingPrevious_[1],
+                                  movingPrevious_[0]);
+        movingPops_.push_back(lastMovingPop_);
     }
     movingPrevious_[1] = movingPrevious_[0];
     movingPrevious_[0] = here;

@@ -44,6 +44,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -135,6 +136,9 @@ class ErrorMeter {
     const std::vector<double>& pops() const { return pops_; }
     // Pop along the camera's ground point, one per frame from the third on (see above).
     const std::vector<double>& movingPops() const { return movingPops_; }
+    // The pop along the camera's ground point of the latest frame() (NaN on a frame without
+    // one: the first two after the start or a cut, or with measurement off).
+    double lastMovingPop() const { return lastMovingPop_; }
     static constexpr double kMoveCut_m = 100.0;
     const MeasureSettings& settings() const { return settings_; }
     double oracleSeconds() const { return oracle_s_; }  // wall time spent capturing the oracle
@@ -170,6 +174,7 @@ class ErrorMeter {
     std::vector<MeasuredFrame> measured_;
     std::vector<double> pops_;
     std::vector<double> movingPops_;
+    double lastMovingPop_ = std::numeric_limits<double>::quiet_NaN();
     // The last two values along the moving point (newest first), and where it was.
     ShRgb movingPrevious_[2];
     double movingX_m_ = 0.0, movingZ_m_ = 0.0;
