@@ -4,7 +4,8 @@
 // [SECTION] Lattice helpers
 // [SECTION] Patch sampling (cached per key)
 // [SECTION] LOD selection
-// [SECTION] Stitching: a vertex's rendered value comes from the coarsest patch containing it
+// [SECTION] Stitching: a vertex's rendered value comes from the coarsest patch containing it;
+//           so does a corner's value (corner stitching)
 // [SECTION] Packing into plain arrays
 // [SECTION] Terrain proxy for probe capture
 #include "world/TerrainPatch.h"
@@ -226,6 +227,42 @@ class Stitcher {
         return v;
     }
 
+    // Index in `corners` of the leaf corner at lattice point (vx, vz), whose normal is `normal`;
+    // appended on first use, after the corners it reads. The coarsest leaf D containing it
+    // decides, as for heights: a corner of D is evaluated; a point inside one of D's edges
+    // reads that edge's two ends (which may in turn lie inside an even coarser edge).
+    std::uint32_t corner(std::int64_t vx, std::int64_t vz, const glm::dvec3& normal,
+                         std::vector<TerrainCorner>& corners) {
+        const auto key = std::make_pair(vx, vz);
+        if (auto it = cornerMemo_.find(key); it != cornerMemo_.end()) return it->second;
+        const TerrainPatch* d = coarsestContaining(vx, vz);
+        AMB_CHECK(d != nullptr);
+        const std::int64_t n = std::int64_t(kQ) * TerrainPatch::latticeStep(d->key.level);
+        const std::int64_t x0 = d->key.i * n, z0 = d->key.k * n;
+        const bool onX = vx == x0 || vx == x0 + n, onZ = vz == z0 || vz == z0 + n;
+        AMB_CHECK(onX || onZ);  // a leaf's corner lies on D's boundary
+        TerrainCorner c;
+        c.position_m =
+            glm::dvec3(latticeToWorld(vx), rendered(vx, vz).height_m, latticeToWorld(vz));
+        c.normal = normal;
+        if (!(onX && onZ)) {
+            // The ends of D's edge through the point, with their own normals.
+            const std::int64_t ax = onX ? vx : x0, az = onX ? z0 : vz;
+            const std::int64_t bx = onX ? vx : x0 + n, bz = onX ? z0 + n : vz;
+            const auto endNormal = [&](std::int64_t ex, std::int64_t ez) {
+                return d->cornerNormals[(ex == x0 ? 0 : 1) + (ez == z0 ? 0 : 2)];
+            };
+            c.from = {corner(ax, az, endNormal(ax, az), corners),
+                      corner(bx, bz, endNormal(bx, bz), corners)};
+            c.t = float(double(onX ? vz - z0 : vx - x0) / double(n));
+        }
+        const auto index = static_cast<std::uint32_t>(corners.size());
+        if (onX && onZ) c.from = {index, index};
+        corners.push_back(c);
+        cornerMemo_.emplace(key, index);
+        return index;
+    }
+
   private:
     const TerrainPatch* coarsestContaining(std::int64_t vx, std::int64_t vz) const {
         for (int level = top_; level >= 0; --level) {
@@ -247,9 +284,42 @@ class Stitcher {
     const std::unordered_map<PatchKey, const TerrainPatch*, PatchKeyHash>& leaves_;
     int top_;
     std::unordered_map<std::pair<std::int64_t, std::int64_t>, VertexValue, LatticeHash> memo_;
+    std::unordered_map<std::pair<std::int64_t, std::int64_t>, std::uint32_t, LatticeHash>
+        cornerMemo_;
 };
 
 }  // namespace
+
+std::vector<std::uint32_t> cornersToEvaluate(const TerrainMesh& mesh,
+                                             const std::vector<std::size_t>& patches) {
+    std::vector<char> needed(mesh.corners.size(), 0);
+    std::vector<std::uint32_t> stack;
+    for (std::size_t p : patches) {
+        const auto& index = mesh.patches[p].cornerIndex;
+        stack.insert(stack.end(), index.begin(), index.end());
+    }
+    while (!stack.empty()) {
+        const std::uint32_t c = stack.back();
+        stack.pop_back();
+        if (needed[c]) continue;
+        needed[c] = 1;
+        const TerrainCorner& corner = mesh.corners[c];
+        if (!corner.evaluated()) stack.insert(stack.end(), corner.from.begin(), corner.from.end());
+    }
+    std::vector<std::uint32_t> out;
+    for (std::size_t c = 0; c < needed.size(); ++c) {
+        if (needed[c] && mesh.corners[c].evaluated()) out.push_back(static_cast<std::uint32_t>(c));
+    }
+    return out;
+}
+
+void stitchCornerValues(const std::vector<TerrainCorner>& corners, glm::vec3* values) {
+    for (std::size_t c = 0; c < corners.size(); ++c) {
+        const TerrainCorner& corner = corners[c];
+        if (corner.evaluated()) continue;
+        values[c] = (1.0f - corner.t) * values[corner.from[0]] + corner.t * values[corner.from[1]];
+    }
+}
 
 // ---- [SECTION] Packing -----------------------------------------------------------------------
 
@@ -320,6 +390,11 @@ TerrainMesh TerrainPatchCache::build(const std::vector<PatchKey>& leaves,
                     draw.cornerNormals[c] = p.cornerNormals[c];
                 }
             }
+        }
+        for (int c = 0; c < 4; ++c) {
+            draw.cornerIndex[c] = stitcher.corner(vertexLattice(key.i, key.level, (c & 1) ? kQ : 0),
+                                                  vertexLattice(key.k, key.level, (c & 2) ? kQ : 0),
+                                                  p.cornerNormals[c], out.corners);
         }
         // Two triangles per quad, counter-clockwise seen from +Y.
         const std::uint32_t base = draw.firstVertex;

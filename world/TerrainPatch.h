@@ -12,6 +12,11 @@
 // a vertex's rendered height is defined once, from the coarsest patch that contains it, so every
 // patch sharing an edge renders it identically (TerrainPatchCache::build, "stitching").
 //
+// Corner values. A value given at the patch corners and blended bilinearly across each patch (the
+// ambient irradiance) is stitched the same way: a corner inside a coarser leaf's edge takes the
+// linear interpolation of that edge's two end values, so a finer patch's edge blends exactly as
+// the coarser edge beside it (TerrainMesh::corners, stitchCornerValues).
+//
 // Caching. A TerrainPatch holds the native (unstitched) samples of one key and depends on nothing
 // else; stitching runs on the edges only, each frame.
 #pragma once
@@ -72,15 +77,39 @@ struct TerrainPatchDraw {
     PatchKey key;
     std::uint32_t firstIndex = 0, indexCount = 0;
     std::uint32_t firstVertex = 0, vertexCount = 0;
-    std::array<glm::dvec3, 4> corners_m;      // world positions as rendered (stitched)
-    std::array<glm::dvec3, 4> cornerNormals;  // unit, World::normal at the corner
+    std::array<glm::dvec3, 4> corners_m;         // world positions as rendered (stitched)
+    std::array<glm::dvec3, 4> cornerNormals;     // unit, World::normal at the corner
+    std::array<std::uint32_t, 4> cornerIndex{};  // into TerrainMesh::corners
+};
+
+// A corner of the leaves, held once however many patches share it. Evaluated, or, inside a
+// coarser leaf's edge, the linear interpolation of that edge's end corners:
+// value = (1 - t) value[from[0]] + t value[from[1]].
+struct TerrainCorner {
+    glm::dvec3 position_m{0.0};           // as rendered (stitched)
+    glm::dvec3 normal{0.0};               // unit, World::normal at the corner
+    std::array<std::uint32_t, 2> from{};  // both its own index when evaluated
+    float t = 0.0f;
+    bool evaluated() const { return from[0] == from[1]; }
 };
 
 struct TerrainMesh {
     glm::dvec3 origin_m{0.0};  // positions in `mesh` are relative to this
     WorldMesh mesh;            // all patches; indices are absolute into the mesh
     std::vector<TerrainPatchDraw> patches;
+    // Every leaf corner once; an interpolated corner comes after the corners it reads.
+    std::vector<TerrainCorner> corners;
 };
+
+// Corner values stitched across LOD boundaries (docs/DESIGN.md "Terrain and objects").
+// The corners whose values must be evaluated to draw the patches `patches` (indices into
+// mesh.patches) stitched: their evaluated corners and the ends of the coarser edges their other
+// corners read, each once, ascending. O(patches).
+std::vector<std::uint32_t> cornersToEvaluate(const TerrainMesh& mesh,
+                                             const std::vector<std::size_t>& patches);
+// values[c] for every corner of `corners`, the evaluated ones set: fills in the interpolated
+// ones (in list order, so chains along ever coarser edges resolve). O(corners).
+void stitchCornerValues(const std::vector<TerrainCorner>& corners, glm::vec3* values);
 
 struct TerrainLodSettings {
     int coarsestLevel = 8;             // patch size 32 m * 2^8 = 8192 m

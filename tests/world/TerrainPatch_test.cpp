@@ -1,12 +1,16 @@
 // TerrainPatch_test.cpp — patches are deterministic and cached by key, LOD selection refines
 // towards the camera, edges coincide across patch borders and LOD transitions (no cracks), near
-// and 10^6 m from the origin; the terrain proxy stays small.
+// and 10^6 m from the origin; corner colours meet across LOD transitions and a linear field is
+// left as it is; the terrain proxy stays small.
 #include "world/TerrainPatch.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
+#include <limits>
 #include <map>
+#include <numeric>
 #include <set>
 
 #include <gtest/gtest.h>
@@ -52,11 +56,18 @@ struct CrackReport {
     double worstGap_m = 0.0;
 };
 
-// For every pair of leaves sharing a stretch of edge, every vertex of either one on the shared
-// stretch must lie on the other one's edge polyline: exactly where both have a vertex, within
-// float rounding where the coarser edge interpolates.
-CrackReport checkCracks(const TerrainMesh& m) {
-    CrackReport r;
+// A stretch of edge shared by leaves p and q (an ordered pair: each pair appears twice): along
+// z (the line x = const) or along x, from lo to hi; pa and qa are p's and q's fixed vertex
+// index across the line.
+struct SharedStretch {
+    std::size_t p, q;
+    bool alongZ;
+    double lo, hi;
+    int pa, qa;
+};
+
+std::vector<SharedStretch> sharedStretches(const TerrainMesh& m) {
+    std::vector<SharedStretch> out;
     const auto& P = m.patches;
     for (std::size_t p = 0; p < P.size(); ++p) {
         for (std::size_t q = 0; q < P.size(); ++q) {
@@ -66,58 +77,61 @@ CrackReport checkCracks(const TerrainMesh& m) {
             const double sp = TerrainPatch::size_m(kp.level), sq = TerrainPatch::size_m(kq.level);
             const double px0 = TerrainPatch::originX_m(kp), pz0 = TerrainPatch::originZ_m(kp);
             const double qx0 = TerrainPatch::originX_m(kq), qz0 = TerrainPatch::originZ_m(kq);
-            // Vertical shared line x = const (p's right edge on q's left edge or vice versa).
             for (int side = 0; side < 4; ++side) {
                 const bool alongZ = side < 2;  // the shared line is x = const
-                double line;
-                int pa, qa;  // p's and q's fixed vertex index across the line
-                if (side == 0 && px0 + sp == qx0) {
-                    line = qx0;
+                int pa, qa;                    // p's and q's fixed vertex index across the line
+                if ((side == 0 && px0 + sp == qx0) || (side == 2 && pz0 + sp == qz0)) {
                     pa = kQ;
                     qa = 0;
-                } else if (side == 1 && qx0 + sq == px0) {
-                    line = px0;
-                    pa = 0;
-                    qa = kQ;
-                } else if (side == 2 && pz0 + sp == qz0) {
-                    line = qz0;
-                    pa = kQ;
-                    qa = 0;
-                } else if (side == 3 && qz0 + sq == pz0) {
-                    line = pz0;
+                } else if ((side == 1 && qx0 + sq == px0) || (side == 3 && qz0 + sq == pz0)) {
                     pa = 0;
                     qa = kQ;
                 } else
                     continue;
-                (void)line;
                 // Overlap of the two edges along the line.
                 const double p0 = alongZ ? pz0 : px0, q0 = alongZ ? qz0 : qx0;
                 const double lo = std::max(p0, q0), hi = std::min(p0 + sp, q0 + sq);
                 if (hi <= lo) continue;
-                if (kp.level != kq.level) ++r.levelTransitions;
-                const double stepP = TerrainPatch::spacing_m(kp.level);
-                const double stepQ = TerrainPatch::spacing_m(kq.level);
-                for (int t = 0; t <= kQ; ++t) {
-                    const double s = p0 + t * stepP;  // coordinate along the line
-                    if (s < lo || s > hi) continue;
-                    const float yp = alongZ ? vertexY(m, P[p], pa, t) : vertexY(m, P[p], t, pa);
-                    // q's polyline at s.
-                    const double u = (s - q0) / stepQ;
-                    const int j = std::min(static_cast<int>(std::floor(u)), kQ - 1);
-                    const double f = u - j;
-                    const float y0 = alongZ ? vertexY(m, P[q], qa, j) : vertexY(m, P[q], j, qa);
-                    const float y1 =
-                        alongZ ? vertexY(m, P[q], qa, j + 1) : vertexY(m, P[q], j + 1, qa);
-                    if (f == 0.0) {
-                        if (yp != y0)
-                            r.worstGap_m = std::max(r.worstGap_m, std::abs(double(yp) - y0) + 1.0);
-                        ++r.sharedVertices;
-                    } else {
-                        const double yq = y0 + f * (double(y1) - y0);
-                        r.worstGap_m = std::max(r.worstGap_m, std::abs(yp - yq));
-                        ++r.interpolatedVertices;
-                    }
-                }
+                out.push_back({p, q, alongZ, lo, hi, pa, qa});
+            }
+        }
+    }
+    return out;
+}
+
+// For every pair of leaves sharing a stretch of edge, every vertex of either one on the shared
+// stretch must lie on the other one's edge polyline: exactly where both have a vertex, within
+// float rounding where the coarser edge interpolates.
+CrackReport checkCracks(const TerrainMesh& m) {
+    CrackReport r;
+    const auto& P = m.patches;
+    for (const SharedStretch& e : sharedStretches(m)) {
+        const PatchKey& kp = P[e.p].key;
+        const PatchKey& kq = P[e.q].key;
+        if (kp.level != kq.level) ++r.levelTransitions;
+        const double p0 = e.alongZ ? TerrainPatch::originZ_m(kp) : TerrainPatch::originX_m(kp);
+        const double q0 = e.alongZ ? TerrainPatch::originZ_m(kq) : TerrainPatch::originX_m(kq);
+        const double stepP = TerrainPatch::spacing_m(kp.level);
+        const double stepQ = TerrainPatch::spacing_m(kq.level);
+        for (int t = 0; t <= kQ; ++t) {
+            const double s = p0 + t * stepP;  // coordinate along the line
+            if (s < e.lo || s > e.hi) continue;
+            const float yp = e.alongZ ? vertexY(m, P[e.p], e.pa, t) : vertexY(m, P[e.p], t, e.pa);
+            // q's polyline at s.
+            const double u = (s - q0) / stepQ;
+            const int j = std::min(static_cast<int>(std::floor(u)), kQ - 1);
+            const double f = u - j;
+            const float y0 = e.alongZ ? vertexY(m, P[e.q], e.qa, j) : vertexY(m, P[e.q], j, e.qa);
+            const float y1 =
+                e.alongZ ? vertexY(m, P[e.q], e.qa, j + 1) : vertexY(m, P[e.q], j + 1, e.qa);
+            if (f == 0.0) {
+                if (yp != y0)
+                    r.worstGap_m = std::max(r.worstGap_m, std::abs(double(yp) - y0) + 1.0);
+                ++r.sharedVertices;
+            } else {
+                const double yq = y0 + f * (double(y1) - y0);
+                r.worstGap_m = std::max(r.worstGap_m, std::abs(yp - yq));
+                ++r.interpolatedVertices;
             }
         }
     }
@@ -259,6 +273,177 @@ TEST(TerrainPatch, ProxyIsSmallAndFollowsTheTerrain) {
         };
         ASSERT_GT(glm::cross(v(1) - v(0), v(2) - v(0)).y, 0.0);
     }
+}
+
+// ---- Corner values stitched across LOD boundaries ------------------------------------------
+
+// A colour field that is not linear in x and z: a coarse edge's interpolation differs from it at
+// the finer corners along the edge.
+glm::vec3 curvedField(const glm::dvec3& p) {
+    return glm::vec3(float(1.0 + 0.5 * std::sin(p.x / 37.0)),
+                     float(1.0 + 0.5 * std::cos(p.z / 23.0)),
+                     float(1.0 + 0.3 * std::sin((p.x + p.z) / 51.0)));
+}
+
+glm::vec3 linearField(const glm::dvec3& p) {
+    return glm::vec3(float(0.8 + 1e-3 * p.x - 2e-4 * p.z), float(0.5 - 5e-4 * p.x + 1e-3 * p.z),
+                     float(0.3 + 2e-4 * (p.x + p.z)));
+}
+
+std::vector<std::size_t> allPatches(const TerrainMesh& mesh) {
+    std::vector<std::size_t> all(mesh.patches.size());
+    std::iota(all.begin(), all.end(), std::size_t(0));
+    return all;
+}
+
+// Stitched values at every corner of `mesh`: the field where cornersToEvaluate(patches) asks
+// (NaN elsewhere, so a value read but never evaluated shows), then stitchCornerValues.
+std::vector<glm::vec3> stitchedCorners(const TerrainMesh& mesh,
+                                       glm::vec3 (*field)(const glm::dvec3&),
+                                       const std::vector<std::size_t>& patches) {
+    std::vector<glm::vec3> v(mesh.corners.size(),
+                             glm::vec3(std::numeric_limits<float>::quiet_NaN()));
+    for (std::uint32_t c : cornersToEvaluate(mesh, patches))
+        v[c] = field(mesh.corners[c].position_m);
+    stitchCornerValues(mesh.corners, v.data());
+    return v;
+}
+
+using PatchCorners = std::function<std::array<glm::vec3, 4>(std::size_t patch)>;
+
+// The colour patch p shows at world (x, z) on its square: its corner values, bilinear.
+glm::vec3 shownColour(const TerrainMesh& m, std::size_t p, const PatchCorners& corners, double x,
+                      double z) {
+    const PatchKey& k = m.patches[p].key;
+    const double size = TerrainPatch::size_m(k.level);
+    const float u = float((x - TerrainPatch::originX_m(k)) / size);
+    const float v = float((z - TerrainPatch::originZ_m(k)) / size);
+    const std::array<glm::vec3, 4> c = corners(p);
+    return glm::mix(glm::mix(c[0], c[1], u), glm::mix(c[2], c[3], u), v);
+}
+
+struct SeamReport {
+    int lodStretches = 0;  // shared stretches between leaves of different levels
+    int samples = 0;
+    double worst = 0.0;  // largest difference of a channel between the two sides
+};
+
+// Along every stretch shared by leaves of different levels, the colour each side shows at the
+// finer leaf's two corners on it and at three points between them.
+SeamReport checkSeams(const TerrainMesh& m, const PatchCorners& corners) {
+    SeamReport r;
+    for (const SharedStretch& e : sharedStretches(m)) {
+        const PatchKey& kp = m.patches[e.p].key;
+        if (kp.level >= m.patches[e.q].key.level) continue;  // p is the finer side
+        ++r.lodStretches;
+        const double size = TerrainPatch::size_m(kp.level);
+        const double across =
+            (e.alongZ ? TerrainPatch::originX_m(kp) : TerrainPatch::originZ_m(kp)) +
+            (e.pa == kQ ? size : 0.0);
+        for (int j = 0; j <= 4; ++j) {
+            const double along = e.lo + (e.hi - e.lo) * j / 4.0;
+            const double x = e.alongZ ? across : along, z = e.alongZ ? along : across;
+            const glm::vec3 d =
+                shownColour(m, e.p, corners, x, z) - shownColour(m, e.q, corners, x, z);
+            r.worst = std::max(
+                {r.worst, double(std::abs(d.x)), double(std::abs(d.y)), double(std::abs(d.z))});
+            if (std::isnan(d.x + d.y + d.z)) r.worst = 1e30;
+            ++r.samples;
+        }
+    }
+    return r;
+}
+
+PatchCorners stitchedOf(const TerrainMesh& m, const std::vector<glm::vec3>& values) {
+    return [&m, &values](std::size_t p) {
+        std::array<glm::vec3, 4> c;
+        for (int k = 0; k < 4; ++k) c[k] = values[m.patches[p].cornerIndex[k]];
+        return c;
+    };
+}
+
+PatchCorners unstitchedOf(const TerrainMesh& m, glm::vec3 (*field)(const glm::dvec3&)) {
+    return [&m, field](std::size_t p) {
+        std::array<glm::vec3, 4> c;
+        for (int k = 0; k < 4; ++k) c[k] = field(m.patches[p].corners_m[k]);
+        return c;
+    };
+}
+
+glm::dvec3 cameraAbove(double x, double z) {
+    return {x, defaultWorld().height(x, z) + 3.0, z};
+}
+
+// Two levels side by side (a 64 m leaf west of the four 32 m leaves of its east neighbour), then
+// a camera's selection with levels 0 to 6: along every edge between leaves of different levels
+// the fine side shows what the coarse side interpolates, at its corners and between them.
+TEST(TerrainPatch, CornerColoursMeetAcrossLodBoundaries) {
+    TerrainPatchCache cache(defaultWorld(), smallLod());
+    const std::vector<PatchKey> twoLevels = {{1, 0, 0}, {0, 2, 0}, {0, 3, 0}, {0, 2, 1}, {0, 3, 1}};
+    const glm::dvec3 camera = cameraAbove(250.0, -730.0);
+    const TerrainMesh meshes[2] = {cache.build(twoLevels, glm::dvec3(0.0)),
+                                   cache.build(camera, camera)};
+    for (const TerrainMesh& mesh : meshes) {
+        const std::vector<glm::vec3> stitched =
+            stitchedCorners(mesh, curvedField, allPatches(mesh));
+        const SeamReport after = checkSeams(mesh, stitchedOf(mesh, stitched));
+        const SeamReport before = checkSeams(mesh, unstitchedOf(mesh, curvedField));
+        EXPECT_GE(after.lodStretches, mesh.patches.size() == 5 ? 2 : 40);
+        // Values near 1 in float: agreement to rounding.
+        EXPECT_LT(after.worst, 1e-5) << "over " << after.samples << " points";
+        // Without stitching the seams are there (the field bends between the fine corners).
+        EXPECT_GT(before.worst, 1e-2);
+    }
+}
+
+// Where the field is linear in x and z a coarse edge's interpolation is the field itself:
+// stitching changes nothing.
+TEST(TerrainPatch, StitchingKeepsALinearField) {
+    TerrainPatchCache cache(defaultWorld(), smallLod());
+    const glm::dvec3 camera = cameraAbove(250.0, -730.0);
+    const TerrainMesh mesh = cache.build(camera, camera);
+    const std::vector<glm::vec3> stitched = stitchedCorners(mesh, linearField, allPatches(mesh));
+    int interpolated = 0;
+    for (const TerrainCorner& c : mesh.corners) interpolated += c.evaluated() ? 0 : 1;
+    EXPECT_GT(interpolated, 20);
+    double worst = 0.0;
+    for (const TerrainPatchDraw& d : mesh.patches) {
+        for (int k = 0; k < 4; ++k) {
+            const glm::vec3 diff = stitched[d.cornerIndex[k]] - linearField(d.corners_m[k]);
+            worst = std::max({worst, double(std::abs(diff.x)), double(std::abs(diff.y)),
+                              double(std::abs(diff.z))});
+        }
+    }
+    // Values up to about 4 in float.
+    EXPECT_LT(worst, 1e-5);
+}
+
+// Drawing only some patches (the visible ones) evaluates their corners and the coarser edge ends
+// they read, each once, and gives them the same values as stitching everything.
+TEST(TerrainPatch, CornersToEvaluateReachTheCoarserEdges) {
+    TerrainPatchCache cache(defaultWorld(), smallLod());
+    const glm::dvec3 camera = cameraAbove(250.0, -730.0);
+    const TerrainMesh mesh = cache.build(camera, camera);
+    const std::vector<glm::vec3> all = stitchedCorners(mesh, curvedField, allPatches(mesh));
+    std::vector<std::size_t> fine;
+    for (std::size_t p = 0; p < mesh.patches.size(); ++p) {
+        if (mesh.patches[p].key.level <= 1) fine.push_back(p);
+    }
+    ASSERT_FALSE(fine.empty());
+    const std::vector<glm::vec3> some = stitchedCorners(mesh, curvedField, fine);
+    for (std::size_t p : fine) {
+        for (int k = 0; k < 4; ++k) {
+            const std::uint32_t c = mesh.patches[p].cornerIndex[k];
+            EXPECT_EQ(some[c], all[c]) << "patch " << p << " corner " << k;
+        }
+    }
+    // Each lattice point once: no two corners at the same place; at most four per patch.
+    const std::vector<std::uint32_t> everything = cornersToEvaluate(mesh, allPatches(mesh));
+    std::set<std::pair<double, double>> places;
+    for (const TerrainCorner& c : mesh.corners) places.emplace(c.position_m.x, c.position_m.z);
+    EXPECT_EQ(places.size(), mesh.corners.size());
+    EXPECT_LT(everything.size(), 4 * mesh.patches.size());
+    EXPECT_LT(cornersToEvaluate(mesh, fine).size(), everything.size());
 }
 
 }  // namespace
