@@ -45,6 +45,9 @@ GlMesh uploadMesh(const WorldMesh& mesh) {
     glVertexArrayAttribBinding(vao, 3, 1);
     glVertexArrayAttribFormat(vao, 4, 2, GL_FLOAT, GL_FALSE, 16);
     glVertexArrayAttribBinding(vao, 4, 1);
+    // Irradiance per vertex (road pieces; SceneDrawer::draw binds and enables it per draw).
+    glVertexArrayAttribFormat(vao, 5, 3, GL_FLOAT, GL_FALSE, 0);
+    glVertexArrayAttribBinding(vao, 5, 5);
     glVertexArrayElementBuffer(vao, m.indices.id());
     return m;
 }
@@ -137,6 +140,7 @@ SceneDrawer::SceneDrawer()
     terrainOrigin_ = terrain_.uniform("uOrigin");
     terrainRect_ = terrain_.uniform("uPatchRect");
     terrainCorners_ = terrain_.uniform("uCornerIrradiance");
+    terrainPerVertex_ = terrain_.uniform("uVertexIrradiance");
 }
 
 void SceneDrawer::setSky(const SkyLighting& sky) {
@@ -205,18 +209,40 @@ std::size_t SceneDrawer::draw(const DrawList& list, const FrameConstants& consta
         }
     }
 
-    // Terrain patches (and road pieces): one draw each, corner irradiance per patch.
+    // Terrain patches (and road pieces): one draw each, corner irradiance per patch (or, for
+    // road pieces, irradiance per vertex from one buffer for the frame).
     terrain_.use();
+    if (!list.vertexIrradiance.empty()) {
+        if (list.vertexIrradiance.size() > vertexIrradianceCapacity_) {
+            vertexIrradianceCapacity_ =
+                std::max<std::size_t>(list.vertexIrradiance.size() * 2, 4096);
+            vertexIrradiance_ = makeBuffer(nullptr, vertexIrradianceCapacity_ * sizeof(glm::vec3),
+                                           GL_DYNAMIC_STORAGE_BIT);
+        }
+        glNamedBufferSubData(vertexIrradiance_.id(), 0,
+                             GLsizeiptr(list.vertexIrradiance.size() * sizeof(glm::vec3)),
+                             list.vertexIrradiance.data());
+    }
     for (const TerrainDraw& d : list.terrain) {
         glUniform3fv(terrainOrigin_, 1, &d.origin.x);
         glUniform4fv(terrainRect_, 1, &d.rect.x);
         glm::vec4 corners[4];
         for (int k = 0; k < 4; ++k) corners[k] = glm::vec4(d.cornerIrradiance[k], 0.0f);
         glUniform4fv(terrainCorners_, 4, &corners[0].x);
-        glBindVertexArray(d.mesh->vao.id());
+        const GLuint vao = d.mesh->vao.id();
+        const bool perVertex = d.firstVertexIrradiance >= 0;
+        glUniform1i(terrainPerVertex_, perVertex ? 1 : 0);
+        if (perVertex) {
+            glVertexArrayVertexBuffer(vao, 5, vertexIrradiance_.id(),
+                                      GLintptr(d.firstVertexIrradiance * sizeof(glm::vec3)),
+                                      sizeof(glm::vec3));
+            glEnableVertexArrayAttrib(vao, 5);
+        }
+        glBindVertexArray(vao);
         const GLsizei count = d.indexCount > 0 ? GLsizei(d.indexCount) : d.mesh->indexCount;
         glDrawElements(GL_TRIANGLES, count, GL_UNSIGNED_INT,
                        reinterpret_cast<const void*>(std::uintptr_t(d.firstIndex) * 4));
+        if (perVertex) glDisableVertexArrayAttrib(vao, 5);
         triangles += std::size_t(count) / 3;
     }
 

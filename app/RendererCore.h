@@ -3,8 +3,9 @@
 //
 // [SECTION] FrameConstants   the std140 block of shaders/common.glsl
 // [SECTION] GlMesh           a WorldMesh on the GPU (positions, normals, albedo, indices)
-// [SECTION] DrawList         terrain patches with corner irradiance, instanced objects with
-//                            ambient sets (three R&H 4x4 matrices each): the ambient slot
+// [SECTION] DrawList         terrain patches with corner irradiance, road pieces with irradiance
+//                            per vertex, instanced objects with ambient sets (three R&H 4x4
+//                            matrices each): the ambient slot
 // [SECTION] SkyLighting      sky texture, main light, hemisphere means; exposure
 // [SECTION] SceneDrawer      draws a DrawList: opaque terrain and objects, then the sky behind
 #pragma once
@@ -51,7 +52,8 @@ struct GlMesh {
     GLsizei indexCount = 0;
     std::size_t triangles() const { return std::size_t(indexCount) / 3; }
 };
-// Attributes 0..2 per vertex; attributes 3 and 4 read ObjectInstance from binding 1 (instanced).
+// Attributes 0..2 per vertex; attributes 3 and 4 read ObjectInstance from binding 1 (instanced);
+// attribute 5 (irradiance per vertex, binding 5) is enabled by the draws that use it.
 GlMesh uploadMesh(const WorldMesh& mesh);
 
 // ---- DrawList --------------------------------------------------------------------------------
@@ -61,6 +63,9 @@ struct TerrainDraw {
     glm::vec3 origin{0.0f};                        // patch origin, camera-relative [m]
     glm::vec4 rect{0, 0, 1, 1};  // (x0, z0) relative to the origin [m], 1/size [1/m]
     std::array<glm::vec3, 4> cornerIrradiance{};  // (x0,z0), (x1,z0), (x0,z1), (x1,z1)
+    // Road pieces: the irradiance of mesh vertex v is DrawList::vertexIrradiance[this + v]
+    // (the corners and rect are then unused); -1: the corners, bilinear across the rect.
+    std::int64_t firstVertexIrradiance = -1;
 };
 
 struct ObjectInstance {
@@ -82,11 +87,13 @@ struct AmbientSet {
 struct DrawList {
     std::vector<TerrainDraw> terrain;
     std::vector<ObjectBatch> objects;
-    std::vector<AmbientSet> ambientSets;  // indexed by ObjectInstance::rotationSet.y
+    std::vector<AmbientSet> ambientSets;      // indexed by ObjectInstance::rotationSet.y
+    std::vector<glm::vec3> vertexIrradiance;  // see TerrainDraw::firstVertexIrradiance
     void clear() {
         terrain.clear();
         objects.clear();
         ambientSets.clear();
+        vertexIrradiance.clear();
     }
 };
 
@@ -137,9 +144,11 @@ class SceneDrawer {
     std::size_t instanceCapacity_ = 0;
     GlBuffer ambientSets_;
     std::size_t ambientCapacity_ = 0;
+    GlBuffer vertexIrradiance_;
+    std::size_t vertexIrradianceCapacity_ = 0;
     GlTexture skyTexture_;
     GlVertexArray emptyVao_;
-    GLint terrainOrigin_ = -1, terrainRect_ = -1, terrainCorners_ = -1;
+    GLint terrainOrigin_ = -1, terrainRect_ = -1, terrainCorners_ = -1, terrainPerVertex_ = -1;
 };
 
 }  // namespace amb

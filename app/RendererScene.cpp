@@ -2,7 +2,7 @@
 //
 // [SECTION] Culling      frustum planes from the camera-relative view-projection (reversed Z)
 // [SECTION] Terrain      TerrainPatchCache leaves, rebuilt and re-uploaded only when they change
-// [SECTION] Roads        ribbons along the centrelines, in chunks for culling
+// [SECTION] Roads        ribbons along the centrelines, in chunks for culling, lit per vertex
 // [SECTION] Plants       per-tile culling, per-plant distance LOD (full mesh, proxy, none)
 // [SECTION] Capture      terrain proxy + tree proxies + roads around the probe
 #include "app/RendererScene.h"
@@ -12,6 +12,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "world/Road.h"
 #include "world/Vegetation.h"
 #include "world/Vehicle.h"
 #include "world/World.h"
@@ -55,6 +56,7 @@ double horizontalDistance(const glm::dvec3& a, const glm::dvec3& b) {
 struct RendererScene::RoadChunk {
     glm::dvec3 origin_m;
     glm::dvec3 min_m, max_m;
+    std::vector<glm::dvec3> vertices_m, normals;  // per mesh vertex, world position and normal
     GlMesh mesh;
 };
 
@@ -103,42 +105,21 @@ RendererScene::RendererScene(const World& world, const RendererSceneSettings& se
         const auto& c = road.centreline;
         for (size_t start = 0; start + 1 < c.size(); start += kRoadChunkSegments) {
             const size_t end = std::min(c.size() - 1, start + kRoadChunkSegments);
-            WorldMesh m;
+            const WorldMesh m = roadRibbon(road, start, end, settings.roadLift_m, roadAlbedo);
             RoadChunk chunk;
             chunk.origin_m = c[start];
             chunk.min_m = glm::dvec3(1e300);
             chunk.max_m = glm::dvec3(-1e300);
-            for (size_t i = start; i <= end; ++i) {
-                const glm::dvec3 a = c[i > 0 ? i - 1 : i], b = c[std::min(i + 1, c.size() - 1)];
-                glm::dvec3 t = b - a;
-                t.y = 0.0;
-                const glm::dvec3 side = glm::normalize(glm::dvec3(-t.z, 0.0, t.x));
-                for (int s = -1; s <= 1; s += 2) {
-                    glm::dvec3 p = c[i] + side * (s * road.halfWidth_m);
-                    p.y = c[i].y + settings.roadLift_m;
-                    chunk.min_m = glm::min(chunk.min_m, p);
-                    chunk.max_m = glm::max(chunk.max_m, p);
-                    const glm::dvec3 rel = p - chunk.origin_m;
-                    m.positions.insert(m.positions.end(),
-                                       {float(rel.x), float(rel.y), float(rel.z)});
-                    m.normals.insert(m.normals.end(), {0.0f, 1.0f, 0.0f});
-                    m.albedo.insert(m.albedo.end(), {roadAlbedo.r, roadAlbedo.g, roadAlbedo.b});
-                }
-            }
-            for (std::uint32_t q = 0; q + 1 < std::uint32_t(end - start + 1); ++q) {
-                const std::uint32_t l0 = 2 * q, r0 = l0 + 1, l1 = l0 + 2, r1 = l0 + 3;
-                // Counter-clockwise seen from above whichever way the side vector points.
-                m.indices.insert(m.indices.end(), {l0, r0, l1, r0, r1, l1});
-            }
-            // Make every triangle face up.
-            for (size_t t = 0; t < m.indices.size(); t += 3) {
-                auto P = [&](std::uint32_t v) {
-                    return glm::vec3(m.positions[3 * v], m.positions[3 * v + 1],
-                                     m.positions[3 * v + 2]);
-                };
-                const glm::vec3 n = glm::cross(P(m.indices[t + 1]) - P(m.indices[t]),
-                                               P(m.indices[t + 2]) - P(m.indices[t]));
-                if (n.y < 0.0f) std::swap(m.indices[t + 1], m.indices[t + 2]);
+            // World positions and normals of the vertices: where the draw looks up the ambient.
+            for (size_t v = 0; v < m.vertexCount(); ++v) {
+                const glm::dvec3 p =
+                    chunk.origin_m +
+                    glm::dvec3(m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]);
+                chunk.min_m = glm::min(chunk.min_m, p);
+                chunk.max_m = glm::max(chunk.max_m, p);
+                chunk.vertices_m.push_back(p);
+                chunk.normals.emplace_back(m.normals[3 * v], m.normals[3 * v + 1],
+                                           m.normals[3 * v + 2]);
             }
             chunk.mesh = uploadMesh(m);
             roads_.push_back(std::move(chunk));
@@ -215,19 +196,28 @@ void RendererScene::buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj
         visible.emplace_back(glm::length(nearest - eye_m), i);
     }
     std::sort(visible.begin(), visible.end());
-    // The visible patches' corners in one batch (the frame's largest set of lookups).
+    // The visible patches' corners in one batch (the frame's largest set of lookups), each
+    // shared corner once; a corner inside a coarser neighbour's edge is not looked up but takes
+    // that edge's interpolation, so colours meet across LOD boundaries (world/TerrainPatch.h).
+    std::vector<std::size_t> visiblePatches;
+    for (const auto& [distance, i] : visible) visiblePatches.push_back(i);
+    const std::vector<std::uint32_t> evaluate = cornersToEvaluate(terrainMesh_, visiblePatches);
     std::vector<glm::dvec3> cornerAt, cornerNormal;
-    for (const auto& [distance, i] : visible) {
-        const TerrainPatchDraw& p = terrainMesh_.patches[i];
-        cornerAt.insert(cornerAt.end(), p.corners_m.begin(), p.corners_m.end());
-        cornerNormal.insert(cornerNormal.end(), p.cornerNormals.begin(), p.cornerNormals.end());
+    for (std::uint32_t c : evaluate) {
+        cornerAt.push_back(terrainMesh_.corners[c].position_m);
+        cornerNormal.push_back(terrainMesh_.corners[c].normal);
     }
     std::vector<glm::vec3> irradiance(cornerAt.size());
     ambient.cornerIrradianceBatch(cornerAt.size(), cornerAt.data(), cornerNormal.data(),
                                   irradiance.data());
-    for (std::size_t v = 0; v < visible.size(); ++v) {
-        out.terrain.push_back(patchDraw(terrainGl_, terrainMesh_.patches[visible[v].second],
-                                        terrainMesh_.origin_m, eye_m, &irradiance[4 * v]));
+    std::vector<glm::vec3> cornerValue(terrainMesh_.corners.size(), glm::vec3(0.0f));
+    for (std::size_t j = 0; j < evaluate.size(); ++j) cornerValue[evaluate[j]] = irradiance[j];
+    stitchCornerValues(terrainMesh_.corners, cornerValue.data());
+    for (std::size_t i : visiblePatches) {
+        const TerrainPatchDraw& p = terrainMesh_.patches[i];
+        glm::vec3 corners[4];
+        for (int k = 0; k < 4; ++k) corners[k] = cornerValue[p.cornerIndex[k]];
+        out.terrain.push_back(patchDraw(terrainGl_, p, terrainMesh_.origin_m, eye_m, corners));
     }
     const std::size_t drawnPatches = visible.size();
     addRoads(eye_m, &viewProj, settings_.terrain.viewRadius_m, ambient, out);
@@ -256,6 +246,10 @@ void RendererScene::addRoads(const glm::dvec3& eye_m, const glm::mat4* viewProj,
                              const AmbientSource& ambient, DrawList& out) {
     Frustum frustum{};
     if (viewProj) frustum = frustumOf(*viewProj);
+    // The ambient at every vertex of the visible pieces, with the vertex's own normal, in one
+    // batch (docs/DESIGN.md "Terrain and objects").
+    std::vector<const RoadChunk*> drawn;
+    std::vector<glm::dvec3> at, normal;
     for (const RoadChunk& c : roads_) {
         const glm::dvec3 centre = 0.5 * (c.min_m + c.max_m);
         const double radius = 0.5 * glm::length(c.max_m - c.min_m);
@@ -263,17 +257,21 @@ void RendererScene::addRoads(const glm::dvec3& eye_m, const glm::mat4* viewProj,
         if (viewProj &&
             !boxVisible(frustum, glm::vec3(c.min_m - eye_m), glm::vec3(c.max_m - eye_m)))
             continue;
+        drawn.push_back(&c);
+        at.insert(at.end(), c.vertices_m.begin(), c.vertices_m.end());
+        normal.insert(normal.end(), c.normals.begin(), c.normals.end());
+    }
+    const std::size_t first = out.vertexIrradiance.size();
+    out.vertexIrradiance.resize(first + at.size());
+    ambient.cornerIrradianceBatch(at.size(), at.data(), normal.data(),
+                                  out.vertexIrradiance.data() + first);
+    std::size_t offset = first;
+    for (const RoadChunk* c : drawn) {
         TerrainDraw d;
-        d.mesh = &c.mesh;
-        d.origin = glm::vec3(c.origin_m - eye_m);
-        const glm::dvec3 lo = c.min_m - c.origin_m, size = c.max_m - c.min_m;
-        d.rect = glm::vec4(float(lo.x), float(lo.z), float(1.0 / std::max(size.x, 1.0)),
-                           float(1.0 / std::max(size.z, 1.0)));
-        const glm::dvec3 up(0.0, 1.0, 0.0);
-        d.cornerIrradiance = {ambient.cornerIrradiance({c.min_m.x, c.min_m.y, c.min_m.z}, up),
-                              ambient.cornerIrradiance({c.max_m.x, c.min_m.y, c.min_m.z}, up),
-                              ambient.cornerIrradiance({c.min_m.x, c.min_m.y, c.max_m.z}, up),
-                              ambient.cornerIrradiance({c.max_m.x, c.min_m.y, c.max_m.z}, up)};
+        d.mesh = &c->mesh;
+        d.origin = glm::vec3(c->origin_m - eye_m);
+        d.firstVertexIrradiance = std::int64_t(offset);
+        offset += c->vertices_m.size();
         out.terrain.push_back(d);
     }
 }

@@ -24,16 +24,17 @@ class World;
 
 // ---- AmbientSource ---------------------------------------------------------------------------
 // What the draw needs from the ambient term (docs/DESIGN.md "The frame", stage 5): the
-// irradiance at each terrain-patch corner for its normal, and one set of R&H matrices per object.
+// irradiance at each terrain-patch corner and road vertex for its normal, and one set of R&H
+// matrices per object.
 // Constant and hemisphere ambient implement it now; the ambience volume implements it next.
 class AmbientSource {
   public:
     virtual ~AmbientSource() = default;
     virtual glm::vec3 cornerIrradiance(const glm::dvec3& position_m,
                                        const glm::dvec3& normal) const = 0;
-    // The same at `count` corners at once (a frame's terrain corners): out[i] for position i
-    // and normal i. One by one by default; a source over an interpolated volume answers the
-    // batch with one cache check and no per-call overhead.
+    // The same at `count` points at once (a frame's terrain corners, its road vertices): out[i]
+    // for position i and normal i. One by one by default; a source over an interpolated volume
+    // answers the batch with one cache check and no per-call overhead.
     virtual void cornerIrradianceBatch(std::size_t count, const glm::dvec3* positions_m,
                                        const glm::dvec3* normals, glm::vec3* out) const {
         for (std::size_t i = 0; i < count; ++i)

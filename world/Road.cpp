@@ -1,7 +1,7 @@
 // Road.cpp — routing, spline smoothing, grade-bounded profile and the spatial index of roads.
 //
 // [SECTION] Index
-//   Road queries (pointAt, tangentAt)
+//   Road queries (pointAt, tangentAt), the ribbon mesh to draw
 //   Routing grid and Dijkstra
 //   Endpoints of the highway and the mountain road
 //   Smoothing (Laplacian relaxation + cubic B-spline) and resampling
@@ -67,6 +67,42 @@ glm::dvec3 Road::tangentAt(double s_m) const {
     const double t = u - double(i);
     const glm::dvec3 d = glm::mix(vertexTangent(i), vertexTangent(i + 1), t);
     return glm::normalize(d);
+}
+
+WorldMesh roadRibbon(const Road& road, std::size_t first, std::size_t last, double lift_m,
+                     const glm::vec3& albedo) {
+    const auto& c = road.centreline;
+    AMB_CHECK(first < last && last < c.size());
+    WorldMesh m;
+    for (std::size_t i = first; i <= last; ++i) {
+        const glm::dvec3 along = c[std::min(i + 1, c.size() - 1)] - c[i > 0 ? i - 1 : i];
+        const glm::dvec3 side = glm::normalize(glm::dvec3(-along.z, 0.0, along.x));
+        glm::dvec3 n = glm::normalize(glm::cross(side, along));
+        if (n.y < 0.0) n = -n;
+        for (int s = -1; s <= 1; s += 2) {
+            glm::dvec3 p = c[i] + side * (s * road.halfWidth_m);
+            p.y = c[i].y + lift_m;
+            const glm::dvec3 rel = p - c[first];
+            m.positions.insert(m.positions.end(), {float(rel.x), float(rel.y), float(rel.z)});
+            m.normals.insert(m.normals.end(), {float(n.x), float(n.y), float(n.z)});
+            m.albedo.insert(m.albedo.end(), {albedo.r, albedo.g, albedo.b});
+        }
+    }
+    for (std::uint32_t q = 0; q < std::uint32_t(last - first); ++q) {
+        const std::uint32_t l0 = 2 * q, r0 = l0 + 1, l1 = l0 + 2, r1 = l0 + 3;
+        m.indices.insert(m.indices.end(), {l0, r0, l1, r0, r1, l1});
+    }
+    // Make every triangle face up (counter-clockwise seen from above), whichever way the side
+    // vector points.
+    const auto P = [&](std::uint32_t v) {
+        return glm::vec3(m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]);
+    };
+    for (std::size_t t = 0; t < m.indices.size(); t += 3) {
+        const glm::vec3 n = glm::cross(P(m.indices[t + 1]) - P(m.indices[t]),
+                                       P(m.indices[t + 2]) - P(m.indices[t]));
+        if (n.y < 0.0f) std::swap(m.indices[t + 1], m.indices[t + 2]);
+    }
+    return m;
 }
 
 // ---- Routing grid and Dijkstra --------------------------------------------------------------

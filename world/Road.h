@@ -20,6 +20,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "world/WorldMesh.h"
 #include "world/WorldSettings.h"
 
 namespace amb {
@@ -37,6 +38,14 @@ struct Road {
     // Horizontal arc length at centreline vertex i (the vertices are evenly spaced).
     double vertexDistance_m(std::size_t i) const;
 };
+
+// The stretch of `road` from centreline vertex `first` to `last` as a ribbon to draw: a left and
+// a right vertex per centreline vertex at the half width, lifted `lift_m` above the surface,
+// positions relative to centreline[first], every triangle facing up. The surface is level across
+// the road and follows its grade along it, so each normal is perpendicular to the horizontal
+// across direction and to the centreline's (central-difference) tangent.
+WorldMesh roadRibbon(const Road& road, std::size_t first, std::size_t last, double lift_m,
+                     const glm::vec3& albedo);
 
 struct RoadQuery {
     double distance_m;       // horizontal (XZ) distance to the centreline

@@ -1,13 +1,18 @@
 // Renderer_test.cpp — the main view on EGL and OSMesa: sky above the horizon and terrain below by
-// pixel statistics against the sky model, and the two platforms agree (PSNR >= 40 dB).
+// pixel statistics against the sky model, and the two platforms agree (PSNR >= 40 dB); road
+// vertices are lit at their own positions and normals.
 #include "app/Renderer.h"
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include "GlTestContext.h"
+#include "app/RendererScene.h"
 #include "world/Conventions.h"
 #include "world/Error.h"
 #include "world/World.h"
@@ -146,6 +151,115 @@ TEST(Renderer, RejectsAbsurdSizes) {
     rs.width = 0;
     rs.height = 0;
     EXPECT_THROW(Renderer(world, rs), InputError);
+}
+
+// An ambient that bends with x and z and turns with the normal; it counts the lookups made one
+// at a time (the draw should batch them).
+class CurvedAmbient final : public AmbientSource {
+  public:
+    static glm::vec3 field(const glm::dvec3& p, const glm::dvec3& n) {
+        return glm::vec3(float(1.0 + 0.3 * std::sin(p.x / 37.0)),
+                         float(1.0 + 0.3 * std::cos(p.z / 23.0)), float(1.0 + 2.0 * (n.x + n.z)));
+    }
+    glm::vec3 cornerIrradiance(const glm::dvec3& p, const glm::dvec3& n) const override {
+        ++singles;
+        return field(p, n);
+    }
+    void cornerIrradianceBatch(std::size_t count, const glm::dvec3* p, const glm::dvec3* n,
+                               glm::vec3* out) const override {
+        for (std::size_t i = 0; i < count; ++i) out[i] = field(p[i], n[i]);
+    }
+    std::uint32_t objectSet(const glm::dvec3&, std::vector<AmbientSet>& sets) const override {
+        sets.emplace_back();
+        return std::uint32_t(sets.size() - 1);
+    }
+    mutable int singles = 0;
+};
+
+template <class T>
+std::vector<T> readBack(const GlBuffer& buffer) {
+    GLint bytes = 0;
+    glGetNamedBufferParameteriv(buffer.id(), GL_BUFFER_SIZE, &bytes);
+    std::vector<T> out(std::size_t(bytes) / sizeof(T));
+    glGetNamedBufferSubData(buffer.id(), 0, bytes, out.data());
+    return out;
+}
+
+// Looking down onto the steepest stretch of the mountain road: each road vertex is lit by the
+// ambient at its own position with its own (tilted) normal, through the batch, so the colour
+// follows the field along the road and differs from the old lighting (the chunk's bounding-box
+// corners with an up normal, bilinear).
+TEST(Renderer, RoadsAreLitAtTheirOwnVerticesAndNormals) {
+    AMB_REQUIRE_PLATFORM(platform, Backend::Auto, kW, kH);
+    const World world(WorldSettings{});
+    const auto& c = world.roads().find("mountain")->centreline;
+    std::size_t steep = 24;
+    for (std::size_t i = 24; i + 24 < c.size(); i += 8) {
+        if (std::abs(c[i + 24].y - c[i - 24].y) > std::abs(c[steep + 24].y - c[steep - 24].y))
+            steep = i;
+    }
+    const glm::dvec3 target = c[steep];
+    const glm::dvec3 eye = target + glm::dvec3(0.0, 80.0, 40.0);
+    const glm::vec3 forward = glm::normalize(glm::vec3(target - eye));
+    const glm::vec3 right = glm::normalize(glm::cross(forward, glm::vec3(0, 1, 0)));
+    const glm::mat4 viewProj = reversedInfinitePerspective(1.0471976f, float(kW) / kH, 0.1f) *
+                               glm::lookAt(glm::vec3(0.0f), forward, glm::cross(right, forward));
+    RendererScene scene(world);
+    DrawList list;
+    const CurvedAmbient ambient;
+    scene.buildView(eye, viewProj, ambient, list);
+    EXPECT_EQ(ambient.singles, 0);
+
+    int roadDraws = 0, targetChunks = 0;
+    double worst = 0.0;
+    for (const TerrainDraw& d : list.terrain) {
+        if (d.firstVertexIrradiance < 0) continue;
+        ++roadDraws;
+        const std::vector<glm::vec3> pos = readBack<glm::vec3>(d.mesh->positions);
+        const std::vector<glm::vec3> nrm = readBack<glm::vec3>(d.mesh->normals);
+        ASSERT_EQ(pos.size(), nrm.size());
+        ASSERT_LE(std::size_t(d.firstVertexIrradiance) + pos.size(), list.vertexIrradiance.size());
+        glm::dvec3 lo(1e300), hi(-1e300);
+        std::vector<glm::dvec3> at(pos.size());
+        bool hasTarget = false;
+        for (std::size_t v = 0; v < pos.size(); ++v) {
+            at[v] = eye + glm::dvec3(d.origin) + glm::dvec3(pos[v]);
+            lo = glm::min(lo, at[v]);
+            hi = glm::max(hi, at[v]);
+            hasTarget = hasTarget || std::hypot(at[v].x - target.x, at[v].z - target.z) < 6.0;
+            const glm::vec3 got = list.vertexIrradiance[std::size_t(d.firstVertexIrradiance) + v];
+            const glm::vec3 expected = CurvedAmbient::field(at[v], glm::dvec3(nrm[v]));
+            worst = std::max(worst, double(glm::length(got - expected)));
+        }
+        if (!hasTarget) continue;
+        ++targetChunks;
+        // The old lighting of this chunk, and how far the colours range along it.
+        const glm::dvec3 up(0.0, 1.0, 0.0);
+        const glm::vec3 e00 = CurvedAmbient::field({lo.x, lo.y, lo.z}, up);
+        const glm::vec3 e10 = CurvedAmbient::field({hi.x, lo.y, lo.z}, up);
+        const glm::vec3 e01 = CurvedAmbient::field({lo.x, lo.y, hi.z}, up);
+        const glm::vec3 e11 = CurvedAmbient::field({hi.x, lo.y, hi.z}, up);
+        double fromOld = 0.0, tilt = 0.0;
+        glm::vec3 least(1e30f), most(-1e30f);
+        for (std::size_t v = 0; v < pos.size(); ++v) {
+            const float u = float((at[v].x - lo.x) / std::max(hi.x - lo.x, 1.0));
+            const float w = float((at[v].z - lo.z) / std::max(hi.z - lo.z, 1.0));
+            const glm::vec3 old = glm::mix(glm::mix(e00, e10, u), glm::mix(e01, e11, u), w);
+            const glm::vec3 got = list.vertexIrradiance[std::size_t(d.firstVertexIrradiance) + v];
+            fromOld = std::max(fromOld, double(glm::length(got - old)));
+            least = glm::min(least, got);
+            most = glm::max(most, got);
+            tilt = std::max(tilt, std::sqrt(1.0 - double(nrm[v].y) * nrm[v].y));
+        }
+        EXPECT_GT(tilt, 0.03) << "the stretch is on a grade";
+        EXPECT_GT(fromOld, 0.05);
+        // 48 segments of 3 m: the field's x and z terms turn by more than a radian along it.
+        EXPECT_GT(std::max(most.x - least.x, most.y - least.y), 0.1f);
+    }
+    EXPECT_GT(roadDraws, 0);
+    EXPECT_GE(targetChunks, 1);
+    // Positions read back relative to the eye in float: a few micrometres.
+    EXPECT_LT(worst, 1e-4);
 }
 
 }  // namespace

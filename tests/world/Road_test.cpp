@@ -1,4 +1,5 @@
-// Road_test.cpp — routed roads: length, grade bound, smoothness, water, determinism, queries.
+// Road_test.cpp — routed roads: length, grade bound, smoothness, water, determinism, queries,
+// the ribbon mesh drawn.
 #include "world/Road.h"
 
 #include <cmath>
@@ -227,6 +228,54 @@ TEST(Road, SmallRegionStillRoutesInsideIt) {
             ASSERT_LE(std::abs(p.x), settings.roadRegion_m);
             ASSERT_LE(std::abs(p.z), settings.roadRegion_m);
         }
+    }
+}
+
+// The ribbon the renderer draws: two vertices per centreline vertex at the half width, lifted,
+// facing up; on a grade its normals tilt along the road, perpendicular to the centreline's
+// tangent and to the level across direction.
+TEST(Road, RibbonFollowsTheGradeWithItsNormals) {
+    const Road& mountain = *defaultWorld().network.find("mountain");
+    const auto& c = mountain.centreline;
+    // The steepest stretch of 48 segments.
+    std::size_t first = 1;
+    double steepest = 0.0;
+    for (std::size_t i = 1; i + 49 < c.size(); i += 16) {
+        const double grade = std::abs(c[i + 48].y - c[i].y) / (48.0 * RoadNetwork::kRoadSpacing_m);
+        if (grade > steepest) steepest = grade, first = i;
+    }
+    ASSERT_GT(steepest, 0.03);
+    const std::size_t last = first + 48;
+    const double lift = 0.12;
+    const WorldMesh m = roadRibbon(mountain, first, last, lift, glm::vec3(0.1f));
+    ASSERT_EQ(m.vertexCount(), 2 * (last - first + 1));
+    EXPECT_EQ(m.triangleCount(), 2 * (last - first));
+    double largestTilt = 0.0;
+    for (std::size_t i = first; i <= last; ++i) {
+        const glm::dvec3 along = c[std::min(i + 1, c.size() - 1)] - c[i - 1];
+        for (int s = 0; s < 2; ++s) {
+            const std::size_t v = 2 * (i - first) + s;
+            const glm::dvec3 p = c[first] + glm::dvec3(m.positions[3 * v], m.positions[3 * v + 1],
+                                                       m.positions[3 * v + 2]);
+            const glm::dvec3 n(m.normals[3 * v], m.normals[3 * v + 1], m.normals[3 * v + 2]);
+            EXPECT_NEAR(horizontal(p, c[i]), mountain.halfWidth_m, 1e-3);
+            EXPECT_NEAR(p.y, c[i].y + lift, 1e-3);
+            EXPECT_NEAR(glm::length(n), 1.0, 1e-6);
+            EXPECT_GT(n.y, 0.0);
+            EXPECT_NEAR(glm::dot(n, glm::normalize(along)), 0.0, 1e-6);  // follows the grade
+            const glm::dvec3 across = p - glm::dvec3(c[i].x, c[i].y + lift, c[i].z);
+            EXPECT_NEAR(glm::dot(n, across), 0.0, 1e-3);  // level across
+            largestTilt = std::max(largestTilt, std::sqrt(1.0 - n.y * n.y));
+        }
+    }
+    // sin of the tilt is about the grade.
+    EXPECT_GT(largestTilt, 0.5 * steepest);
+    for (std::size_t t = 0; t < m.indices.size(); t += 3) {
+        const auto P = [&](int k) {
+            const std::uint32_t v = m.indices[t + k];
+            return glm::dvec3(m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]);
+        };
+        ASSERT_GT(glm::cross(P(1) - P(0), P(2) - P(0)).y, 0.0);
     }
 }
 
