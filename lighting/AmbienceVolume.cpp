@@ -56,6 +56,7 @@ AmbienceVolumeSettings ambienceSettingsFromJson(const std::string& jsonText,
             o.number("maxLifetime_s", t.maxLifetime_s, 1e-3, kBig);
             o.number("regenerateFraction", t.regenerateFraction, 0.0, 1.0);
             o.integer("searchCells", t.searchCells, 1, 16);
+            o.boolean("smoothInterpolation", t.smoothInterpolation);
         });
         f.object("scheduler", [&](JsonFields& o) {
             ProbeSchedulerSettings& t = s.scheduler;

@@ -1,8 +1,10 @@
-// AnchorField.cpp — hierarchical bilinear interpolation of the anchor store (see AnchorField.h).
+// AnchorField.cpp — hierarchical bicubic Hermite interpolation of the anchor store (see
+// AnchorField.h).
 #include "lighting/AnchorField.h"
 
 #include <algorithm>
 #include <cmath>
+#include <unordered_map>
 
 namespace amb {
 
@@ -21,6 +23,43 @@ ShRgb fromFloats(const float* in) {
     for (int k = 0; k < kShCoefficients; ++k)
         for (int ch = 0; ch < 3; ++ch) sh.c[k][ch] = in[3 * k + ch];
     return sh;
+}
+
+// A slope from the differences on either side of a sample: their harmonic mean where they agree
+// in sign (the central difference for equal ones, smaller near an extremum), 0 where they do not:
+// a Hermite cubic with such slopes stays within its samples' range in one dimension. Continuous
+// in the differences.
+double harmonicSlope(double left, double right) {
+    if (!(left * right > 0.0)) return 0.0;
+    return 2.0 * left * right / (left + right);
+}
+
+// The smallest in magnitude of four values that agree in sign, else 0 (continuous).
+double minMod4(const double* q) {
+    double m = q[0];
+    for (int n = 1; n < 4; ++n) {
+        if (!(q[n] * m > 0.0)) return 0.0;
+        if (std::fabs(q[n]) < std::fabs(m)) m = q[n];
+    }
+    return m;
+}
+
+// out = sum over the 4 corners q and their 4 blocks m (value, slopes, twist; kStride floats
+// each, kStride x 4 per corner) of weight[4q + m] x block: the lookup's inner loop. Built twice
+// with GCC on x86-64, for the baseline and for AVX2 with FMA, chosen when the program starts.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+__attribute__((target_clones("default", "arch=haswell")))
+#endif
+void blend16(const float* const corner[4], const float* weight, float* out) {
+    constexpr int kStride = 28;
+    for (int j = 0; j < kStride; ++j) out[j] = 0.0f;
+    for (int q = 0; q < 4; ++q) {
+        for (int m = 0; m < 4; ++m) {
+            const float wm = weight[4 * q + m];
+            const float* block = corner[q] + m * kStride;
+            for (int j = 0; j < kStride; ++j) out[j] += wm * block[j];
+        }
+    }
 }
 
 // floor() for |v| < 2^62 without a library call.
@@ -53,7 +92,7 @@ std::size_t AnchorField::cells() const {
 }
 
 std::size_t AnchorField::bytes() const {
-    std::size_t b = sizeof(*this) + corners_.capacity() * sizeof(float);
+    std::size_t b = sizeof(*this) + points_.capacity() * sizeof(float);
     for (const CellMap& m : cells_)
         b += m.bucket_count() * (sizeof(std::pair<CellKey, CellRef>) + sizeof(std::uint64_t));
     b += levelsIn_.bucket_count() *
@@ -61,16 +100,31 @@ std::size_t AnchorField::bytes() const {
     return b;
 }
 
+std::array<double, 4> AnchorField::hermite(double t, bool derivative) {
+    const double t2 = t * t, t3 = t2 * t;
+    if (derivative)
+        return {6.0 * t2 - 6.0 * t, 3.0 * t2 - 4.0 * t + 1.0, -6.0 * t2 + 6.0 * t, 3.0 * t2 - 2.0 * t};
+    return {2.0 * t3 - 3.0 * t2 + 1.0, t3 - 2.0 * t2 + t, -2.0 * t3 + 3.0 * t2, t3 - t2};
+}
+
+std::array<double, 27> AnchorField::slopeBound() const {
+    std::array<double, 27> bound{};
+    for (int L = 0; L < lattice_.levels; ++L)
+        for (int j = 0; j < kN; ++j) bound[j] = std::max(bound[j], slope_[L][j]);
+    return bound;
+}
+
 void AnchorField::rebuild(const FieldLattice& lattice, const std::vector<FieldAnchor>& anchors,
                           const ShRgb& fallback, int fromLevel) {
-    if (!built_) fromLevel = 0;  // never built: all of it
+    if (!built_ || lattice.smooth != lattice_.smooth) fromLevel = 0;  // all of it
     lattice_ = lattice;
+    pf_ = lattice.smooth ? 4 * kStride : kStride;
     lattice_.levels = std::clamp(lattice.levels, 1, kFieldMaxLevels);
     fromLevel = std::min(fromLevel, lattice_.levels);
     for (int L = 0; L < lattice_.levels; ++L) inverseSpacing_[L] = 1.0 / lattice_.spacing[L];
     fallback_ = fallback;
-    for (int L = fromLevel; L < kFieldMaxLevels; ++L) cells_[L].clear();
-    corners_.resize(levelStart_[fromLevel] * kN);
+    for (int L = fromLevel; L < kFieldMaxLevels; ++L) cells_[L].clear(), slope_[L].fill(0.0);
+    points_.resize(levelStart_[fromLevel] * pf_);
     levelsIn_.clear();
     finest_ = -1;
 
@@ -84,7 +138,7 @@ void AnchorField::rebuild(const FieldLattice& lattice, const std::vector<FieldAn
     for (int L = 0; L < lattice_.levels; ++L) {
         if (L >= fromLevel) {
             buildLevel(L, anchors);
-            levelStart_[L + 1] = corners_.size() / kN;
+            levelStart_[L + 1] = points_.size() / pf_;
         }
         if (cells_[L].empty()) continue;
         finest_ = L;
@@ -98,30 +152,72 @@ void AnchorField::rebuild(const FieldLattice& lattice, const std::vector<FieldAn
     built_ = true;
 }
 
+// F_{L-1}'s Hermite data at (x, z), derivatives scaled to level-L units: the finest stored cell
+// of a coarser level, or the fallback (flat).
+void AnchorField::coarserData(int L, double x, double z, double* out) const {
+    std::fill(out, out + 4 * kN, 0.0);
+    Hit hit;
+    float value[kN];
+    toFloats(L == 0 ? fallback_ : at(x, z, &hit, L - 1), value);
+    for (int j = 0; j < kN; ++j) out[j] = double(value[j]);  // the value exactly as at() gives it
+    if (L == 0 || hit.level < 0 || !lattice_.smooth) return;
+    const auto it = cells_[hit.level].find(CellKey{hit.i, hit.k});
+    const float* r[2] = {points_.data() + std::size_t(it->second.row0) * pf_,
+                         points_.data() + std::size_t(it->second.row1) * pf_};
+    // d/du, d/dw and d2/dudw of the coarser cell, then to level-L units (s_L / s_hit = 3^-n).
+    const std::array<double, 4> hu = hermite(hit.u), hw = hermite(hit.w);
+    const std::array<double, 4> du = hermite(hit.u, true), dw = hermite(hit.w, true);
+    double ratio = 1.0;
+    for (int n = hit.level; n < L; ++n) ratio /= 3.0;
+    const std::array<double, 4>* wu[3] = {&du, &hu, &du};
+    const std::array<double, 4>* ww[3] = {&hw, &dw, &dw};
+    const double scale[3] = {ratio, ratio, ratio * ratio};
+    for (int d = 0; d < 3; ++d) {
+        double* o = out + (d + 1) * kN;
+        for (int b = 0; b < 2; ++b)
+            for (int a = 0; a < 2; ++a) {
+                const float* corner = r[b] + a * pf_;
+                const double vu = (*wu[d])[2 * a], su = (*wu[d])[2 * a + 1];
+                const double vw = (*ww[d])[2 * b], sw = (*ww[d])[2 * b + 1];
+                const double w4[4] = {vu * vw, su * vw, vu * sw, su * sw};
+                for (int m = 0; m < 4; ++m)
+                    for (int j = 0; j < kN; ++j)
+                        o[j] += w4[m] * scale[d] * double(corner[m * kStride + j]);
+            }
+    }
+}
+
 // The cells of one level (the coarser levels are built): every cell with a corner in reach of
 // an anchor of this level.
 void AnchorField::buildLevel(int L, const std::vector<FieldAnchor>& anchors) {
     const double fine = lattice_.fineSpacing_m;
     const std::int64_t sc = lattice_.scale[L];
-    // F_{L-1} at a level-L lattice point (the fallback below level 0).
-    auto coarser = [&](const CellKey& c, float* out) {
-        toFloats(L == 0 ? fallback_
-                        : at(double(c.i * sc) * fine, double(c.k * sc) * fine, nullptr, L - 1),
-                 out);
+    auto xOf = [&](const CellKey& c) { return double(c.i * sc) * fine; };
+    auto zOf = [&](const CellKey& c) { return double(c.k * sc) * fine; };
+    // F_{L-1}'s data at level-L points, each computed once (node-based: references stay valid).
+    std::unordered_map<CellKey, std::array<double, 4 * kN>, CellKeyHash> coarse;
+    auto coarserAt = [&](const CellKey& c) -> const std::array<double, 4 * kN>& {
+        auto it = coarse.find(c);
+        if (it == coarse.end()) {
+            std::array<double, 4 * kN> d;
+            coarserData(L, xOf(c), zOf(c), d.data());
+            it = coarse.emplace(c, d).first;
+        }
+        return it->second;
     };
     // Reach: per lattice point within R cells of this level's anchors, sum K p and sum K p r,
     // r = v - F_{L-1} at the anchor (its residual against the coarser levels).
     reach_.clear();
     residuals_.clear();
     const int R = std::max(0, lattice_.reachCells);
-    std::array<float, kN> v, base;
+    std::array<float, kN> v;
     for (std::uint32_t n = 0; n < anchors.size(); ++n) {
         const FieldAnchor& a = anchors[n];
         if (a.level != L || !(a.presence > 0.0f)) continue;
         toFloats(a.value, v.data());
-        coarser({a.i, a.k}, base.data());
+        const auto& base = coarserAt({a.i, a.k});
         std::array<double, kN> r;
-        for (int j = 0; j < kN; ++j) r[j] = double(v[j]) - double(base[j]);
+        for (int j = 0; j < kN; ++j) r[j] = double(v[j]) - base[j];
         residuals_.emplace(CellKey{a.i, a.k}, r);
         for (int di = -R; di <= R; ++di) {
             for (int dk = -R; dk <= R; ++dk) {
@@ -136,6 +232,50 @@ void AnchorField::buildLevel(int L, const std::vector<FieldAnchor>& anchors) {
         }
     }
     if (reach_.empty()) return;
+
+    // C_L (as float, what the lookup shows) and D_L at every point in reach (AnchorField.h).
+    struct Level {
+        std::array<float, kN> value;
+        std::array<double, kN> d;
+        double coverage;
+    };
+    tsl::hopscotch_map<CellKey, Level, CellKeyHash> inReach;
+    inReach.reserve(reach_.size());
+    for (const auto& entry : reach_) {
+        const CellKey& c = entry.first;
+        const auto& sum = entry.second;
+        const auto& base = coarserAt(c);
+        Level lv;
+        lv.coverage = std::min(1.0, sum[0]);
+        float* out = lv.value.data();
+        const FieldAnchor* anchor = anchorAt(L, c);
+        if (anchor && anchor->level < L && anchor->presence >= 1.0f) {
+            for (int j = 0; j < kN; ++j) out[j] = float(base[j]);  // a present coarser anchor
+        } else if (anchor && anchor->level == L && anchor->presence >= 1.0f) {
+            toFloats(anchor->value, out);  // exact on a present anchor
+        } else {
+            // G_L: the coarser value plus this level's residuals nearby (its own left out).
+            double w = sum[0];
+            std::array<double, kN> g;
+            for (int j = 0; j < kN; ++j) g[j] = sum[1 + j];
+            const double p = anchor ? double(anchor->presence) : 0.0;
+            if (anchor && anchor->level == L) {
+                const auto& own = residuals_.find(c)->second;
+                w -= p;
+                for (int j = 0; j < kN; ++j) g[j] -= p * own[j];
+            }
+            w = std::max(w, kCoverageFloor);
+            for (int j = 0; j < kN; ++j) g[j] = base[j] + g[j] / w;
+            if (anchor && anchor->level == L) {
+                toFloats(anchor->value, v.data());
+                for (int j = 0; j < kN; ++j) out[j] = float(p * double(v[j]) + (1.0 - p) * g[j]);
+            } else {  // a coarser anchor fading (weight 1 - p on the residuals) or none (p = 0)
+                for (int j = 0; j < kN; ++j) out[j] = float(base[j] + (1.0 - p) * (g[j] - base[j]));
+            }
+        }
+        for (int j = 0; j < kN; ++j) lv.d[j] = double(out[j]) - base[j];
+        inReach.emplace(c, lv);
+    }
 
     // The cells around the points in reach and their corners, in rows sorted by (k, i).
     std::vector<CellKey> cellList, cornerList;
@@ -156,55 +296,111 @@ void AnchorField::buildLevel(int L, const std::vector<FieldAnchor>& anchors) {
     std::sort(cornerList.begin(), cornerList.end(), rowOrder);
     cornerList.erase(std::unique(cornerList.begin(), cornerList.end()), cornerList.end());
 
-    // C_L at each corner (AnchorField.h).
-    std::vector<float> values(cornerList.size() * kN);
+    // H_L at each corner: value, s d/dx, s d/dz, s^2 d2/dxdz.
+    std::vector<float> values(cornerList.size() * pf_, 0.0f);
+    static const std::array<double, kN> zero{};
+    auto dAt = [&](std::int64_t i, std::int64_t k) -> const std::array<double, kN>& {
+        const auto it = inReach.find(CellKey{i, k});
+        return it == inReach.end() ? zero : it->second.d;
+    };
     for (std::size_t n = 0; n < cornerList.size(); ++n) {
         const CellKey& c = cornerList[n];
-        float* out = values.data() + n * kN;
-        coarser(c, base.data());
-        const auto sum = reach_.find(c);
-        // Out of reach, or a present coarser anchor: the coarser value as it is (exact there).
-        const FieldAnchor* anchor = anchorAt(L, c);
-        if (sum == reach_.end() || (anchor && anchor->level < L && anchor->presence >= 1.0f)) {
-            std::copy(base.begin(), base.end(), out);
+        float* out = values.data() + n * pf_;
+        const auto& base = coarserAt(c);
+        const auto own = inReach.find(c);
+        if (!lattice_.smooth) {  // bilinear: the value alone
+            if (own == inReach.end())
+                for (int j = 0; j < kN; ++j) out[j] = float(base[j]);
+            else
+                std::copy(own->second.value.begin(), own->second.value.end(), out);
             continue;
         }
-        if (anchor && anchor->level == L && anchor->presence >= 1.0f) {
-            toFloats(anchor->value, out);  // exact on a present anchor
+        if (own == inReach.end()) {  // out of reach: F_{L-1}'s own data
+            for (int m = 0; m < 4; ++m)
+                for (int j = 0; j < kN; ++j) out[m * kStride + j] = float(base[m * kN + j]);
             continue;
         }
-        // G_L: the coarser value plus this level's residuals nearby (its own left out).
-        double w = sum->second[0];
-        std::array<double, kN> g;
-        for (int j = 0; j < kN; ++j) g[j] = sum->second[1 + j];
-        const double p = anchor ? double(anchor->presence) : 0.0;
-        if (anchor && anchor->level == L) {
-            const auto& own = residuals_.find(c)->second;
-            w -= p;
-            for (int j = 0; j < kN; ++j) g[j] -= p * own[j];
+        std::copy(own->second.value.begin(), own->second.value.end(), out);
+        const double k = own->second.coverage;
+        const auto &e = dAt(c.i + 1, c.k), &wst = dAt(c.i - 1, c.k);
+        const auto &nth = dAt(c.i, c.k + 1), &sth = dAt(c.i, c.k - 1);
+        const auto &ne = dAt(c.i + 1, c.k + 1), &nw = dAt(c.i - 1, c.k + 1);
+        const auto &se = dAt(c.i + 1, c.k - 1), &sw = dAt(c.i - 1, c.k - 1);
+        // With coverage k > 0, the lattice's own slopes stand in for F_{L-1}'s in part: from
+        // the values C = F_{L-1} + D_L at the neighbours, limited so that a cubic never
+        // overshoots its samples (harmonic mean of the one-sided differences, 0 at an extremum;
+        // the twist the smallest of the four one-sided cross differences, 0 if they disagree).
+        // Both are exact for a bilinear field.
+        std::array<double, kN> lx{}, lz{}, lxz{};
+        if (k > 0.0) {
+            const double* C[3][3];  // C[dk + 1][di + 1] at (c.i + di, c.k + dk)
+            std::array<std::array<std::array<double, kN>, 3>, 3> cv;
+            for (int dk = -1; dk <= 1; ++dk)
+                for (int di = -1; di <= 1; ++di) {
+                    const auto& f = coarserAt({c.i + di, c.k + dk});
+                    const auto& d = dAt(c.i + di, c.k + dk);
+                    auto& out3 = cv[dk + 1][di + 1];
+                    for (int j = 0; j < kN; ++j) out3[j] = f[j] + d[j];
+                    C[dk + 1][di + 1] = out3.data();
+                }
+            for (int j = 0; j < kN; ++j) {
+                const double c0 = C[1][1][j];
+                lx[j] = harmonicSlope(c0 - C[1][0][j], C[1][2][j] - c0);
+                lz[j] = harmonicSlope(c0 - C[0][1][j], C[2][1][j] - c0);
+                const double q[4] = {C[2][2][j] - C[2][1][j] - C[1][2][j] + c0,
+                                     -(C[2][0][j] - C[2][1][j] - C[1][0][j] + c0),
+                                     -(C[0][2][j] - C[0][1][j] - C[1][2][j] + c0),
+                                     C[0][0][j] - C[0][1][j] - C[1][0][j] + c0};
+                lxz[j] = minMod4(q);
+            }
         }
-        w = std::max(w, kCoverageFloor);
-        for (int j = 0; j < kN; ++j) g[j] = double(base[j]) + g[j] / w;
-        if (anchor && anchor->level == L) {
-            toFloats(anchor->value, v.data());
-            for (int j = 0; j < kN; ++j) out[j] = float(p * double(v[j]) + (1.0 - p) * g[j]);
-        } else {  // a coarser anchor fading (weight 1 - p on the residuals) or none (p = 0)
-            for (int j = 0; j < kN; ++j)
-                out[j] = float(double(base[j]) + (1.0 - p) * (g[j] - double(base[j])));
+        for (int j = 0; j < kN; ++j) {
+            const double gx = base[kN + j], gz = base[2 * kN + j], gxz = base[3 * kN + j];
+            const double ox = gx + 0.5 * (e[j] - wst[j]);
+            const double oz = gz + 0.5 * (nth[j] - sth[j]);
+            const double oxz = gxz + 0.25 * (ne[j] - nw[j] - se[j] + sw[j]);
+            out[kStride + j] = float(ox + k * (lx[j] - ox));
+            out[2 * kStride + j] = float(oz + k * (lz[j] - oz));
+            out[3 * kStride + j] = float(oxz + k * (lxz[j] - oxz));
         }
     }
 
     // Cells point at their corner rows: (i, k) and (i, k + 1); (i + 1, .) follow them.
-    const std::uint32_t first = std::uint32_t(corners_.size() / kN);
-    corners_.insert(corners_.end(), values.begin(), values.end());
+    const std::uint32_t first = std::uint32_t(points_.size() / pf_);
+    points_.insert(points_.end(), values.begin(), values.end());
     auto indexOf = [&](const CellKey& c) {
         const auto it = std::lower_bound(cornerList.begin(), cornerList.end(), c, rowOrder);
         return first + std::uint32_t(it - cornerList.begin());
     };
     CellMap& cells = cells_[L];
     cells.reserve(cellList.size());
-    for (const CellKey& c : cellList)
-        cells.emplace(c, CellRef{indexOf(c), indexOf(CellKey{c.i, c.k + 1})});
+    std::array<double, kN>& slope = slope_[L];
+    for (const CellKey& c : cellList) {
+        const CellRef ref{indexOf(c), indexOf(CellKey{c.i, c.k + 1})};
+        cells.emplace(c, ref);
+        // slopeBound: the Hermite bound of the cell in both axes.
+        const float* p[4] = {points_.data() + std::size_t(ref.row0) * pf_,
+                             points_.data() + std::size_t(ref.row0 + 1) * pf_,
+                             points_.data() + std::size_t(ref.row1) * pf_,
+                             points_.data() + std::size_t(ref.row1 + 1) * pf_};
+        for (int j = 0; j < kN; ++j) {
+            double dvx = 0, dvz = 0, gx = 0, gz = 0, gxz = 0;
+            dvx = std::max(std::fabs(double(p[1][j]) - p[0][j]), std::fabs(double(p[3][j]) - p[2][j]));
+            dvz = std::max(std::fabs(double(p[2][j]) - p[0][j]), std::fabs(double(p[3][j]) - p[1][j]));
+            if (!lattice_.smooth) {  // bilinear: the larger edge difference per axis
+                slope[j] = std::max(slope[j], std::max(dvx, dvz) * inverseSpacing_[L]);
+                continue;
+            }
+            for (int q = 0; q < 4; ++q) {
+                gx = std::max(gx, std::fabs(double(p[q][kStride + j])));
+                gz = std::max(gz, std::fabs(double(p[q][2 * kStride + j])));
+                gxz = std::max(gxz, std::fabs(double(p[q][3 * kStride + j])));
+            }
+            const double bx = 1.5 * dvx + gx + 0.75 * gz + 0.25 * gxz;
+            const double bz = 1.5 * dvz + gz + 0.75 * gx + 0.25 * gxz;
+            slope[j] = std::max(slope[j], std::max(bx, bz) * inverseSpacing_[L]);
+        }
+    }
 }
 
 const FieldAnchor* AnchorField::anchorAt(int L, CellKey c) const {
@@ -244,8 +440,8 @@ ShRgb AnchorField::at(double x, double z, Hit* hit, int maxLevel) const {
         const Locus c = L == 0 ? top : locate(L, x, z);
         const auto it = cells_[L].find(CellKey{c.i, c.k});
         if (it == cells_[L].end()) continue;
-        const float* r0 = corners_.data() + std::size_t(it->second.row0) * kN;  // (i, k), (i+1, k)
-        const float* r1 = corners_.data() + std::size_t(it->second.row1) * kN;  // row k + 1
+        const float* r0 = points_.data() + std::size_t(it->second.row0) * pf_;
+        const float* r1 = points_.data() + std::size_t(it->second.row1) * pf_;
         const double dx = x - c.x0, dz = z - c.z0;
         double u = dx / (c.x1 - c.x0), w = dz / (c.z1 - c.z0);
         // On a lattice line (within 1e-9 m): exactly on it, so an anchor's value comes back
@@ -262,13 +458,29 @@ ShRgb AnchorField::at(double x, double z, Hit* hit, int maxLevel) const {
         }
         if (cu >= 0 && cw >= 0) {
             if (hit) hit->corner = cu + 2 * cw;
-            return fromFloats((cw ? r1 : r0) + cu * kN);
+            return fromFloats((cw ? r1 : r0) + cu * pf_);
         }
-        const float w00 = float((1.0 - u) * (1.0 - w)), w10 = float(u * (1.0 - w));
-        const float w01 = float((1.0 - u) * w), w11 = float(u * w);
-        float out[kN];
-        for (int j = 0; j < kN; ++j)
-            out[j] = w00 * r0[j] + w10 * r0[kN + j] + w01 * r1[j] + w11 * r1[kN + j];
+        if (!lattice_.smooth) {  // bilinear between the corner values
+            const float w00 = float((1.0 - u) * (1.0 - w)), w10 = float(u * (1.0 - w));
+            const float w01 = float((1.0 - u) * w), w11 = float(u * w);
+            float out[kN];
+            for (int j = 0; j < kN; ++j)
+                out[j] = w00 * r0[j] + w10 * r0[pf_ + j] + w01 * r1[j] + w11 * r1[pf_ + j];
+            return fromFloats(out);
+        }
+        // Bicubic Hermite: 4 corners x (value, slope x, slope z, twist), 16 weights.
+        const std::array<double, 4> hu = hermite(u), hw = hermite(w);
+        const float* corner[4] = {r0, r0 + pf_, r1, r1 + pf_};
+        float weight[16];
+        for (int q = 0; q < 4; ++q) {
+            const int a = q & 1, b = q >> 1;
+            weight[4 * q + 0] = float(hu[2 * a] * hw[2 * b]);
+            weight[4 * q + 1] = float(hu[2 * a + 1] * hw[2 * b]);
+            weight[4 * q + 2] = float(hu[2 * a] * hw[2 * b + 1]);
+            weight[4 * q + 3] = float(hu[2 * a + 1] * hw[2 * b + 1]);
+        }
+        alignas(32) float out[kStride];
+        blend16(corner, weight, out);
         return fromFloats(out);
     }
     return fallback_;

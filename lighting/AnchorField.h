@@ -1,8 +1,10 @@
 // AnchorField.h — the interpolated field of the anchor store (AnchorStore.h "Interpolation"):
-// hierarchical bilinear interpolation over the store's 3 x 3 lattice, kept as a cache of cells
-// per level whose four corner values are precomputed. A lookup is a few hash probes (finest level
-// first) and one bilinear blend of four coefficient sets; the cache is rebuilt from the anchors
-// when they change (once a frame: blends and fades move every frame while probes arrive).
+// a hierarchy over the store's 3 x 3 lattice in which each level holds, at its lattice points,
+// a value and a gradient, and fills its cells by bicubic Hermite interpolation (smooth: no kink
+// at lattice lines). It is kept as a cache of cells per level; a lookup is a few hash probes
+// (finest level first) and one blend of 16 coefficient sets (4 corners x value, d/dx, d/dz,
+// d2/dxdz); the cache is rebuilt from the anchors when they change (once a frame: blends and
+// fades move every frame while probes arrive).
 //
 // The field (s_L spacing of level L, v = an anchor's current x relight, p its presence weight
 // easeInOut(presence), AnchorStore.h):
@@ -11,25 +13,34 @@
 //                 coarser levels' value at its point (its residual).
 //   G_L(c)      = F_{L-1}(c) + sum_a K_a p_a r_a / max(sum_a K_a p_a, kCoverageFloor), over
 //                 this level's anchors a other than c within R_L = reachCells x s_L of the
-//                 lattice point c, K_a = (1 - (|c - a| / R_L)^2)^2: a missing corner takes the
+//                 lattice point c, K_a = (1 - (|c - a| / R_L)^2)^2: a missing point takes the
 //                 coarser value corrected by the weighted mean of the residuals nearby, in part
 //                 where they cover it thinly (far, or fading in), none beyond R_L.
 //   C_L(c)      = p v + (1 - p) G_L(c)                  with a level-L anchor at c,
 //               = F_{L-1}(c) + (1 - p)(G_L(c) - F_{L-1}(c))  with a coarser anchor at c (whose
 //                                                        presence F_{L-1} already carries),
 //               = G_L(c)                                otherwise.
-//   F_L(x)      = the bilinear blend of C_L at the four corners of x's level-L cell.
+//   D_L(c)      = C_L(c) - F_{L-1}(c): what level L adds at c (zero beyond R_L).
+//   H_L(c)      = the Hermite data at c: value C_L(c); derivatives d/dx, d/dz, d2/dxdz =
+//                 (1 - k) (F_{L-1}'s own + D_L's central differences) + k (C_L's central
+//                 differences), over c's neighbours s_L apart, with k = min(1, sum_a K_a p_a)
+//                 the level's coverage at c: F_{L-1}'s own slopes where the level adds nothing,
+//                 the lattice's slopes where its anchors cover c, continuous in between.
+//   F_L(x)      = the bicubic Hermite interpolation of H_L over x's level-L cell.
 //   result      = F_finest.
-// Where no level-L anchor reaches a cell's corners, C_L = F_{L-1} there, and a bilinear function
-// on a cell restricted to one of its 3 x 3 sub-cells is bilinear there, so such a cell equals
-// F_{L-1} exactly: only cells with a corner in reach are stored, and a lookup answers from the
-// finest stored cell containing it.
-// Properties: corner values are shared by the cells that meet there and F_{L-1} is continuous,
-// so F_L is continuous everywhere (piecewise bilinear, Lipschitz) and moves continuously with
-// presences and values; a present anchor's corner is its value (exact); an anchor of presence 0,
-// or one whose value is what the coarser levels show at its point (r = 0), changes nothing; a
-// field bilinear over complete coarse cells is reproduced at every finer level (its residuals
-// vanish); corner values are convex mixes of anchor values and the fallback.
+// Where no level-L anchor reaches a cell's corners, H_L there is F_{L-1}'s own value and
+// derivatives, and F_{L-1} is bicubic on the cell (a level-L cell lies inside one level-(L-1)
+// cell), so the Hermite interpolation reproduces it exactly: only cells with a corner in reach
+// are stored, and a lookup answers from the finest stored cell containing it.
+// Properties: neighbouring cells share their edge's corner data, so F_L is continuous with a
+// continuous gradient everywhere (C1: across lattice lines, partly present cells and levels), and
+// a point crossing it at a steady speed sees no kink; it moves continuously with presences and
+// values. A present anchor's point shows its value (exact). An anchor of presence 0, or one
+// whose value is what the coarser levels show at its point (r = 0), changes nothing (D_L = 0:
+// H_L = F_{L-1}'s own data). Central differences are exact for a bilinear field, so a field
+// bilinear over a complete coarse lattice is reproduced wherever a cell's corners and their
+// neighbours are complete (the finer D_L vanish). Gradients are bounded (slopeBound) and the
+// result is always finite.
 #pragma once
 
 #include <array>
@@ -52,6 +63,9 @@ struct FieldLattice {
     std::array<std::int64_t, kFieldMaxLevels> scale{};  // finest-lattice units per level-L unit
     double fineSpacing_m = 1.0;
     int reachCells = 2;  // reach of level-0 anchors into holes, in level-0 cells
+    // Bicubic Hermite cells (C1, the default) or bilinear ones (C0: the values alone, kinks at
+    // lattice lines; a quarter of the data and of the work per lookup).
+    bool smooth = true;
 };
 
 // One anchor as the field sees it (only anchors with presence > 0 are given).
@@ -66,7 +80,7 @@ class AnchorField {
   public:
     // Where a lookup was answered.
     struct Hit {
-        int level = -1;             // level of the cell used; -1: the fallback
+        int level = -1;             // finest level with a cell there; -1: the fallback alone
         std::int64_t i = 0, k = 0;  // that cell's minimum corner (level coordinates)
         double u = 0.0, w = 0.0;    // position in the cell along x and z, [0, 1]
         int corner = -1;            // 0..3 when the query is on (within 1e-9 m of) a corner:
@@ -84,10 +98,20 @@ class AnchorField {
 
     std::size_t cells() const;
     std::size_t bytes() const;
+    // Per coefficient (ShRgb order, c[k][ch] at 3k + ch), a bound on |dF/dx| and |dF/dz| over
+    // the whole field: the largest over stored cells of (1.5 |corner value difference| +
+    // |s dF/dx| + 0.75 |s dF/dz| + 0.25 |s^2 d2F/dxdz|) / s at the cell's corners (and the same
+    // with x and z swapped). From the Hermite basis: sum |h'| <= 1.5 on value differences,
+    // <= 1 on slopes, and sum |h| <= 1 on values, <= 0.25 on slopes.
+    std::array<double, 27> slopeBound() const;
 
     // Coverage below which G_L takes only part of the residuals nearby (the rest is the
     // coarser value), in units of one anchor at the corner itself.
     static constexpr double kCoverageFloor = 0.25;
+
+    // The cubic Hermite basis at t in [0, 1]: weights of (value at 0, slope at 0, value at 1,
+    // slope at 1), slopes per unit t. `derivative`: their d/dt.
+    static std::array<double, 4> hermite(double t, bool derivative = false);
 
   private:
     struct CellKey {
@@ -97,7 +121,7 @@ class AnchorField {
     struct CellKeyHash {
         std::size_t operator()(const CellKey& c) const;
     };
-    // A stored cell: where its corners' values are. Corner values are stored once per lattice
+    // A stored cell: where its corners' data are. Corner data are stored once per lattice
     // point, each level's in rows sorted by (k, i), so corner (i + 1, k) follows (i, k).
     struct CellRef {
         std::uint32_t row0;  // corner (i, k)
@@ -105,6 +129,12 @@ class AnchorField {
     };
     using CellMap = tsl::hopscotch_map<CellKey, CellRef, CellKeyHash>;
     static constexpr int kFloats = 27;  // a coefficient set (ShRgb order)
+    // A stored point: value, s_L d/dx, s_L d/dz, s_L^2 d2/dxdz, each a coefficient set padded
+    // to kStride floats (whole SIMD vectors).
+    static constexpr int kStride = 28;
+    int pf_ = 4 * kStride;  // floats per stored point: 4 blocks (smooth) or 1 (bilinear)
+    // F_{L-1}'s Hermite data at (x, z) in level-L units (value, s dx, s dz, s^2 dxdz).
+    void coarserData(int level, double x, double z, double* out) const;
 
     void buildLevel(int level, const std::vector<FieldAnchor>& anchors);
 
@@ -122,8 +152,9 @@ class AnchorField {
     // Per level-0 cell, bit L set when some level-L cell inside it is stored: a lookup probes
     // only those levels.
     tsl::hopscotch_map<CellKey, std::uint32_t, CellKeyHash> levelsIn_;
-    std::vector<float> corners_;  // kFloats per stored corner
-    std::array<std::size_t, kFieldMaxLevels + 1> levelStart_{};  // first corner of each level
+    std::vector<float> points_;  // pf_ floats per stored point
+    std::array<std::size_t, kFieldMaxLevels + 1> levelStart_{};  // first point of each level
+    std::array<std::array<double, 27>, kFieldMaxLevels> slope_{};  // slopeBound per level
     std::array<double, kFieldMaxLevels> inverseSpacing_{};
     int finest_ = -1;  // finest level holding a cell
     bool built_ = false;

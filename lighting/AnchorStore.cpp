@@ -5,7 +5,7 @@
 // [SECTION] Storage       Impl: one int32 grid per level, anchor pool with a free list
 // [SECTION] Lattice
 // [SECTION] Insert, remove, advance (blending, presence, expiry, pruning)
-// [SECTION] Interpolation (hierarchical bilinear, AnchorField.h; cache rebuilt on change)
+// [SECTION] Interpolation (hierarchical bicubic Hermite, AnchorField.h; cache rebuilt on change)
 // [SECTION] Statistics
 // [SECTION] Files (.vdb)
 #include "lighting/AnchorStore.h"
@@ -451,6 +451,7 @@ void AnchorStore::Impl::ensureField() const {
     }
     lattice.fineSpacing_m = fineSpacing;
     lattice.reachCells = settings.searchCells;
+    lattice.smooth = settings.smoothInterpolation;
     thread_local std::vector<FieldAnchor> anchors;
     anchors.clear();
     for (std::size_t n = 0; n < pool.size(); ++n) {
@@ -473,7 +474,11 @@ void AnchorStore::Impl::describe(double qx, double qz, const AnchorField::Hit& h
         detail.fallback = true;
         return;
     }
-    const double wx[2] = {1.0 - hit.u, hit.u}, wz[2] = {1.0 - hit.w, hit.w};
+    // A corner's value carries the bilinear weights, or the Hermite value weights (smooth).
+    const std::array<double, 4> hu = AnchorField::hermite(hit.u), hw = AnchorField::hermite(hit.w);
+    const bool smooth = settings.smoothInterpolation;
+    const double wx[2] = {smooth ? hu[0] : 1.0 - hit.u, smooth ? hu[2] : hit.u};
+    const double wz[2] = {smooth ? hw[0] : 1.0 - hit.w, smooth ? hw[2] : hit.w};
     for (int q = 0; q < 4; ++q) {
         const LatticeKey point{hit.level, std::int32_t(hit.i + (q & 1)),
                                std::int32_t(hit.k + (q >> 1))};
@@ -570,6 +575,11 @@ void AnchorStore::interpolateMany(std::size_t count, const double* x_m, const do
                           for (std::size_t i = r.begin(); i != r.end(); ++i)
                               out[i] = field.at(x_m[i], z_m[i]);
                       });
+}
+
+std::array<double, 27> AnchorStore::interpolationSlopeBound() const {
+    impl_->ensureField();
+    return impl_->field.slopeBound();
 }
 
 std::size_t AnchorStore::interpolationCacheBytes() const {

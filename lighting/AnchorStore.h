@@ -1,6 +1,6 @@
 // AnchorStore.h — the sparse, hierarchical store of ambience anchors along the ground plane
-// (thesis 7.5, 7.6, 8.4, 9.3; docs/DESIGN.md "Anchor store"), with blending and continuous
-// (hierarchical bilinear) interpolation.
+// (thesis 7.5, 7.6, 8.4, 9.3; docs/DESIGN.md "Anchor store"), with blending and smooth
+// (hierarchical bicubic Hermite) interpolation.
 //
 // [SECTION] Lattice        Level L has spacing s_L = s_0 / 3^L (3 x 3 subdivision, the thesis'
 //                          SHGraph restricted to the ground). A level-L point (i, k) lies at
@@ -15,9 +15,10 @@
 //                          and expiry on the store's simulation clock (seconds, monotonic; the
 //                          time of day is only recorded, so its wrap at 24 h does not matter).
 // [SECTION] Lifetime       anchorLifetime_s(): how long a capture stays valid while the sun moves.
-// [SECTION] Interpolation  interpolate(x, z): bilinear in the finest cell whose corners the
-//                          store covers, missing corners from the coarser levels (thesis 7.6's
-//                          bilinear example, made hierarchical; see AnchorStore::interpolate).
+// [SECTION] Interpolation  interpolate(x, z): level by level, what each level adds to the
+//                          coarser ones, bicubic Hermite between values and gradients (C1),
+//                          missing points from the coarser levels (thesis 7.6's example made
+//                          hierarchical and smooth; see AnchorStore::interpolate).
 // [SECTION] Files          save()/load() as .vdb (OpenVDB grids, inspectable with vdb_print).
 //
 // OpenVDB is used only inside AnchorStore.cpp (one int32 grid per level mapping (i, 0, k) to an
@@ -63,6 +64,9 @@ struct AnchorStoreSettings {
     // Reach into holes: at level L, the level's anchors fill its missing lattice points within
     // searchCells x s_L (AnchorField.h, G_L); nearestAnchor() searches the same window.
     int searchCells = 2;
+    // Interpolation between lattice points (AnchorField.h): bicubic Hermite, smooth (C1: no
+    // kink where a moving object crosses a lattice line), or bilinear (C0: cheaper lookups).
+    bool smoothInterpolation = true;
 };
 
 // Spacing of the finest level, s_0 / 3^(levels - 1) [m].
@@ -138,8 +142,8 @@ struct InterpolationDetail {
         int quadrant = 0;  // 0: dx >= 0, dz >= 0; 1: dx < 0, dz >= 0; 2: dx < 0, dz < 0;
                            // 3: dx >= 0, dz < 0 (dx, dz = anchor - query)
         double distance_m = 0.0;
-        double weight = 0.0;  // its corner's bilinear weight x easeInOut(presence): the share of its
-                              // own value (the rest comes from the coarser levels' fill)
+        double weight = 0.0;  // its corner's Hermite value weight x easeInOut(presence): the
+                              // share of its own value (the rest: neighbours, coarser levels)
     };
     std::vector<Used> used;  // present anchors at the corners of the cell used (or the one hit)
     int level = -1;          // level of the cell used; -1 with `fallback`
@@ -232,32 +236,39 @@ class AnchorStore {
     void setFallback(const ShRgb& sh);
     const ShRgb& fallback() const;
     // The interpolated SH at ground point (x, z) (AnchorField.h has the formulas):
-    //  1. Level by level, coarsest first, the field is bilinear in each level-L cell between its
-    //     four corner values. A corner holding a level-L anchor of presence p has the value
-    //     p x (current x relight) + (1 - p) x (the value without it); a corner without one takes
-    //     the coarser levels' interpolated value there (the fallback below level 0), corrected
-    //     by the weighted mean of the residuals (anchor minus coarser value) of this level's
-    //     anchors within searchCells x s_L, in part where they cover it thinly.
-    //  2. The result is the finest level's value: bilinear in the finest cell in reach of
-    //     anchors, with the missing corners filled from the coarser levels and the neighbours.
-    //  Properties: continuous everywhere (across lattice lines, partly present cells and levels;
-    //  piecewise bilinear, so Lipschitz with a gradient of at most (corner value range) / s_L in
-    //  each axis); exact on a present anchor (within 1e-9 m: its value bit for bit); a new
-    //  anchor (p = 0) changes nothing, and as its presence grows the pattern moves from the old
-    //  to the new one (thesis 7.6); a field bilinear on a complete lattice is reproduced; the
-    //  result is a convex mix of anchor values and the fallback, always finite; a lookup reads
-    //  one cell per level, finest first (bounded), from a cache rebuilt by the first lookup
-    //  after the anchors change.
+    //  1. Level by level, coarsest first, each lattice point c of level L gets a value C_L(c).
+    //     A point holding a level-L anchor of presence weight p has p x (current x relight) +
+    //     (1 - p) x (the value without it); a point without one takes the coarser levels'
+    //     interpolated value there (the fallback below level 0), corrected by the weighted mean
+    //     of the residuals (anchor minus coarser value) of this level's anchors within
+    //     searchCells x s_L, in part where they cover it thinly.
+    //  2. Each point also gets a gradient: the coarser field's own where the level adds nothing,
+    //     the central differences of its neighbours' values where the level's anchors cover it,
+    //     blended by that coverage. The cells in reach of the level's anchors are bicubic
+    //     Hermite between their corners' values and gradients; a lookup answers from the finest
+    //     such cell (elsewhere a level equals the coarser one exactly).
+    //  Properties: continuous with a continuous gradient everywhere (across lattice lines,
+    //  partly present cells and levels), so a point moving at a steady speed sees no kink and
+    //  no pop; Lipschitz (AnchorField::slopeBound); exact on a present anchor (within 1e-9 m:
+    //  its value bit for bit); a new anchor (p = 0) changes nothing, and as its presence grows
+    //  the pattern moves from the old to the new one (thesis 7.6); a field bilinear on a
+    //  complete lattice is reproduced; always finite; a lookup reads one cell per level,
+    //  finest first (bounded), from a cache rebuilt by the first lookup after the anchors
+    //  change.
     //  Relation to the thesis: 9.3's four-quadrant rule keeps the nearest anchor per quadrant
     //  to find a neighbourhood when the lattice is incomplete, and weights it by inverse
     //  distance, which jumps whenever the chosen set changes; 7.6's worked example weights the
-    //  four surrounding sets bilinearly. Here the four corners are the cell's own and a missing
-    //  corner is filled from the next coarser level, so the lattice's holes need no search.
+    //  four surrounding sets bilinearly, which is continuous but kinks at every lattice line.
+    //  Here the four corners are the cell's own, a missing corner is filled from the coarser
+    //  levels (the lattice's holes need no search), and the Hermite cubic removes the kinks.
     // Safe to call from several threads at once while nothing modifies the store.
     ShRgb interpolate(double x_m, double z_m, InterpolationDetail* detail = nullptr) const;
     // interpolate() at `count` points (x_m[i], z_m[i]) into out[i]: one cache check for the
     // batch, then the lookups (in parallel with TBB for large batches). The per-frame path.
     void interpolateMany(std::size_t count, const double* x_m, const double* z_m, ShRgb* out) const;
+    // Per coefficient (ShRgb order, c[k][ch] at 3k + ch), a bound on the gradient of
+    // interpolate() along x and along z [per m] (AnchorField::slopeBound).
+    std::array<double, 27> interpolationSlopeBound() const;
     // The nearest anchor of presence > 0 on the level-L lattice within searchCells x s_L,
     // finest level first (ties to the smaller key), or nullptr: the `nearest` baseline.
     const Anchor* nearestAnchor(double x_m, double z_m) const;

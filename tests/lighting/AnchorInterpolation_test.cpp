@@ -44,10 +44,12 @@ bool allFinite(const ShRgb& sh) {
     return true;
 }
 
-// A store whose anchors are inserted at once at full weight (blend time 0).
-AnchorStore instantStore() {
+// A store whose anchors are inserted at once at full weight (blend time 0); bilinear unless
+// `smooth` (the tests of closed forms below are the bilinear ones).
+AnchorStore instantStore(bool smooth = false) {
     AnchorStoreSettings s;
     s.blendTime_s = 0.0;
+    s.smoothInterpolation = smooth;
     return AnchorStore(s);
 }
 
@@ -62,7 +64,9 @@ float scalarOf(const ShRgb& sh) {
 }
 
 TEST(AnchorInterpolation, ExactAtAnchors) {
-    AnchorStore store = instantStore();
+  for (bool smooth : {false, true}) {
+    SCOPED_TRACE(smooth ? "smooth" : "bilinear");
+    AnchorStore store = instantStore(smooth);
     std::mt19937 rng(11);
     std::uniform_int_distribution<int> level(0, 4), coord(-12, 12);
     std::vector<LatticeKey> keys;
@@ -80,10 +84,13 @@ TEST(AnchorInterpolation, ExactAtAnchors) {
         EXPECT_EQ(d.used[0].key, k);
         EXPECT_EQ(maxDiff(v, store.find(k)->current), 0.0);
     }
+  }
 }
 
 TEST(AnchorInterpolation, AllEmptyGivesTheFallback) {
-    AnchorStore store = instantStore();
+  for (bool smooth : {false, true}) {
+    SCOPED_TRACE(smooth ? "smooth" : "bilinear");
+    AnchorStore store = instantStore(smooth);
     store.setFallback(makeSh(0.125f));
     InterpolationDetail d;
     EXPECT_EQ(maxDiff(store.interpolate(12.0, -7.0, &d), makeSh(0.125f)), 0.0);
@@ -95,6 +102,7 @@ TEST(AnchorInterpolation, AllEmptyGivesTheFallback) {
     EXPECT_TRUE(d.fallback);
     EXPECT_FALSE(store.interpolate(485.0, 0.0, &d).c[0].x == makeSh(0.125f).c[0].x);
     EXPECT_FALSE(d.fallback);
+  }
 }
 
 TEST(AnchorInterpolation, MissingCornersComeFromTheCoarserLevel) {
@@ -165,6 +173,7 @@ TEST(AnchorInterpolation, CoarsestLevelReachesIntoHolesAndFadesToTheFallback) {
     // the coverage at d = 1 is 0.5625 p < 0.25: the corner takes 0.5625 p / 0.25 of the residual.
     AnchorStoreSettings s;
     s.blendTime_s = 2.0;
+    s.smoothInterpolation = false;
     AnchorStore fading(s);
     fading.setFallback(makeSh(f));
     fading.insert({0, 0, 0}, makeSh(v), {0, 2, 0}, 1e6);
@@ -182,10 +191,14 @@ TEST(AnchorInterpolation, CoarsestLevelReachesIntoHolesAndFadesToTheFallback) {
 TEST(AnchorInterpolation, BilinearFieldIsReproducedInsideCompleteCells) {
     // Every point of the 27 m lattice over [-108, 108]^2 holds f(x, z), a field linear in x and
     // z plus an xz term, and random 9 m and 3 m points inside hold it too (the rest are holes).
-    // Bilinear cells reproduce a bilinear field, and so do the coarser fills of the holes: the
-    // result equals f wherever the 27 m cells are complete, to float rounding (1e-6 of the
-    // largest coefficient).
-    AnchorStore store = instantStore();
+    // Bilinear cells reproduce a bilinear field, and so do the coarser fills of the holes; the
+    // smooth cells too where a cell's corners have their neighbours (central differences and
+    // their limited form are exact for such a field). The result equals f over [-54, 54]^2
+    // (cells and neighbours complete at every level), to float rounding (1e-6 of the largest
+    // coefficient).
+  for (bool smooth : {false, true}) {
+    SCOPED_TRACE(smooth ? "smooth" : "bilinear");
+    AnchorStore store = instantStore(smooth);
     auto f = [](double x, double z) { return 2.0 + 0.01 * x - 0.02 * z + 1e-4 * x * z; };
     auto putAt = [&](const LatticeKey& key) {
         const LatticeKey c = store.canonical(key);
@@ -197,7 +210,7 @@ TEST(AnchorInterpolation, BilinearFieldIsReproducedInsideCompleteCells) {
     std::uniform_int_distribution<int> fine3(-9, 9), fine4(-27, 27);
     for (int n = 0; n < 80; ++n) putAt({3, fine3(rng), fine3(rng)});
     for (int n = 0; n < 300; ++n) putAt({4, fine4(rng), fine4(rng)});
-    std::uniform_real_distribution<double> q(-108.0, 108.0);
+    std::uniform_real_distribution<double> q(-54.0, 54.0);
     double worst = 0.0, largest = 0.0;
     for (int n = 0; n < 5000; ++n) {
         const double x = q(rng), z = q(rng);
@@ -206,6 +219,7 @@ TEST(AnchorInterpolation, BilinearFieldIsReproducedInsideCompleteCells) {
         largest = std::max(largest, maxDiff(expected, ShRgb{}));
     }
     EXPECT_LT(worst, 1e-6 * largest) << "largest coefficient " << largest;
+  }
 }
 
 TEST(AnchorInterpolation, NearestAnchorIsTheNearestPresentOneInReach) {
@@ -224,6 +238,7 @@ TEST(AnchorInterpolation, NearestAnchorIsTheNearestPresentOneInReach) {
     // An anchor fading in at presence 0 is not there yet.
     AnchorStoreSettings s;
     s.blendTime_s = 2.0;
+    s.smoothInterpolation = false;
     AnchorStore fading(s);
     fading.insert({4, 1, 1}, makeSh(1.0f), {3, 2, 3}, 100.0);
     EXPECT_EQ(fading.nearestAnchor(3.0, 3.0), nullptr);
@@ -232,7 +247,9 @@ TEST(AnchorInterpolation, NearestAnchorIsTheNearestPresentOneInReach) {
 }
 
 TEST(AnchorInterpolation, CoincidentPointsFarFromOrigin) {
-    AnchorStore store = instantStore();
+  for (bool smooth : {false, true}) {
+    SCOPED_TRACE(smooth ? "smooth" : "bilinear");
+    AnchorStore store = instantStore(smooth);
     const LatticeKey k = store.keyNear(1.0e7, -1.0e7, 4);
     put(store, k, 2.0f);
     put(store, {k.level, k.i + 2, k.k + 1}, 4.0f);
@@ -247,10 +264,12 @@ TEST(AnchorInterpolation, CoincidentPointsFarFromOrigin) {
     const ShRgb v = store.interpolate(x + 1e-4, z + 1e-4, &d);
     EXPECT_FALSE(d.exact);
     EXPECT_LT(maxDiff(v, makeSh(2.0f)), maxDiff(makeSh(4.0f), makeSh(2.0f)) * 1.5e-4 / 5.0);
+  }
 }
 
 TEST(AnchorInterpolation, NeverNaN) {
-    AnchorStore store = instantStore();
+  for (bool smooth : {false, true}) {
+    AnchorStore store = instantStore(smooth);
     store.setFallback(makeSh(0.5f));
     const double nan = std::numeric_limits<double>::quiet_NaN();
     const double inf = std::numeric_limits<double>::infinity();
@@ -263,13 +282,15 @@ TEST(AnchorInterpolation, NeverNaN) {
     std::uniform_real_distribution<double> u(-600.0, 600.0);
     for (int n = 0; n < 2000; ++n) EXPECT_TRUE(allFinite(store.interpolate(u(rng), u(rng))));
     EXPECT_EQ(maxDiff(store.interpolate(nan, 1.0), makeSh(0.5f)), 0.0);
+  }
 }
 
 // A store of three levels (27, 9 and 3 m) with holes around the origin: anchors present,
 // fading in, refreshed mid-blend, fading out at the end of their lifetime, relit.
-AnchorStore randomStore(unsigned seed, std::vector<LatticeKey>* keys = nullptr) {
+AnchorStore randomStore(unsigned seed, bool smooth, std::vector<LatticeKey>* keys = nullptr) {
     AnchorStoreSettings s;
     s.blendTime_s = 2.0;
+    s.smoothInterpolation = smooth;
     AnchorStore store(s);
     store.setFallback(makeSh(0.3f));
     std::mt19937 rng(seed);
@@ -298,16 +319,37 @@ AnchorStore randomStore(unsigned seed, std::vector<LatticeKey>* keys = nullptr) 
     return store;
 }
 
+// Walks 200 random lines of 20 m at 1 cm steps through a random store; calls
+// step(line, n, previous value, value) for every step.
+template <class Step>
+void walk(const AnchorStore& store, Step&& step) {
+    std::mt19937 rng(43);
+    std::uniform_real_distribution<double> start(-70.0, 70.0), angle(0.0, 2.0 * kPi);
+    for (int line = 0; line < 200; ++line) {
+        const double x0 = start(rng), z0 = start(rng), t = angle(rng);
+        const double cx = std::cos(t), cz = std::sin(t);
+        ShRgb prev = store.interpolate(x0, z0);
+        for (int n = 1; n <= 2000; ++n) {
+            const ShRgb v = store.interpolate(x0 + n * 0.01 * cx, z0 + n * 0.01 * cz);
+            step(line, n, std::fabs(cx) + std::fabs(cz), prev, v);
+            prev = v;
+        }
+    }
+}
+
 TEST(AnchorInterpolation, RandomWalksStayWithinTheLipschitzBound) {
-    // Bound: the field is bilinear in each cell of spacing s_L >= s_min = 3 m between corner
-    // values that are convex mixes of anchor values (current x relight) and the fallback, so in
-    // each coefficient j, |d f_j / dx| and |d f_j / dz| are at most range_j / s_min, range_j
-    // being the spread of coefficient j over the anchors and the fallback. A step h along
-    // (cos t, sin t) then changes f_j by at most (|cos t| + |sin t|) range_j h / s_min, whatever
+    // Bound (AnchorStore::interpolationSlopeBound, AnchorField::slopeBound): per coefficient j,
+    // |d f_j / dx| and |d f_j / dz| are at most g_j, from the cells' corner data (bilinear: the
+    // larger edge difference / s_L; smooth: the Hermite basis' bound on values and slopes). A
+    // step h along (cos t, sin t) then changes f_j by at most (|cos t| + |sin t|) g_j h, whatever
     // cells, lattice lines or levels it crosses; float rounding adds at most 2e-6 of the
     // largest coefficient. A jump (the old four-quadrant rule changed by 0.17 of the
     // neighbour-to-neighbour difference within 1 cm) would break it by two orders of magnitude.
-    AnchorStore store = randomStore(41);
+    // Bilinear corner values are convex mixes of the anchors and the fallback, so there g_j is
+    // also at most (their range) / 3 m, which is checked too.
+  for (bool smooth : {false, true}) {
+    SCOPED_TRACE(smooth ? "smooth" : "bilinear");
+    AnchorStore store = randomStore(41, smooth);
     int fading = 0;
     std::array<double, 3 * kShCoefficients> lo, hi;
     lo.fill(1e300), hi.fill(-1e300);
@@ -326,39 +368,58 @@ TEST(AnchorInterpolation, RandomWalksStayWithinTheLipschitzBound) {
     ASSERT_GT(fading, 20);  // the walk crosses fading anchors too
     double largest = 0.0;
     for (int j = 0; j < 3 * kShCoefficients; ++j) largest = std::max({largest, -lo[j], hi[j]});
-    const double sMin = 3.0, h = 0.01, tol = 2e-6 * largest;
-
-    std::mt19937 rng(43);
-    std::uniform_real_distribution<double> start(-70.0, 70.0), angle(0.0, 2.0 * kPi);
+    const std::array<double, 27> g = store.interpolationSlopeBound();
+    const double h = 0.01, tol = 2e-6 * largest;
+    if (!smooth)
+        for (int j = 0; j < 3 * kShCoefficients; ++j) EXPECT_LE(g[j], (hi[j] - lo[j]) / 3.0 + 1e-9);
     double worstRatio = 0.0;  // largest step / bound seen
-    for (int line = 0; line < 200; ++line) {
-        const double x0 = start(rng), z0 = start(rng), t = angle(rng);
-        const double cx = std::cos(t), cz = std::sin(t);
-        ShRgb prev = store.interpolate(x0, z0);
-        for (int n = 1; n <= 2000; ++n) {  // 20 m at 1 cm
-            const ShRgb v = store.interpolate(x0 + n * h * cx, z0 + n * h * cz);
-            for (int k = 0; k < kShCoefficients; ++k) {
-                for (int ch = 0; ch < 3; ++ch) {
-                    const int j = 3 * k + ch;
-                    const double bound = (std::fabs(cx) + std::fabs(cz)) * (hi[j] - lo[j]) * h / sMin;
-                    const double step = std::fabs(double(v.c[k][ch]) - prev.c[k][ch]);
-                    ASSERT_LE(step, bound + tol)
-                        << "line " << line << " step " << n << " coefficient " << j;
-                    worstRatio = std::max(worstRatio, step / bound);
-                }
+    walk(store, [&](int line, int n, double axes, const ShRgb& prev, const ShRgb& v) {
+        for (int k = 0; k < kShCoefficients; ++k) {
+            for (int ch = 0; ch < 3; ++ch) {
+                const int j = 3 * k + ch;
+                const double bound = axes * g[j] * h;
+                const double step = std::fabs(double(v.c[k][ch]) - prev.c[k][ch]);
+                ASSERT_LE(step, bound + tol)
+                    << "line " << line << " step " << n << " coefficient " << j;
+                worstRatio = std::max(worstRatio, step / bound);
             }
-            prev = v;
         }
-    }
+    });
     // The walks do see real gradients (the bound is not vacuous).
     EXPECT_GT(worstRatio, 0.05);
+  }
+}
+
+TEST(AnchorInterpolation, SmoothCellsHaveNoKinks) {
+    // Along the same walks, the change of the step from one step to the next (the second
+    // difference, what a moving object sees as a pop) is, for a C1 field with bounded curvature,
+    // of order h^2, and only at a kink of order h: |d2 f_j| <= 0.1 x g_j h, g_j the slope bound,
+    // at 1 cm steps. Bilinear cells kink at every lattice line; the smooth ones never.
+    double worst[2] = {0.0, 0.0};
+    for (bool smooth : {false, true}) {
+        const AnchorStore store = randomStore(41, smooth);
+        const std::array<double, 27> g = store.interpolationSlopeBound();
+        std::vector<double> lastStep(27, 0.0);
+        walk(store, [&](int, int n, double, const ShRgb& prev, const ShRgb& v) {
+            for (int j = 0; j < 27; ++j) {
+                const double step = double(v.c[j / 3][j % 3]) - prev.c[j / 3][j % 3];
+                if (n > 1) worst[smooth] = std::max(worst[smooth], std::fabs(step - lastStep[j]) / (g[j] * 0.01));
+                lastStep[j] = step;
+            }
+        });
+    }
+    EXPECT_LT(worst[1], 0.1) << "smooth";
+    EXPECT_GT(worst[0], 0.1) << "bilinear (the test can tell a kink)";
 }
 
 TEST(AnchorInterpolation, InsertingAnAnchorChangesNothingAtItsInstant) {
     // New anchors (presence 0) anywhere in a busy store, and refreshes of existing ones: the
     // value at every point is bit for bit what it was.
     std::vector<LatticeKey> keys;
-    AnchorStore store = randomStore(47, &keys);
+  for (bool smooth : {false, true}) {
+    SCOPED_TRACE(smooth ? "smooth" : "bilinear");
+    keys.clear();
+    AnchorStore store = randomStore(47, smooth, &keys);
     std::mt19937 rng(49);
     std::uniform_real_distribution<double> q(-80.0, 80.0);
     std::vector<std::pair<double, double>> points;
@@ -392,6 +453,7 @@ TEST(AnchorInterpolation, InsertingAnAnchorChangesNothingAtItsInstant) {
         moved = std::max(moved, maxDiff(store.interpolate(points[p].first, points[p].second),
                                         before[p]));
     EXPECT_GT(moved, 1.0);
+  }
 }
 
 TEST(AnchorInterpolation, ThesisPatternChangeExample) {
@@ -402,6 +464,7 @@ TEST(AnchorInterpolation, ThesisPatternChangeExample) {
     auto build = [](double blendTime_s) {
         AnchorStoreSettings s;
         s.blendTime_s = blendTime_s;
+        s.smoothInterpolation = false;  // the closed forms below are bilinear
         AnchorStore store(s);
         for (auto [key, v] : {std::pair<LatticeKey, float>{{2, 0, 0}, 1.0f},
                               {{2, 1, 0}, 2.0f},
@@ -467,7 +530,8 @@ TEST(AnchorInterpolation, ThesisPatternChangeExample) {
 }
 
 TEST(AnchorInterpolation, ManyPointsInParallelEqualOneByOne) {
-    AnchorStore store = instantStore();
+  for (bool smooth : {false, true}) {
+    AnchorStore store = instantStore(smooth);
     std::mt19937 rng(8);
     std::uniform_int_distribution<int> level(1, 4), coord(-20, 20);
     for (int n = 0; n < 300; ++n)
@@ -483,6 +547,7 @@ TEST(AnchorInterpolation, ManyPointsInParallelEqualOneByOne) {
     for (std::size_t i = 0; i < x.size(); ++i) {
         ASSERT_EQ(maxDiff(out[i], store.interpolate(x[i], z[i])), 0.0) << i;
     }
+  }
 }
 
 TEST(AnchorInterpolation, PartialPresenceBlendsWithTheValueBeneath) {
@@ -491,6 +556,7 @@ TEST(AnchorInterpolation, PartialPresenceBlendsWithTheValueBeneath) {
     // at (6, 0), one cell away (K = 0.5625, above the coverage floor: all of it): 1.
     AnchorStoreSettings s;
     s.blendTime_s = 2.0;
+    s.smoothInterpolation = false;
     AnchorStore store(s);
     const float f = 0.5f;
     store.setFallback(makeSh(f));

@@ -23,7 +23,8 @@ void expectNear(const ShRgb& a, const ShRgb& b, double tol) {
 
 TEST(AnchorRelight, ScalesWhatInterpolationReads) {
     AnchorStoreSettings s;
-    s.blendTime_s = 0.0;  // at full weight at once
+    s.blendTime_s = 0.0;             // at full weight at once
+    s.smoothInterpolation = false;  // bilinear: half-way between two anchors is their mean
     AnchorStore store(s);
     const LatticeKey a{4, 0, 0}, b{4, 1, 0};
     const auto at = [&](const LatticeKey& k) {
