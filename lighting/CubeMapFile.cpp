@@ -3,11 +3,15 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
+#include <fstream>
 
 #include <OpenImageIO/imageio.h>
+#include <boost/crc.hpp>
 
 #include "world/Conventions.h"
 #include "world/Error.h"
+#include "world/TextFile.h"
 
 namespace amb {
 
@@ -28,8 +32,65 @@ void limitImageSize() {
 
 }  // namespace
 
+namespace {
+
+// A PNG file's chunk structure, checked before OpenImageIO reads it: libpng reports a file that
+// ends inside a chunk by a long jump out of OpenImageIO's read callback, which leaks the error
+// string on the way, and a corrupt chunk is better named here. Every chunk must lie inside the
+// file and carry its CRC-32, up to IEND. Files without the PNG signature are left alone (their
+// own decoders check them).
+// The largest PNG cube map read: 2048 x 12288 RGBA, 16 bits, stored [bytes].
+constexpr std::size_t kMaxPngFileBytes = std::size_t(kMaxCubeMapFace) * kMaxCubeMapFace *
+                                         kCubeFaces * 8 + (std::size_t(1) << 20);
+
+// A chunk type for a message: its letters, other bytes as '?'.
+std::string printable(std::string type) {
+    for (char& c : type)
+        if (!((c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z'))) c = '?';
+    return type;
+}
+
+void checkPngChunks(const std::string& path) {
+    static const char kSignature[8] = {'\x89', 'P', 'N', 'G', '\r', '\n', '\x1a', '\n'};
+    {
+        std::ifstream head(path, std::ios::binary);
+        char first[8] = {};
+        if (!head.read(first, 8) || std::memcmp(first, kSignature, 8) != 0) return;
+    }
+    const std::string bytes = readTextFile(path, "PNG cube map", kMaxPngFileBytes);
+    auto be32 = [&](std::size_t at) {
+        return std::uint32_t(std::uint8_t(bytes[at])) << 24 |
+               std::uint32_t(std::uint8_t(bytes[at + 1])) << 16 |
+               std::uint32_t(std::uint8_t(bytes[at + 2])) << 8 | std::uint32_t(std::uint8_t(bytes[at + 3]));
+    };
+    std::size_t at = 8;
+    while (true) {
+        if (bytes.size() - at < 8) {
+            throw InputError(path, "PNG file ends at byte " + std::to_string(bytes.size()) +
+                                       " without its IEND chunk (truncated)");
+        }
+        const std::uint32_t length = be32(at);
+        const std::string type = bytes.substr(at + 4, 4);
+        if (length > 0x7FFFFFFFu || bytes.size() - at - 8 < std::size_t(length) + 4) {
+            throw InputError(path, "PNG chunk '" + printable(type) + "' at byte " + std::to_string(at) +
+                                       " runs past the end of the file (truncated)");
+        }
+        boost::crc_32_type crc;
+        crc.process_bytes(bytes.data() + at + 4, 4 + std::size_t(length));
+        if (crc.checksum() != be32(at + 8 + length)) {
+            throw InputError(path, "PNG chunk '" + printable(type) + "' at byte " + std::to_string(at) +
+                                       " fails its CRC (corrupt)");
+        }
+        if (type == "IEND") return;
+        at += 12 + std::size_t(length);
+    }
+}
+
+}  // namespace
+
 CubeMapImage readCubeMap(const std::string& path) {
     limitImageSize();
+    checkPngChunks(path);
     // Colour is radiance: keep it as stored, never multiplied by an alpha channel.
     OIIO::ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha", 1);

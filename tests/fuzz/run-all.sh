@@ -2,7 +2,7 @@
 # Runs every libFuzzer target for N seconds each (default 60), one after another, starting from
 # its seed corpus, and prints per target: executions, new corpus entries, crashes.
 #
-#   tests/fuzz/run-all.sh [seconds] [build dir, default build-fuzz]
+#   tests/fuzz/run-all.sh [seconds] [build dir, default build-fuzz] [targets, comma-separated]
 #
 # New inputs go to out/fuzz/corpus/<target>/ (the committed seeds in tests/fuzz/corpus/ are only
 # read); crashing inputs to out/fuzz/crashes/<target>/, logs to out/fuzz/<target>.log. A crash
@@ -17,6 +17,9 @@ build="${2:-build-fuzz}"
 targets=(fuzz_replay fuzz_sweep fuzz_volume_settings fuzz_baseline_settings fuzz_oracle
          fuzz_anchor_store fuzz_cubemap)
 json_targets=" fuzz_replay fuzz_sweep fuzz_volume_settings fuzz_baseline_settings fuzz_oracle "
+if [[ -n "${3:-}" ]]; then
+  IFS=, read -r -a targets <<<"$3"
+fi
 
 if [[ ! "$seconds" =~ ^[0-9]+$ ]] || ((seconds < 1)); then
   echo "run-all: seconds must be a positive integer, got '$seconds'" >&2

@@ -179,6 +179,42 @@ std::string pngHeaderOnly(std::uint32_t width, std::uint32_t height) {
     return file;
 }
 
+// Found by fuzzing (fuzz_cubemap): a PNG that ends inside a chunk made libpng jump out of
+// OpenImageIO's read callback, which leaked the error string (LeakSanitizer). Truncated and
+// corrupt chunks are now refused before decoding, naming the chunk; a valid file still reads.
+TEST(CubeMapFile, TruncatedOrCorruptPngChunksAreNamed) {
+    const std::string png = tempPath("chunks.png");
+    writeImage(png, 4, 24, 3, OIIO::TypeDesc::UINT8, std::vector<float>(4 * 24 * 3, 0.5f));
+    std::string good;
+    {
+        std::ifstream in(png, std::ios::binary);
+        good.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    ASSERT_GT(good.size(), 45u);
+    // The fuzzer's input: IHDR, then an oFFs chunk of 9 bytes of which 3 are there.
+    const std::string truncated = good.substr(0, 33) + std::string("\x00\x00\x00\x09oFFs\x00\x00\x00", 11);
+    std::string corrupt = good;
+    corrupt[20] ^= 0x01;  // a bit of IHDR's width: its CRC no longer matches
+    const struct {
+        const std::string* bytes;
+        const char* expect;
+    } cases[] = {{&truncated, "'oFFs' at byte 33 runs past the end"},
+                 {&corrupt, "'IHDR' at byte 8 fails its CRC"},
+                 {&good, nullptr}};
+    for (const auto& c : cases) {
+        std::ofstream(png, std::ios::binary | std::ios::trunc) << *c.bytes;
+        try {
+            readCubeMap(png);
+            EXPECT_EQ(c.expect, nullptr) << "no error";
+        } catch (const InputError& e) {
+            ASSERT_NE(c.expect, nullptr) << e.what();
+            EXPECT_NE(std::string(e.what()).find(c.expect), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find(png), std::string::npos) << e.what();
+        }
+    }
+    std::filesystem::remove(png);
+}
+
 // A 65-byte PNG declaring 100000 x 600000 pixels (1.4e11 texels) and one declaring 8000 x 48000
 // (4.6 GB of floats) are refused from their headers with InputError naming the size, quickly
 // and without allocating (before, the first gave bad_alloc and the second allocated 4.6 GB);
