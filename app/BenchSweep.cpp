@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdint>
 
+#include "lighting/AmbienceMethod.h"
 #include "world/Error.h"
 #include "world/TextFile.h"
 
@@ -42,9 +43,13 @@ SweepPoint parsePoint(const json& p, const std::string& where,
         } else if (key == "facesPerFrame" && it->is_number_integer()) {
             // Range-check at full width before narrowing, so 4294967297 does not become 1.
             const std::uint64_t u = it->is_number_unsigned() ? it->get<std::uint64_t>() : 0;
-            const std::int64_t n = it->is_number_unsigned() ? (u > 6 ? 7 : std::int64_t(u))
-                                                            : it->get<std::int64_t>();
-            if (n < 1 || n > 6) throw InputError(where, "facesPerFrame: expected 1 to 6");
+            const std::int64_t n =
+                it->is_number_unsigned()
+                    ? (u > std::uint64_t(kMaxFacesPerFrame) ? kMaxFacesPerFrame + 1 : std::int64_t(u))
+                    : it->get<std::int64_t>();
+            if (n < 1 || n > kMaxFacesPerFrame)
+                throw InputError(where, "facesPerFrame: expected 1 to " +
+                                            std::to_string(kMaxFacesPerFrame));
             point.facesPerFrame = int(n);
         } else {
             throw InputError(where, "unknown key or wrong type: '" + key +

@@ -29,7 +29,7 @@ constexpr int kMaxSweepJsonDepth = 32;
 
 // The points of a sweep file's text, after the default point (always first). `methodNames` are
 // the names "methods" may list. Throws InputError(where, ...) for malformed JSON, unknown keys,
-// wrong types, a bad label, a method not in `methodNames`, facesPerFrame outside 1-6, or
+// wrong types, a bad label, a method not in `methodNames`, facesPerFrame outside 1-64, or
 // nesting deeper than kMaxSweepJsonDepth.
 std::vector<SweepPoint> parseSweep(const std::string& text, const std::string& where,
                                    const std::vector<std::string>& methodNames);

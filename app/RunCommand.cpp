@@ -179,8 +179,9 @@ void runReplay(RunOptions o) {
         baselines = baselineSettingsFromJson(
             readSettingsFile(o.baselineConfig, "baseline settings file"), o.baselineConfig);
     }
-    if (o.facesPerFrame < 1 || o.facesPerFrame > 6)
-        throw InputError("--faces-per-frame", "expected 1 to 6");
+    if (o.facesPerFrame < 1 || o.facesPerFrame > kMaxFacesPerFrame)
+        throw InputError("--faces-per-frame",
+                         "expected 1 to " + std::to_string(kMaxFacesPerFrame));
     // One capture budget for every method.
     volumeSettings.facesPerFrame = baselines.facesPerFrame = o.facesPerFrame;
     checkLoops(replay, o);
@@ -474,7 +475,7 @@ void addRunCommand(CLI::App& app) {
                     "JSON file of ambience volume settings (AmbienceVolumeSettings fields, "
                     "lighting/AmbienceVolume.h)");
     cmd->add_option("--faces-per-frame", o->facesPerFrame,
-                    "capture budget: cube faces per frame (default 1, as in the thesis)");
+                    "capture budget: cube faces per frame, 1 to 64 (default 1, as in the thesis)");
     cmd->add_option("--face-size", o->faceSize, "capture face size N (default 16)");
     cmd->add_option("--save-anchors", o->saveAnchors, "write the anchor store at the end (.vdb)");
     cmd->add_option("--load-anchors", o->loadAnchors, "warm-start from an anchor store (.vdb)");

@@ -15,6 +15,10 @@
 
 namespace amb {
 
+// The capture budget's upper end, cube faces per frame (the settings readers and the command
+// line): about 11 probes a frame, where a GPU with 16 x 16 faces is still far from busy.
+inline constexpr int kMaxFacesPerFrame = 64;
+
 struct MethodStatistics {
     std::size_t probes = 0;  // coefficient sets held (anchors, grid probes, cache entries)
     std::size_t bytes = 0;   // memory those take, structure included
