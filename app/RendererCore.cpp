@@ -117,7 +117,7 @@ void SkyLighting::fill(FrameConstants& fc) const {
 float exposureFor(const SkyLighting& now, const SkyLighting& noon) {
     auto white = [](const SkyLighting& s) {
         const glm::vec3 e = s.skyIrradianceUp + s.lightIrradiance * std::max(0.0f, s.lightDir.y);
-        return (0.2126f * e.r + 0.7152f * e.g + 0.0722f * e.b) / float(kPi);
+        return luminance(e) / float(kPi);
     };
     const float reference = std::max(white(noon), 1e-6f);
     return 0.6f / std::max(white(now), reference * 1e-3f);

@@ -12,6 +12,7 @@
 #include "app/CliChecks.h"
 #include "app/Commands.h"
 #include "world/CameraPath.h"
+#include "world/Conventions.h"
 #include "world/Error.h"
 #include "world/Replay.h"
 #include "world/World.h"
@@ -185,7 +186,7 @@ void addReplayCommand(CLI::App& app) {
         ->check(FiniteRange(0.0, 1.0e5));
     make->add_option("--pitch", o.pitch_deg, "static: pitch [deg], + looks up")->check(FiniteRange(-89.0, 89.0));
     make->callback([] {
-        constexpr double kDeg = 3.14159265358979323846 / 180.0;
+        constexpr double kDeg = kPi / 180.0;
         Replay rp;
         rp.name = o.name;
         rp.description = o.description;

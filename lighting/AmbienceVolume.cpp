@@ -18,6 +18,7 @@
 #include "lighting/JsonFields.h"
 #include "lighting/ProbeCapture.h"
 #include "lighting/ProbeEnvironment.h"
+#include "world/Conventions.h"
 #include "world/Error.h"
 
 namespace amb {
@@ -159,7 +160,7 @@ double AmbienceVolume::skyLevel(double timeOfDay_h) const {
     environment_.fallbackCubeMap((minute + 0.5) / 60.0, kN, cube);
     double sum = 0.0;
     for (std::size_t t = 0; t + 2 < cube.size(); t += 3) {
-        const double lum = 0.2126 * cube[t] + 0.7152 * cube[t + 1] + 0.0722 * cube[t + 2];
+        const double lum = luminance(glm::dvec3(cube[t], cube[t + 1], cube[t + 2]));
         sum += std::min(std::isfinite(lum) ? std::max(lum, 0.0) : 0.0, settings_.sunThreshold);
     }
     const double level = std::max(sum / double(cube.size() / 3), 1e-12);

@@ -33,6 +33,7 @@
 #include "lighting/AmbienceMethod.h"
 #include "lighting/AnchorStore.h"
 #include "lighting/ProbeScheduler.h"
+#include "world/Conventions.h"
 
 namespace amb {
 
@@ -49,8 +50,9 @@ struct AmbienceVolumeSettings {
     double nominalFrameTime_s = 1.0 / 60.0;  // frame time assumed before any dt > 0 is seen
     double defaultTimeRate_hPerS = 1.0 / 3600.0;  // before the rate is measured (real time)
     double timeJump_h = 0.25;      // a larger change of the time of day in one update is a jump
-    double sunThreshold = 5000.0;  // texels brighter (luminance radiance) are the sun disc:
-                                   // taken out of the SH (the renderer lights the sun directly)
+    // Texels brighter (luminance radiance [W sr^-1 m^-2]) are the sun disc: taken out of the
+    // SH (the renderer lights the sun directly). The JSON key is "sunThreshold".
+    double sunThreshold = kSunThreshold_Wpsrm2;
     int fallbackFaceSize = 16;     // cube map size for the fallback SH
     double fallbackRefresh_h = 1.0 / 60.0;  // recompute the fallback after this much day time
     double asideFraction = 0.5;  // a probe may move aside up to this x its level's spacing

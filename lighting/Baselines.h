@@ -59,7 +59,7 @@ class RoadNetwork;
 struct BaselineSettings {
     // Shared by every baseline.
     int facesPerFrame = 1;         // capture budget, as AmbienceVolumeSettings::facesPerFrame
-    double sunThreshold = 5000.0;  // luminance radiance above which a texel is the sun disc
+    double sunThreshold = kSunThreshold_Wpsrm2;  // luminance radiance [W sr^-1 m^-2]: sun disc
     double maxAside_m = 4.0;       // how far placeProbe may move a probe sideways [m]
     double defaultTimeRate_hPerS = 1.0 / 3600.0;  // time rate before it is measured [h/s]
     double timeJump_h = 0.25;           // a larger change of the time of day in a frame is a jump

@@ -29,9 +29,9 @@ namespace amb {
 
 namespace {
 
-// Rec. 709 luminance, used only to find sun texels.
+// Rec. 709 luminance (world/Conventions.h), used only to find sun texels.
 double luminance(double r, double g, double b) {
-    return 0.2126 * r + 0.7152 * g + 0.0722 * b;
+    return amb::luminance(glm::dvec3(r, g, b));
 }
 
 // Signed area term of the texel solid-angle formula: the solid angle of the face rectangle

@@ -53,6 +53,7 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include "lighting/SH.h"
+#include "world/Conventions.h"
 
 namespace amb {
 
@@ -61,7 +62,7 @@ class CubeCapture;
 class ProbeEnvironment;
 
 // ---- Irradiance distance ---------------------------------------------------------------------
-inline constexpr double kLuminanceWeights[3] = {0.2126, 0.7152, 0.0722};
+// (luminance weights w_c: kLuminanceWeights, world/Conventions.h)
 
 // ||E_a - E_b|| over the sphere of normals (see above), in irradiance units x sqrt(sr).
 double irradianceDistance(const ShRgb& a, const ShRgb& b);
@@ -94,7 +95,7 @@ struct MeasureSettings {
     int popPoints = 3;              // the camera's ground point + popPoints - 1 ring-1 witnesses
     double cornerSpacing_m = 32.0;  // witnesses sit on this lattice (terrain patch corners)
     double maxAside_m = 4.0;        // oracle probe placement, as the volume's probes
-    double sunThreshold = 5000.0;   // as AmbienceVolumeSettings::sunThreshold
+    double sunThreshold = kSunThreshold_Wpsrm2;  // as AmbienceVolumeSettings::sunThreshold
     int rings() const { return int(ringRadii.size()); }  // ring 0 + ringRadii.size() - 1 bands
 };
 

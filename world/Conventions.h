@@ -10,6 +10,12 @@
 //
 // [SECTION] Radiance
 //   Linear HDR float RGB. The sun may be ~10^5 times the sky; tone mapping happens only at display.
+//   Units: the sky model's cd/m^2 over a luminous efficacy of 100 lm/W, roughly W sr^-1 m^-2
+//   (world/Sky.h). Luminance = Rec. 709 weights (0.2126, 0.7152, 0.0722) . linear RGB.
+//   Texels brighter than kSunThreshold_Wpsrm2 (luminance radiance) are the sun disc.
+//   The distant ground below the horizon is flat and Lambertian with albedo kGroundAlbedo
+//   (world/SkyGround.h). shaders/conventions.glsl repeats pi, the weights and the albedo;
+//   tests/world/Conventions_test.cpp checks that the two agree.
 //
 // [SECTION] Spherical harmonics
 //   Real order-2 SH, 9 coefficients per channel, index k = l(l+1)+m, Ramamoorthi-Hanrahan basis
@@ -37,9 +43,26 @@
 
 namespace amb {
 
+// ---- Pi, luminance, ground, sun --------------------------------------------------------------
+inline constexpr double kPi = 3.14159265358979323846;
+// Rec. 709 luminance weights of linear RGB (R, G, B).
+inline constexpr double kLuminanceWeights[3] = {0.2126, 0.7152, 0.0722};
+// Luminance of a linear RGB value, in the precision of its components.
+template <typename T, glm::qualifier Q>
+constexpr T luminance(const glm::vec<3, T, Q>& rgb) {
+    return T(kLuminanceWeights[0]) * rgb.r + T(kLuminanceWeights[1]) * rgb.g +
+           T(kLuminanceWeights[2]) * rgb.b;
+}
+// Albedo of the flat Lambertian ground below the horizon (the fallback scene, the sky texture's
+// lower half, the hemisphere ambient). A float, as the fallback has always read it.
+inline constexpr float kGroundAlbedo = 0.2f;
+// Luminance radiance [W sr^-1 m^-2, the sky model's units] above which a cube-map texel is the
+// sun disc, kept out of the SH as a directional light (docs/DESIGN.md "Spherical harmonics").
+// The default of every `sunThreshold` setting.
+inline constexpr double kSunThreshold_Wpsrm2 = 5000.0;
+
 // ---- SH constants (full precision) ----------------------------------------------------------
 inline constexpr int kShCoefficients = 9;  // order 2: bands l = 0, 1, 2
-inline constexpr double kPi = 3.14159265358979323846;
 inline constexpr double kShY00 = 0.28209479177387814347;  // 1 / (2 sqrt(pi))
 inline constexpr double kShY1 = 0.48860251190291992159;   // sqrt(3 / (4 pi))
 inline constexpr double kShY2a = 1.09254843059207907054;  // sqrt(15 / (4 pi))

@@ -14,6 +14,8 @@
 #include <glm/gtc/noise.hpp>
 #include <glm/vec2.hpp>
 
+#include "world/Conventions.h"
+
 namespace amb {
 
 namespace {
@@ -41,7 +43,7 @@ void seedOctaves(std::array<Heightfield::Octave, N>& octaves, SplitMix64& rng, d
     for (auto& o : octaves) {
         // A different rotation per octave hides the lattice axes; offsets pick a region of the
         // noise's period, so two seeds see unrelated terrain.
-        const double angle = 2.0 * 3.14159265358979323846 * rng.uniform();
+        const double angle = 2.0 * kPi * rng.uniform();
         o.cosA = std::cos(angle);
         o.sinA = std::sin(angle);
         o.frequency_per_m = frequency;

@@ -32,10 +32,6 @@ double wrapHours(double t_h) {
     return t;
 }
 
-double luminance(const glm::dvec3& rgb) {
-    return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b;
-}
-
 // CIE XYZ -> linear sRGB (D65).
 glm::dvec3 xyzToRgb(double X, double Y, double Z) {
     return {3.2404542 * X - 1.5371385 * Y - 0.4985314 * Z,

@@ -25,7 +25,7 @@ const float* texel(const std::vector<float>& cube, int face, int i, int j) {
 }
 
 float luminance(const float* p) {
-    return 0.2126f * p[0] + 0.7152f * p[1] + 0.0722f * p[2];
+    return amb::luminance(glm::vec3(p[0], p[1], p[2]));
 }
 
 class CubeCaptureTest : public ::testing::Test {

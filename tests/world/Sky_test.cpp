@@ -26,7 +26,7 @@ double elevation_deg(const glm::dvec3& d) {
 }
 
 double luminance(const glm::vec3& c) {
-    return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b;
+    return amb::luminance(glm::dvec3(c));
 }
 
 // Time in [lo, hi] where the sun's centre crosses the horizon (one sign change), by bisection.
