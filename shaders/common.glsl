@@ -3,7 +3,7 @@
 #ifndef AMB_COMMON_GLSL
 #define AMB_COMMON_GLSL
 
-const float PI = 3.14159265358979;
+#include "conventions.glsl"  // PI, LUMINANCE_WEIGHTS, GROUND_ALBEDO
 
 // One block per frame (or per capture face), std140, binding 0. Mirrors amb::FrameConstants.
 layout(std140, binding = 0) uniform FrameConstants {
