@@ -10,6 +10,7 @@
 #include <glm/geometric.hpp>
 
 #include "world/Conventions.h"
+#include "world/SkyGround.h"
 #include "world/Vegetation.h"
 #include "world/World.h"
 
@@ -84,45 +85,22 @@ double WorldProbeEnvironment::sunAngularSpeed_radPerHour() const {
 
 void WorldProbeEnvironment::fallbackCubeMap(double timeOfDay_h, int n,
                                             std::vector<float>& rgb) const {
-    const Sky& sky = world_.sky();
-    const SkyState state = sky.state(timeOfDay_h);
-    rgb.assign(std::size_t(6) * n * n * 3, 0.0f);
-    // Sky over the upper hemisphere; irradiance of a horizontal surface from it.
-    glm::dvec3 skyUp(0.0);
-    std::vector<char> below(std::size_t(6) * n * n, 0);
+    // Texel directions and solid angles (2/n)^2 / |d|^3 (d has unit major axis), then the sky
+    // over flat ground there (world/SkyGround.h).
+    std::vector<glm::dvec3> dirs(std::size_t(6) * n * n);
+    std::vector<double> omegas(dirs.size());
     for (int f = 0; f < kCubeFaces; ++f) {
         for (int j = 0; j < n; ++j) {
             for (int i = 0; i < n; ++i) {
                 const glm::dvec3 d = cubeTexelDirection(f, i, j, n);
                 const double len2 = glm::dot(d, d);
-                const glm::dvec3 dir = d / std::sqrt(len2);
                 const std::size_t t = (std::size_t(f) * n + j) * n + i;
-                if (dir.y < 0.0) {
-                    below[t] = 1;
-                    continue;
-                }
-                const glm::vec3 l = sky.radiance(dir, state);
-                // Texel solid angle (2/n)^2 / |d|^3 (d has unit major axis).
-                const double omega = (4.0 / (double(n) * n)) / (len2 * std::sqrt(len2));
-                skyUp += glm::dvec3(l) * dir.y * omega;
-                rgb[3 * t + 0] = l.r;
-                rgb[3 * t + 1] = l.g;
-                rgb[3 * t + 2] = l.b;
+                dirs[t] = d / std::sqrt(len2);
+                omegas[t] = (4.0 / (double(n) * n)) / (len2 * std::sqrt(len2));
             }
         }
     }
-    // Flat Lambertian ground below the horizon, lit by the sky, the sun and the moon.
-    const DirectionalLight sun = sky.sunLight(timeOfDay_h);
-    const DirectionalLight moon = sky.moonLight(timeOfDay_h);
-    const glm::dvec3 e = skyUp + glm::dvec3(sun.irradiance) * std::max(0.0, sun.direction.y) +
-                         glm::dvec3(moon.irradiance) * std::max(0.0, moon.direction.y);
-    const glm::dvec3 ground = e * (double(settings_.groundAlbedo) / kPi);
-    for (std::size_t t = 0; t < below.size(); ++t) {
-        if (!below[t]) continue;
-        rgb[3 * t + 0] = float(ground.x);
-        rgb[3 * t + 1] = float(ground.y);
-        rgb[3 * t + 2] = float(ground.z);
-    }
+    evaluateSkyGround(world_.sky(), timeOfDay_h, dirs, omegas, rgb);
 }
 
 }  // namespace amb

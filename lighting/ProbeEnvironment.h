@@ -12,9 +12,9 @@
 // [SECTION] Fallback radiance (AnchorStore::setFallback)
 //   A cube map of the sky model (Preetham by day, twilight, moonlit night; no sun or moon disc)
 //   over the upper hemisphere and, below the horizon, a flat Lambertian ground of albedo
-//   groundAlbedo lit by that sky and the sun and moon: L_ground = albedo / pi x
-//   (E_sky(up) + E_sun max(0, sun.y) + E_moon max(0, moon.y)). Its SH is the "no anchor"
-//   ambience: what a probe over open flat ground would see.
+//   kGroundAlbedo lit by that sky and the sun and moon: L_ground = albedo / pi x
+//   (E_sky(up) + E_sun max(0, sun.y) + E_moon max(0, moon.y)), evaluated by world/SkyGround.h.
+//   Its SH is the "no anchor" ambience: what a probe over open flat ground would see.
 #pragma once
 
 #include <memory>
@@ -41,7 +41,6 @@ class ProbeEnvironment {
 struct WorldProbeEnvironmentSettings {
     double probeHeight_m = 2.0;  // above terrain or water
     double clearance_m = 0.5;    // kept from plant footprints and tops
-    float groundAlbedo = 0.2f;   // of the fallback's flat ground
 };
 
 class WorldProbeEnvironment : public ProbeEnvironment {
