@@ -5,6 +5,7 @@
 
 #include "FuzzSupport.h"
 #include "app/BenchSweep.h"
+#include "lighting/AmbienceMethod.h"
 #include "world/Error.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -22,7 +23,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     for (const amb::SweepPoint& p : points) {
         AMB_FUZZ_EXPECT(labels.insert(p.label).second);
         AMB_FUZZ_EXPECT(!p.label.empty() && p.label.find_first_of("/ _,;") == std::string::npos);
-        AMB_FUZZ_EXPECT(p.facesPerFrame >= 1 && p.facesPerFrame <= 6);
+        AMB_FUZZ_EXPECT(p.facesPerFrame >= 1 && p.facesPerFrame <= amb::kMaxFacesPerFrame);
         AMB_FUZZ_EXPECT(p.volume.is_object() && p.baseline.is_object());
         // The bench writes these as the run's settings files.
         (void)p.volume.dump(2);
