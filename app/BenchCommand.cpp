@@ -580,7 +580,7 @@ void drawPlots(const std::string& out) {
     }
     // Debian's Python (the one python3-matplotlib installs into), else the first on PATH.
     const std::string python = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
-    if (std::system((python + " -c 'import matplotlib' >/dev/null 2>&1").c_str()) != 0) {
+    if (spawnAndWait({"/usr/bin/env", python, "-c", "import matplotlib"}, "/dev/null") != 0) {
         std::fprintf(stderr,
                      "plots skipped: python3 with matplotlib is missing (Debian: apt-get install "
                      "python3-matplotlib); results.csv and summary.md are written\n");

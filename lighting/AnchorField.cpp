@@ -45,11 +45,8 @@ double minMod4(const double* q) {
 }
 
 // out = sum over the 4 corners q and their 4 blocks m (value, slopes, twist; kStride floats
-// each, kStride x 4 per corner) of weight[4q + m] x block: the lookup's inner loop. Built twice
-// with GCC on x86-64, for the baseline and for AVX2 with FMA, chosen when the program starts.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-__attribute__((target_clones("default", "arch=haswell")))
-#endif
+// each, kStride x 4 per corner) of weight[4q + m] x block: the lookup's inner loop. (An AVX2
+// build of it measured no faster: the lookup is bound by memory, not arithmetic.)
 void blend16(const float* const corner[4], const float* weight, float* out) {
     constexpr int kStride = 28;
     for (int j = 0; j < kStride; ++j) out[j] = 0.0f;
@@ -75,14 +72,7 @@ std::int64_t floorDiv(std::int64_t a, std::int64_t b) {
 }  // namespace
 
 std::size_t AnchorField::CellKeyHash::operator()(const CellKey& c) const {
-    // splitmix64 finaliser over both coordinates: neighbouring cells land far apart.
-    std::uint64_t h = std::uint64_t(c.i) * 0x9E3779B97F4A7C15ull ^ std::uint64_t(c.k);
-    h ^= h >> 30;
-    h *= 0xBF58476D1CE4E5B9ull;
-    h ^= h >> 27;
-    h *= 0x94D049BB133111EBull;
-    h ^= h >> 31;
-    return std::size_t(h);
+    return hashLatticeCell(c.i, c.k);
 }
 
 std::size_t AnchorField::cells() const {
@@ -118,13 +108,13 @@ void AnchorField::rebuild(const FieldLattice& lattice, const std::vector<FieldAn
                           const ShRgb& fallback, int fromLevel) {
     if (!built_ || lattice.smooth != lattice_.smooth) fromLevel = 0;  // all of it
     lattice_ = lattice;
-    pf_ = lattice.smooth ? 4 * kStride : kStride;
+    pointFloats_ = lattice.smooth ? 4 * kStride : kStride;
     lattice_.levels = std::clamp(lattice.levels, 1, kFieldMaxLevels);
     fromLevel = std::min(fromLevel, lattice_.levels);
     for (int L = 0; L < lattice_.levels; ++L) inverseSpacing_[L] = 1.0 / lattice_.spacing[L];
     fallback_ = fallback;
     for (int L = fromLevel; L < kFieldMaxLevels; ++L) cells_[L].clear(), slope_[L].fill(0.0);
-    points_.resize(levelStart_[fromLevel] * pf_);
+    points_.resize(levelStart_[fromLevel] * pointFloats_);
     levelsIn_.clear();
     finest_ = -1;
 
@@ -138,7 +128,7 @@ void AnchorField::rebuild(const FieldLattice& lattice, const std::vector<FieldAn
     for (int L = 0; L < lattice_.levels; ++L) {
         if (L >= fromLevel) {
             buildLevel(L, anchors);
-            levelStart_[L + 1] = points_.size() / pf_;
+            levelStart_[L + 1] = points_.size() / pointFloats_;
         }
         if (cells_[L].empty()) continue;
         finest_ = L;
@@ -162,8 +152,8 @@ void AnchorField::coarserData(int L, double x, double z, double* out) const {
     for (int j = 0; j < kN; ++j) out[j] = double(value[j]);  // the value exactly as at() gives it
     if (L == 0 || hit.level < 0 || !lattice_.smooth) return;
     const auto it = cells_[hit.level].find(CellKey{hit.i, hit.k});
-    const float* r[2] = {points_.data() + std::size_t(it->second.row0) * pf_,
-                         points_.data() + std::size_t(it->second.row1) * pf_};
+    const float* r[2] = {points_.data() + std::size_t(it->second.row0) * pointFloats_,
+                         points_.data() + std::size_t(it->second.row1) * pointFloats_};
     // d/du, d/dw and d2/dudw of the coarser cell, then to level-L units (s_L / s_hit = 3^-n).
     const std::array<double, 4> hu = hermite(hit.u), hw = hermite(hit.w);
     const std::array<double, 4> du = hermite(hit.u, true), dw = hermite(hit.w, true);
@@ -176,7 +166,7 @@ void AnchorField::coarserData(int L, double x, double z, double* out) const {
         double* o = out + (d + 1) * kN;
         for (int b = 0; b < 2; ++b)
             for (int a = 0; a < 2; ++a) {
-                const float* corner = r[b] + a * pf_;
+                const float* corner = r[b] + a * pointFloats_;
                 const double vu = (*wu[d])[2 * a], su = (*wu[d])[2 * a + 1];
                 const double vw = (*ww[d])[2 * b], sw = (*ww[d])[2 * b + 1];
                 const double w4[4] = {vu * vw, su * vw, vu * sw, su * sw};
@@ -297,7 +287,7 @@ void AnchorField::buildLevel(int L, const std::vector<FieldAnchor>& anchors) {
     cornerList.erase(std::unique(cornerList.begin(), cornerList.end()), cornerList.end());
 
     // H_L at each corner: value, s d/dx, s d/dz, s^2 d2/dxdz.
-    std::vector<float> values(cornerList.size() * pf_, 0.0f);
+    std::vector<float> values(cornerList.size() * pointFloats_, 0.0f);
     static const std::array<double, kN> zero{};
     auto dAt = [&](std::int64_t i, std::int64_t k) -> const std::array<double, kN>& {
         const auto it = inReach.find(CellKey{i, k});
@@ -305,7 +295,7 @@ void AnchorField::buildLevel(int L, const std::vector<FieldAnchor>& anchors) {
     };
     for (std::size_t n = 0; n < cornerList.size(); ++n) {
         const CellKey& c = cornerList[n];
-        float* out = values.data() + n * pf_;
+        float* out = values.data() + n * pointFloats_;
         const auto& base = coarserAt(c);
         const auto own = inReach.find(c);
         if (!lattice_.smooth) {  // bilinear: the value alone
@@ -366,7 +356,7 @@ void AnchorField::buildLevel(int L, const std::vector<FieldAnchor>& anchors) {
     }
 
     // Cells point at their corner rows: (i, k) and (i, k + 1); (i + 1, .) follow them.
-    const std::uint32_t first = std::uint32_t(points_.size() / pf_);
+    const std::uint32_t first = std::uint32_t(points_.size() / pointFloats_);
     points_.insert(points_.end(), values.begin(), values.end());
     auto indexOf = [&](const CellKey& c) {
         const auto it = std::lower_bound(cornerList.begin(), cornerList.end(), c, rowOrder);
@@ -379,10 +369,10 @@ void AnchorField::buildLevel(int L, const std::vector<FieldAnchor>& anchors) {
         const CellRef ref{indexOf(c), indexOf(CellKey{c.i, c.k + 1})};
         cells.emplace(c, ref);
         // slopeBound: the Hermite bound of the cell in both axes.
-        const float* p[4] = {points_.data() + std::size_t(ref.row0) * pf_,
-                             points_.data() + std::size_t(ref.row0 + 1) * pf_,
-                             points_.data() + std::size_t(ref.row1) * pf_,
-                             points_.data() + std::size_t(ref.row1 + 1) * pf_};
+        const float* p[4] = {points_.data() + std::size_t(ref.row0) * pointFloats_,
+                             points_.data() + std::size_t(ref.row0 + 1) * pointFloats_,
+                             points_.data() + std::size_t(ref.row1) * pointFloats_,
+                             points_.data() + std::size_t(ref.row1 + 1) * pointFloats_};
         for (int j = 0; j < kN; ++j) {
             double dvx = 0, dvz = 0, gx = 0, gz = 0, gxz = 0;
             dvx = std::max(std::fabs(double(p[1][j]) - p[0][j]), std::fabs(double(p[3][j]) - p[2][j]));
@@ -440,8 +430,8 @@ ShRgb AnchorField::at(double x, double z, Hit* hit, int maxLevel) const {
         const Locus c = L == 0 ? top : locate(L, x, z);
         const auto it = cells_[L].find(CellKey{c.i, c.k});
         if (it == cells_[L].end()) continue;
-        const float* r0 = points_.data() + std::size_t(it->second.row0) * pf_;
-        const float* r1 = points_.data() + std::size_t(it->second.row1) * pf_;
+        const float* r0 = points_.data() + std::size_t(it->second.row0) * pointFloats_;
+        const float* r1 = points_.data() + std::size_t(it->second.row1) * pointFloats_;
         const double dx = x - c.x0, dz = z - c.z0;
         double u = dx / (c.x1 - c.x0), w = dz / (c.z1 - c.z0);
         // On a lattice line (within 1e-9 m): exactly on it, so an anchor's value comes back
@@ -458,19 +448,19 @@ ShRgb AnchorField::at(double x, double z, Hit* hit, int maxLevel) const {
         }
         if (cu >= 0 && cw >= 0) {
             if (hit) hit->corner = cu + 2 * cw;
-            return fromFloats((cw ? r1 : r0) + cu * pf_);
+            return fromFloats((cw ? r1 : r0) + cu * pointFloats_);
         }
         if (!lattice_.smooth) {  // bilinear between the corner values
             const float w00 = float((1.0 - u) * (1.0 - w)), w10 = float(u * (1.0 - w));
             const float w01 = float((1.0 - u) * w), w11 = float(u * w);
             float out[kN];
             for (int j = 0; j < kN; ++j)
-                out[j] = w00 * r0[j] + w10 * r0[pf_ + j] + w01 * r1[j] + w11 * r1[pf_ + j];
+                out[j] = w00 * r0[j] + w10 * r0[pointFloats_ + j] + w01 * r1[j] + w11 * r1[pointFloats_ + j];
             return fromFloats(out);
         }
         // Bicubic Hermite: 4 corners x (value, slope x, slope z, twist), 16 weights.
         const std::array<double, 4> hu = hermite(u), hw = hermite(w);
-        const float* corner[4] = {r0, r0 + pf_, r1, r1 + pf_};
+        const float* corner[4] = {r0, r0 + pointFloats_, r1, r1 + pointFloats_};
         float weight[16];
         for (int q = 0; q < 4; ++q) {
             const int a = q & 1, b = q >> 1;

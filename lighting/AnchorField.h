@@ -56,6 +56,18 @@ namespace amb {
 
 inline constexpr int kFieldMaxLevels = 8;
 
+// Hash of an integer lattice cell (the splitmix64 finaliser over both coordinates, so that
+// neighbouring cells land far apart); shared by every hash map keyed by a cell.
+inline std::size_t hashLatticeCell(std::int64_t i, std::int64_t k) {
+    std::uint64_t h = std::uint64_t(i) * 0x9E3779B97F4A7C15ull ^ std::uint64_t(k);
+    h ^= h >> 30;
+    h *= 0xBF58476D1CE4E5B9ull;
+    h ^= h >> 27;
+    h *= 0x94D049BB133111EBull;
+    h ^= h >> 31;
+    return std::size_t(h);
+}
+
 // The lattice the field lives on (AnchorStore's).
 struct FieldLattice {
     int levels = 1;
@@ -132,7 +144,7 @@ class AnchorField {
     // A stored point: value, s_L d/dx, s_L d/dz, s_L^2 d2/dxdz, each a coefficient set padded
     // to kStride floats (whole SIMD vectors).
     static constexpr int kStride = 28;
-    int pf_ = 4 * kStride;  // floats per stored point: 4 blocks (smooth) or 1 (bilinear)
+    int pointFloats_ = 4 * kStride;  // floats per stored point: 4 blocks (smooth) or 1 (bilinear)
     // F_{L-1}'s Hermite data at (x, z) in level-L units (value, s dx, s dz, s^2 dxdz).
     void coarserData(int level, double x, double z, double* out) const;
 
@@ -152,7 +164,7 @@ class AnchorField {
     // Per level-0 cell, bit L set when some level-L cell inside it is stored: a lookup probes
     // only those levels.
     tsl::hopscotch_map<CellKey, std::uint32_t, CellKeyHash> levelsIn_;
-    std::vector<float> points_;  // pf_ floats per stored point
+    std::vector<float> points_;  // pointFloats_ floats per stored point
     std::array<std::size_t, kFieldMaxLevels + 1> levelStart_{};  // first point of each level
     std::array<std::array<double, 27>, kFieldMaxLevels> slope_{};  // slopeBound per level
     std::array<double, kFieldMaxLevels> inverseSpacing_{};

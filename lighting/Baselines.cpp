@@ -21,6 +21,7 @@
 #include <glm/geometric.hpp>
 #include <nlohmann/json.hpp>
 
+#include "lighting/AnchorField.h"
 #include "lighting/AnchorStore.h"
 #include "lighting/CubeCapture.h"
 #include "lighting/CubeMapProjector.h"
@@ -165,14 +166,7 @@ BaselineSettings baselineSettingsFromJson(const std::string& jsonText, const std
 // ---- Shared machinery ---------------------------------------------------------------------------
 
 std::size_t CellKeyHash::operator()(const CellKey& key) const noexcept {
-    // Mix both coordinates (splitmix64 finaliser), so neighbouring cells spread over buckets.
-    std::uint64_t h = std::uint64_t(key.i) * 0x9e3779b97f4a7c15ull ^ std::uint64_t(key.k);
-    h ^= h >> 30;
-    h *= 0xbf58476d1ce4e5b9ull;
-    h ^= h >> 27;
-    h *= 0x94d049bb133111ebull;
-    h ^= h >> 31;
-    return std::size_t(h);
+    return hashLatticeCell(key.i, key.k);
 }
 
 std::size_t hashMapBytes(std::size_t buckets, std::size_t elements, std::size_t elementBytes) {
