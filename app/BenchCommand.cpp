@@ -641,7 +641,7 @@ void tune(const BenchOptions& o, const Runner& runner, int workers) {
         {{"store", "blendTime_s"}, d.store.blendTime_s, {0.5, 2.0}, false},
         {{"scheduler", "finestRingCells"}, d.scheduler.finestRingCells, {0.5, 2.0}, false},
         {{"scheduler", "coarseRingCells"}, d.scheduler.coarseRingCells, {0.5, 2.0}, false},
-        {{"store", "searchCells"}, double(d.store.searchCells), {0.5, 1.5}, true},
+        {{"store", "reachCells"}, double(d.store.reachCells), {2.0, 3.0}, true},
     };
     struct Candidate {
         std::string label;

@@ -57,6 +57,9 @@ AmbienceVolumeSettings ambienceSettingsFromJson(const std::string& jsonText,
             o.number("maxLifetime_s", t.maxLifetime_s, 1e-3, kBig);
             o.number("regenerateFraction", t.regenerateFraction, 0.0, 1.0);
             o.integer("searchCells", t.searchCells, 1, 16);
+            o.integer("reachCells", t.reachCells, 1, 16);
+            o.integer("coarseReachCells", t.coarseReachCells, 1, 16);
+            o.number("finerWeight", t.finerWeight, 0.0, 1.0);
             o.boolean("smoothInterpolation", t.smoothInterpolation);
         });
         f.object("scheduler", [&](JsonFields& o) {

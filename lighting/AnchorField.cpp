@@ -45,18 +45,21 @@ double minMod4(const double* q) {
 }
 
 // out = sum over the 4 corners q and their 4 blocks m (value, slopes, twist; kStride floats
-// each, kStride x 4 per corner) of weight[4q + m] x block: the lookup's inner loop. (An AVX2
-// build of it measured no faster: the lookup is bound by memory, not arithmetic.)
-void blend16(const float* const corner[4], const float* weight, float* out) {
+// each, kStride x 4 per corner) of weight[4q + m] x block: the lookup's inner loop. The sum is
+// kept local (in registers) and written once: summing into `out` made every step wait for the
+// previous step's store (a third of a lookup). (An AVX2 clone of it measured no faster.)
+void blend16(const float* const corner[4], const float* __restrict weight,
+             float* __restrict out) {
     constexpr int kStride = 28;
-    for (int j = 0; j < kStride; ++j) out[j] = 0.0f;
+    float sum[kStride] = {};
     for (int q = 0; q < 4; ++q) {
         for (int m = 0; m < 4; ++m) {
             const float wm = weight[4 * q + m];
-            const float* block = corner[q] + m * kStride;
-            for (int j = 0; j < kStride; ++j) out[j] += wm * block[j];
+            const float* __restrict block = corner[q] + m * kStride;
+            for (int j = 0; j < kStride; ++j) sum[j] += wm * block[j];
         }
     }
+    for (int j = 0; j < kStride; ++j) out[j] = sum[j];
 }
 
 // floor() for |v| < 2^62 without a library call.
@@ -75,16 +78,32 @@ std::size_t AnchorField::CellKeyHash::operator()(const CellKey& c) const {
     return hashLatticeCell(c.i, c.k);
 }
 
+void AnchorField::CellMap::insert(const CellKey& c, const CellRef& ref) {
+    const auto block = blocks.try_emplace(CellKey{c.i >> kBlockShift, c.k >> kBlockShift},
+                                          std::uint32_t(refs.size()));
+    if (block.second)
+        refs.resize(refs.size() + (std::size_t(1) << (2 * kBlockShift)), {kNoCell, kNoCell});
+    CellRef& r = refs[block.first->second +
+                      std::size_t(((c.k & kBlockMask) << kBlockShift) | (c.i & kBlockMask))];
+    if (r.row0 == kNoCell) ++count;
+    r = ref;
+}
+
+std::size_t AnchorField::CellMap::bytes() const {
+    return blocks.bucket_count() *
+               (sizeof(std::pair<CellKey, std::uint32_t>) + sizeof(std::uint64_t)) +
+           refs.capacity() * sizeof(CellRef);
+}
+
 std::size_t AnchorField::cells() const {
     std::size_t n = 0;
-    for (const CellMap& m : cells_) n += m.size();
+    for (const CellMap& m : cells_) n += m.count;
     return n;
 }
 
 std::size_t AnchorField::bytes() const {
     std::size_t b = sizeof(*this) + points_.capacity() * sizeof(float);
-    for (const CellMap& m : cells_)
-        b += m.bucket_count() * (sizeof(std::pair<CellKey, CellRef>) + sizeof(std::uint64_t));
+    for (const CellMap& m : cells_) b += m.bytes();
     b += levelsIn_.bucket_count() *
          (sizeof(std::pair<CellKey, std::uint32_t>) + sizeof(std::uint64_t));
     return b;
@@ -106,7 +125,8 @@ std::array<double, 27> AnchorField::slopeBound() const {
 
 void AnchorField::rebuild(const FieldLattice& lattice, const std::vector<FieldAnchor>& anchors,
                           const ShRgb& fallback, int fromLevel) {
-    if (!built_ || lattice.smooth != lattice_.smooth) fromLevel = 0;  // all of it
+    // All of it: the first time, a new kind of cell, or finer anchors informing coarser levels.
+    if (!built_ || lattice.smooth != lattice_.smooth || lattice.finerWeight > 0.0) fromLevel = 0;
     lattice_ = lattice;
     pointFloats_ = lattice.smooth ? 4 * kStride : kStride;
     lattice_.levels = std::clamp(lattice.levels, 1, kFieldMaxLevels);
@@ -133,9 +153,14 @@ void AnchorField::rebuild(const FieldLattice& lattice, const std::vector<FieldAn
         if (cells_[L].empty()) continue;
         finest_ = L;
         const std::int64_t ratio = lattice_.scale[0] / lattice_.scale[L];  // 3^L
-        for (const auto& cell : cells_[L]) {
-            const CellKey top{floorDiv(cell.first.i, ratio), floorDiv(cell.first.k, ratio)};
-            levelsIn_[top] |= 1u << L;
+        const CellMap& m = cells_[L];
+        for (const auto& block : m.blocks) {
+            for (std::int64_t n = 0; n < (std::int64_t(1) << (2 * kBlockShift)); ++n) {
+                if (m.refs[block.second + std::size_t(n)].row0 == kNoCell) continue;
+                const std::int64_t i = (block.first.i << kBlockShift) + (n & kBlockMask);
+                const std::int64_t k = (block.first.k << kBlockShift) + (n >> kBlockShift);
+                levelsIn_[CellKey{floorDiv(i, ratio), floorDiv(k, ratio)}] |= 1u << L;
+            }
         }
     }
     anchors_ = nullptr;
@@ -151,9 +176,9 @@ void AnchorField::coarserData(int L, double x, double z, double* out) const {
     toFloats(L == 0 ? fallback_ : at(x, z, &hit, L - 1), value);
     for (int j = 0; j < kN; ++j) out[j] = double(value[j]);  // the value exactly as at() gives it
     if (L == 0 || hit.level < 0 || !lattice_.smooth) return;
-    const auto it = cells_[hit.level].find(CellKey{hit.i, hit.k});
-    const float* r[2] = {points_.data() + std::size_t(it->second.row0) * pointFloats_,
-                         points_.data() + std::size_t(it->second.row1) * pointFloats_};
+    const CellRef* it = cells_[hit.level].find(hit.i, hit.k);
+    const float* r[2] = {points_.data() + std::size_t(it->row0) * pointFloats_,
+                         points_.data() + std::size_t(it->row1) * pointFloats_};
     // d/du, d/dw and d2/dudw of the coarser cell, then to level-L units (s_L / s_hit = 3^-n).
     const std::array<double, 4> hu = hermite(hit.u), hw = hermite(hit.w);
     const std::array<double, 4> du = hermite(hit.u, true), dw = hermite(hit.w, true);
@@ -199,7 +224,7 @@ void AnchorField::buildLevel(int L, const std::vector<FieldAnchor>& anchors) {
     // r = v - F_{L-1} at the anchor (its residual against the coarser levels).
     reach_.clear();
     residuals_.clear();
-    const int R = std::max(0, lattice_.reachCells);
+    const int R = std::max(0, L == 0 ? lattice_.coarseReachCells : lattice_.reachCells);
     std::array<float, kN> v;
     for (std::uint32_t n = 0; n < anchors.size(); ++n) {
         const FieldAnchor& a = anchors[n];
@@ -216,6 +241,41 @@ void AnchorField::buildLevel(int L, const std::vector<FieldAnchor>& anchors) {
                 const double t2 = R > 0 ? double(d2) / double(R * R) : 0.0;
                 const double K = (1.0 - t2) * (1.0 - t2) * double(a.presence);
                 auto& sum = reach_[CellKey{a.i + di, a.k + dk}];
+                sum[0] += K;
+                for (int j = 0; j < kN; ++j) sum[1 + j] += K * r[j];
+            }
+        }
+    }
+    // The finer levels' anchors inform this level's missing points too (weight finerWeight
+    // each): r = v - F_{L-1} at the anchor's own position, the kernel over its true distance.
+    const double finer = lattice_.finerWeight;
+    for (std::uint32_t n = 0; finer > 0.0 && R > 0 && n < anchors.size(); ++n) {
+        const FieldAnchor& a = anchors[n];
+        if (a.level <= L || a.level >= lattice_.levels || !(a.presence > 0.0f)) continue;
+        toFloats(a.value, v.data());
+        float base[kN];
+        if (L == 0) {
+            toFloats(fallback_, base);
+        } else {
+            const double ax = double(a.i * lattice_.scale[a.level]) * fine;
+            const double az = double(a.k * lattice_.scale[a.level]) * fine;
+            toFloats(at(ax, az, nullptr, L - 1), base);
+        }
+        std::array<double, kN> r;
+        for (int j = 0; j < kN; ++j) r[j] = double(v[j]) - double(base[j]);
+        // Offsets from the level-L points in finest-lattice units (integers: the same bits near
+        // and far from the origin).
+        const std::int64_t sc = lattice_.scale[L];
+        const std::int64_t ai = a.i * lattice_.scale[a.level], ak = a.k * lattice_.scale[a.level];
+        const std::int64_t i0 = floorDiv(ai, sc) - R + 1, k0 = floorDiv(ak, sc) - R + 1;
+        for (std::int64_t ci = i0; ci < i0 + 2 * R; ++ci) {
+            for (std::int64_t ck = k0; ck < k0 + 2 * R; ++ck) {
+                const double du = double(ai - ci * sc) / double(sc);
+                const double dw = double(ak - ck * sc) / double(sc);
+                const double t2 = (du * du + dw * dw) / double(R * R);
+                if (t2 >= 1.0) continue;
+                const double K = (1.0 - t2) * (1.0 - t2) * double(a.presence) * finer;
+                auto& sum = reach_[CellKey{ci, ck}];
                 sum[0] += K;
                 for (int j = 0; j < kN; ++j) sum[1 + j] += K * r[j];
             }
@@ -363,11 +423,10 @@ void AnchorField::buildLevel(int L, const std::vector<FieldAnchor>& anchors) {
         return first + std::uint32_t(it - cornerList.begin());
     };
     CellMap& cells = cells_[L];
-    cells.reserve(cellList.size());
     std::array<double, kN>& slope = slope_[L];
     for (const CellKey& c : cellList) {
         const CellRef ref{indexOf(c), indexOf(CellKey{c.i, c.k + 1})};
-        cells.emplace(c, ref);
+        cells.insert(c, ref);
         // slopeBound: the Hermite bound of the cell in both axes.
         const float* p[4] = {points_.data() + std::size_t(ref.row0) * pointFloats_,
                              points_.data() + std::size_t(ref.row0 + 1) * pointFloats_,
@@ -400,7 +459,8 @@ const FieldAnchor* AnchorField::anchorAt(int L, CellKey c) const {
     return it != anchorAt_[L].end() ? &(*anchors_)[it->second] : nullptr;
 }
 
-AnchorField::Locus AnchorField::locate(int L, double x, double z) const {
+inline __attribute__((always_inline)) AnchorField::Locus AnchorField::locate(int L, double x,
+                                                                            double z) const {
     const std::int64_t sc = lattice_.scale[L];
     const double fine = lattice_.fineSpacing_m, inv = inverseSpacing_[L];
     Locus c;
@@ -428,10 +488,16 @@ ShRgb AnchorField::at(double x, double z, Hit* hit, int maxLevel) const {
     for (int L = std::min(maxLevel, finest_); L >= 0; --L) {
         if (!(levels & (1u << L))) continue;
         const Locus c = L == 0 ? top : locate(L, x, z);
-        const auto it = cells_[L].find(CellKey{c.i, c.k});
-        if (it == cells_[L].end()) continue;
-        const float* r0 = points_.data() + std::size_t(it->second.row0) * pointFloats_;
-        const float* r1 = points_.data() + std::size_t(it->second.row1) * pointFloats_;
+        const CellRef* ref = cells_[L].find(c.i, c.k);
+        if (!ref) continue;
+        const float* r0 = points_.data() + std::size_t(ref->row0) * pointFloats_;
+        const float* r1 = points_.data() + std::size_t(ref->row1) * pointFloats_;
+        // The cell's corner data (two rows of two points) are asked for at once, so that their
+        // cache misses overlap each other and the weights' arithmetic.
+        for (int b = 0; b < 2 * pointFloats_; b += 16) {
+            __builtin_prefetch(r0 + b);
+            __builtin_prefetch(r1 + b);
+        }
         const double dx = x - c.x0, dz = z - c.z0;
         double u = dx / (c.x1 - c.x0), w = dz / (c.z1 - c.z0);
         // On a lattice line (within 1e-9 m): exactly on it, so an anchor's value comes back
@@ -459,15 +525,21 @@ ShRgb AnchorField::at(double x, double z, Hit* hit, int maxLevel) const {
             return fromFloats(out);
         }
         // Bicubic Hermite: 4 corners x (value, slope x, slope z, twist), 16 weights.
-        const std::array<double, 4> hu = hermite(u), hw = hermite(w);
+        // (The basis in float: the weights are applied to float data.)
+        const float fu = float(u), fw = float(w);
+        const float fu2 = fu * fu, fw2 = fw * fw;
+        const float hu[4] = {(2.0f * fu - 3.0f) * fu2 + 1.0f, (fu - 2.0f) * fu2 + fu,
+                             (3.0f - 2.0f * fu) * fu2, (fu - 1.0f) * fu2};
+        const float hw[4] = {(2.0f * fw - 3.0f) * fw2 + 1.0f, (fw - 2.0f) * fw2 + fw,
+                             (3.0f - 2.0f * fw) * fw2, (fw - 1.0f) * fw2};
         const float* corner[4] = {r0, r0 + pointFloats_, r1, r1 + pointFloats_};
         float weight[16];
         for (int q = 0; q < 4; ++q) {
             const int a = q & 1, b = q >> 1;
-            weight[4 * q + 0] = float(hu[2 * a] * hw[2 * b]);
-            weight[4 * q + 1] = float(hu[2 * a + 1] * hw[2 * b]);
-            weight[4 * q + 2] = float(hu[2 * a] * hw[2 * b + 1]);
-            weight[4 * q + 3] = float(hu[2 * a + 1] * hw[2 * b + 1]);
+            weight[4 * q + 0] = hu[2 * a] * hw[2 * b];
+            weight[4 * q + 1] = hu[2 * a + 1] * hw[2 * b];
+            weight[4 * q + 2] = hu[2 * a] * hw[2 * b + 1];
+            weight[4 * q + 3] = hu[2 * a + 1] * hw[2 * b + 1];
         }
         alignas(32) float out[kStride];
         blend16(corner, weight, out);

@@ -1,21 +1,25 @@
 // AnchorField.h — the interpolated field of the anchor store (AnchorStore.h "Interpolation"):
 // a hierarchy over the store's 3 x 3 lattice in which each level holds, at its lattice points,
 // a value and a gradient, and fills its cells by bicubic Hermite interpolation (smooth: no kink
-// at lattice lines). It is kept as a cache of cells per level; a lookup is a few hash probes
-// (finest level first) and one blend of 16 coefficient sets (4 corners x value, d/dx, d/dz,
-// d2/dxdz); the cache is rebuilt from the anchors when they change (once a frame: blends and
-// fades move every frame while probes arrive).
+// at lattice lines). It is kept as a cache of cells per level, indexed by blocks of 8 x 8 cells;
+// a lookup is a few probes of small hash maps (finest level first) and one blend of 16
+// coefficient sets (4 corners x value, d/dx, d/dz, d2/dxdz); the cache is rebuilt from the
+// anchors when they change (once a frame: blends and fades move every frame while probes
+// arrive).
 //
 // The field (s_L spacing of level L, v = an anchor's current x relight, p its presence weight
 // easeInOut(presence), AnchorStore.h):
 //   F_{-1}      = the fallback everywhere.
-//   r_a         = v_a - F_{L-1}(a) for each anchor a of canonical level L: what it adds to the
-//                 coarser levels' value at its point (its residual).
+//   r_a         = v_a - F_{L-1}(a) for each anchor a of canonical level >= L: what it adds to
+//                 the coarser levels' value at its point (its residual against level L).
 //   G_L(c)      = F_{L-1}(c) + sum_a K_a p_a r_a / max(sum_a K_a p_a, kCoverageFloor), over
-//                 this level's anchors a other than c within R_L = reachCells x s_L of the
-//                 lattice point c, K_a = (1 - (|c - a| / R_L)^2)^2: a missing point takes the
-//                 coarser value corrected by the weighted mean of the residuals nearby, in part
-//                 where they cover it thinly (far, or fading in), none beyond R_L.
+//                 the anchors a other than c within R_L = reachCells x s_L of the lattice point
+//                 c (coarseReachCells at level 0): this level's with K_a = (1 - (|c - a| /
+//                 R_L)^2)^2, the finer levels' (at their own positions) with finerWeight x K_a.
+//                 A missing point takes the coarser value corrected by the weighted mean of the
+//                 residuals nearby, in part where they cover it thinly (far, or fading in), none
+//                 beyond R_L. The finer anchors carry what a level's own lattice has not
+//                 captured yet into its holes (a coarse point beside a densely probed road).
 //   C_L(c)      = p v + (1 - p) G_L(c)                  with a level-L anchor at c,
 //               = F_{L-1}(c) + (1 - p)(G_L(c) - F_{L-1}(c))  with a coarser anchor at c (whose
 //                                                        presence F_{L-1} already carries),
@@ -35,9 +39,10 @@
 // Properties: neighbouring cells share their edge's corner data, so F_L is continuous with a
 // continuous gradient everywhere (C1: across lattice lines, partly present cells and levels), and
 // a point crossing it at a steady speed sees no kink; it moves continuously with presences and
-// values. A present anchor's point shows its value (exact). An anchor of presence 0, or one
-// whose value is what the coarser levels show at its point (r = 0), changes nothing (D_L = 0:
-// H_L = F_{L-1}'s own data). Central differences are exact for a bilinear field, so a field
+// values. A present anchor's point shows its value (exact). An anchor of presence 0 changes
+// nothing (it adds K p = 0 everywhere), nor does one whose residuals are all zero: its value is
+// what every coarser level shows at its point (D_L = 0: H_L = F_{L-1}'s own data; with
+// finerWeight 0, only its own level's r counts). Central differences are exact for a bilinear field, so a field
 // bilinear over a complete coarse lattice is reproduced wherever a cell's corners and their
 // neighbours are complete (the finer D_L vanish). Gradients are bounded (slopeBound) and the
 // result is always finite.
@@ -56,16 +61,14 @@ namespace amb {
 
 inline constexpr int kFieldMaxLevels = 8;
 
-// Hash of an integer lattice cell (the splitmix64 finaliser over both coordinates, so that
-// neighbouring cells land far apart); shared by every hash map keyed by a cell.
+// Hash of an integer lattice cell, shared by every hash map keyed by a cell: each coordinate
+// times its own odd 64-bit constant, and the high bits folded into the low ones that the maps'
+// power-of-two tables use, so that neighbouring cells land far apart. (Two multiplies: a lookup
+// hashes two or three cells.)
 inline std::size_t hashLatticeCell(std::int64_t i, std::int64_t k) {
-    std::uint64_t h = std::uint64_t(i) * 0x9E3779B97F4A7C15ull ^ std::uint64_t(k);
-    h ^= h >> 30;
-    h *= 0xBF58476D1CE4E5B9ull;
-    h ^= h >> 27;
-    h *= 0x94D049BB133111EBull;
-    h ^= h >> 31;
-    return std::size_t(h);
+    const std::uint64_t h =
+        std::uint64_t(i) * 0x9E3779B97F4A7C15ull ^ std::uint64_t(k) * 0xC2B2AE3D27D4EB4Full;
+    return std::size_t(h ^ (h >> 29) ^ (h >> 47));
 }
 
 // The lattice the field lives on (AnchorStore's).
@@ -74,7 +77,10 @@ struct FieldLattice {
     std::array<double, kFieldMaxLevels> spacing{};     // s_L [m]
     std::array<std::int64_t, kFieldMaxLevels> scale{};  // finest-lattice units per level-L unit
     double fineSpacing_m = 1.0;
-    int reachCells = 2;  // reach of level-0 anchors into holes, in level-0 cells
+    int reachCells = 2;        // reach of level-L anchors into holes, in level-L cells
+    int coarseReachCells = 2;  // the same for level 0 (the coarsest)
+    // Weight of each anchor of a finer level in a level's missing points (0: none).
+    double finerWeight = 0.0;
     // Bicubic Hermite cells (C1, the default) or bilinear ones (C0: the values alone, kinks at
     // lattice lines; a quarter of the data and of the work per lookup).
     bool smooth = true;
@@ -117,13 +123,13 @@ class AnchorField {
     // <= 1 on slopes, and sum |h| <= 1 on values, <= 0.25 on slopes.
     std::array<double, 27> slopeBound() const;
 
-    // Coverage below which G_L takes only part of the residuals nearby (the rest is the
-    // coarser value), in units of one anchor at the corner itself.
-    static constexpr double kCoverageFloor = 0.25;
-
     // The cubic Hermite basis at t in [0, 1]: weights of (value at 0, slope at 0, value at 1,
     // slope at 1), slopes per unit t. `derivative`: their d/dt.
     static std::array<double, 4> hermite(double t, bool derivative = false);
+
+    // Coverage below which G_L takes only part of the residuals nearby (the rest is the
+    // coarser value), in units of one anchor at the corner itself.
+    static constexpr double kCoverageFloor = 0.25;
 
   private:
     struct CellKey {
@@ -139,7 +145,29 @@ class AnchorField {
         std::uint32_t row0;  // corner (i, k)
         std::uint32_t row1;  // corner (i, k + 1)
     };
-    using CellMap = tsl::hopscotch_map<CellKey, CellRef, CellKeyHash>;
+    // A level's stored cells, in blocks of 8 x 8 cells: a small hash map from a block to its
+    // 64 cell references (row0 = kNoCell where a cell is not stored). The map stays small
+    // enough to sit in the cache, and a probe costs one hash of a few dozen entries and one
+    // load, stored cell or not.
+    static constexpr std::uint32_t kNoCell = 0xFFFFFFFFu;
+    static constexpr int kBlockShift = 3;
+    static constexpr std::int64_t kBlockMask = (1 << kBlockShift) - 1;
+    struct CellMap {
+        tsl::hopscotch_map<CellKey, std::uint32_t, CellKeyHash> blocks;  // block -> first ref
+        std::vector<CellRef> refs;
+        std::size_t count = 0;
+        const CellRef* find(std::int64_t i, std::int64_t k) const {
+            const auto it = blocks.find(CellKey{i >> kBlockShift, k >> kBlockShift});
+            if (it == blocks.end()) return nullptr;
+            const CellRef& r = refs[it->second + std::size_t(((k & kBlockMask) << kBlockShift) |
+                                                             (i & kBlockMask))];
+            return r.row0 == kNoCell ? nullptr : &r;
+        }
+        void insert(const CellKey& c, const CellRef& ref);
+        void clear() { blocks.clear(), refs.clear(), count = 0; }
+        bool empty() const { return count == 0; }
+        std::size_t bytes() const;
+    };
     static constexpr int kFloats = 27;  // a coefficient set (ShRgb order)
     // A stored point: value, s_L d/dx, s_L d/dz, s_L^2 d2/dxdz, each a coefficient set padded
     // to kStride floats (whole SIMD vectors).

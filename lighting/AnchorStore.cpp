@@ -105,7 +105,8 @@ struct AnchorStore::Impl {
         openvdb::initialize();
         AMB_CHECK(s.levels >= 1 && s.levels <= kMaxAnchorLevels);
         AMB_CHECK(std::isfinite(s.coarsestSpacing_m) && s.coarsestSpacing_m > 0.0);
-        AMB_CHECK(s.searchCells >= 1);
+        AMB_CHECK(s.searchCells >= 1 && s.reachCells >= 1 && s.coarseReachCells >= 1);
+        AMB_CHECK(s.finerWeight >= 0.0 && s.finerWeight <= 1.0);
         levels = s.levels;
         std::int64_t sc = 1;
         for (int L = levels - 1; L >= 0; --L) {
@@ -450,7 +451,9 @@ void AnchorStore::Impl::ensureField() const {
         lattice.scale[L] = scale[L];
     }
     lattice.fineSpacing_m = fineSpacing;
-    lattice.reachCells = settings.searchCells;
+    lattice.reachCells = settings.reachCells;
+    lattice.coarseReachCells = settings.coarseReachCells;
+    lattice.finerWeight = settings.finerWeight;
     lattice.smooth = settings.smoothInterpolation;
     thread_local std::vector<FieldAnchor> anchors;
     anchors.clear();

@@ -102,6 +102,20 @@ void BM_AnchorStoreInterpolate(benchmark::State& state) {
 }
 BENCHMARK(BM_AnchorStoreInterpolate);
 
+// A moving object's lookups: one a frame along the track at 30 m/s and 60 frames a second
+// (0.5 m apart), so consecutive lookups share cells as a car's or a plant's do.
+void BM_AnchorStoreInterpolateWalk(benchmark::State& state) {
+    AnchorStore store;
+    populate(store);
+    double x = 0.0;
+    for (auto _ : state) {
+        x = x < 1000.0 ? x + 0.5 : 0.0;
+        benchmark::DoNotOptimize(store.interpolate(x, 1.0 + 0.01 * x));
+    }
+    state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_AnchorStoreInterpolateWalk);
+
 // A frame's batch: 1024 points (terrain corners, plants) through interpolateMany; the time per
 // lookup is the counter s_per_lookup (wall time).
 void BM_AnchorStoreInterpolateBatch(benchmark::State& state) {

@@ -47,7 +47,8 @@ echo '{}' >"$v/empty.json"
 echo '{"store": {"blendTime_s": 1}, "scheduler": {"corridorCells": 4}}' >"$v/tuned.json"
 cat >"$v/every-key.json" <<'JSON'
 {"store": {"coarsestSpacing_m": 243, "levels": 6, "blendTime_s": 1, "allowedSunAngle_rad": 0.05,
-           "minLifetime_s": 2, "maxLifetime_s": 600, "regenerateFraction": 0.8, "searchCells": 2},
+           "minLifetime_s": 2, "maxLifetime_s": 600, "regenerateFraction": 0.8, "searchCells": 2,
+           "reachCells": 1, "coarseReachCells": 2, "finerWeight": 1},
  "scheduler": {"velocityTimeConstant_s": 0.5, "horizon_s": 2, "pathStep_s": 0.25,
                "historyLength_s": 4, "roadSnap_m": 20, "roadAlignment": 0.7,
                "teleportDistance_m": 100, "corridorCells": 4, "maxLevel": 2,

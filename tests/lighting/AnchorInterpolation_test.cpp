@@ -53,6 +53,14 @@ AnchorStore instantStore(bool smooth = false) {
     return AnchorStore(s);
 }
 
+// The closed forms of a level's own fill: its anchors reach 2 cells into its holes, and the
+// finer levels' anchors do not count (the default reaches 1 cell and counts them).
+AnchorStoreSettings ownLevelFill(AnchorStoreSettings s) {
+    s.reachCells = 2;
+    s.finerWeight = 0.0;
+    return s;
+}
+
 void put(AnchorStore& store, const LatticeKey& key, float v) {
     ASSERT_NE(store.insert(key, makeSh(v), {store.keyX_m(key), 2.0, store.keyZ_m(key)}, 1e6),
               AnchorStore::InsertResult::Rejected);
@@ -111,8 +119,11 @@ TEST(AnchorInterpolation, MissingCornersComeFromTheCoarserLevel) {
     // (3, 0) hold anchors; (0, 3) and (3, 3) are missing and take the 9 m cell's bilinear value
     // plus b's residual r = b - (9 m value at (3, 0)): they are within b's reach (2 cells, 6 m)
     // with weights K = (1 - d^2 / 4)^2 = 0.25 and 0.5625, at least the coverage floor 0.25, so
-    // the whole residual.
-    AnchorStore store = instantStore();
+    // the whole residual. (A level's own fill, ownLevelFill.)
+    AnchorStoreSettings s;
+    s.blendTime_s = 0.0;
+    s.smoothInterpolation = false;
+    AnchorStore store(ownLevelFill(s));
     const float a00 = 1.0f, a10 = 2.0f, a01 = 4.0f, a11 = 5.5f, b = 3.0f;
     put(store, store.canonical({3, 0, 0}), a00);
     put(store, {3, 1, 0}, a10);
@@ -149,6 +160,40 @@ TEST(AnchorInterpolation, MissingCornersComeFromTheCoarserLevel) {
     EXPECT_LT(maxDiff(store.interpolate(7.5, 4.0), makeSh(float(coarse(7.5, 4.0) + r / 3.0))),
               2e-5);
     EXPECT_LT(maxDiff(store.interpolate(4.5, 7.5), makeSh(float(coarse(4.5, 7.5)))), 2e-5);
+}
+
+TEST(AnchorInterpolation, FinerAnchorsFillTheCoarserLevelsHoles) {
+    // One 3 m anchor b at (3, 0) over the fallback f, default reach (1 cell; 2 at level 0) with
+    // the finer anchors counted. Level 0 (243 m) has no anchor of its own: its points take
+    // f + K (b - f) / max(K, 0.25) with K = (1 - d^2 / 4)^2 over b's distance d in 243 m cells,
+    // so all of b where K >= 0.25. The coarser value at b is then b, so the finer levels add
+    // nothing, and the 243 m cells are bilinear between those corners.
+    AnchorStore store = instantStore();
+    const float b = 3.0f, f = 0.5f;
+    store.setFallback(makeSh(f));
+    put(store, {4, 1, 0}, b);
+    auto corner = [&](double x, double z) {  // G_0 at a 243 m point
+        const double du = (3.0 - x) / 243.0, dw = -z / 243.0, t2 = (du * du + dw * dw) / 4.0;
+        if (t2 >= 1.0) return double(f);
+        const double K = (1.0 - t2) * (1.0 - t2);
+        return f + K * (b - f) / std::max(K, 0.25);
+    };
+    ASSERT_NEAR(corner(243.0, 243.0), b, 1e-12);  // K = 0.256: whole
+    ASSERT_LT(corner(-243.0, 243.0), b - 0.01);   // K = 0.244: in part
+    EXPECT_LT(maxDiff(store.interpolate(100.0, 100.0), makeSh(b)), 1e-5);
+    const double u = (-100.0 + 243.0) / 243.0, w = 100.0 / 243.0;
+    const double expected = (1 - u) * (1 - w) * corner(-243.0, 0.0) + u * (1 - w) * corner(0.0, 0.0) +
+                            (1 - u) * w * corner(-243.0, 243.0) + u * w * corner(0.0, 243.0);
+    EXPECT_LT(maxDiff(store.interpolate(-100.0, 100.0), makeSh(float(expected))), 1e-5);
+    EXPECT_LT(maxDiff(store.interpolate(3.0, 0.0), makeSh(b)), 1e-6);  // exact on the anchor
+    // A level's own fill alone: b reaches 2 x 3 m, so (100, 100) shows the fallback.
+    AnchorStoreSettings s;
+    s.blendTime_s = 0.0;
+    s.smoothInterpolation = false;
+    AnchorStore own(ownLevelFill(s));
+    own.setFallback(makeSh(f));
+    put(own, {4, 1, 0}, b);
+    EXPECT_LT(maxDiff(own.interpolate(100.0, 100.0), makeSh(f)), 1e-6);
 }
 
 TEST(AnchorInterpolation, CoarsestLevelReachesIntoHolesAndFadesToTheFallback) {
@@ -370,8 +415,9 @@ TEST(AnchorInterpolation, RandomWalksStayWithinTheLipschitzBound) {
     for (int j = 0; j < 3 * kShCoefficients; ++j) largest = std::max({largest, -lo[j], hi[j]});
     const std::array<double, 27> g = store.interpolationSlopeBound();
     const double h = 0.01, tol = 2e-6 * largest;
-    if (!smooth)
+    if (!smooth) {
         for (int j = 0; j < 3 * kShCoefficients; ++j) EXPECT_LE(g[j], (hi[j] - lo[j]) / 3.0 + 1e-9);
+    }
     double worstRatio = 0.0;  // largest step / bound seen
     walk(store, [&](int line, int n, double axes, const ShRgb& prev, const ShRgb& v) {
         for (int k = 0; k < kShCoefficients; ++k) {
@@ -465,7 +511,7 @@ TEST(AnchorInterpolation, ThesisPatternChangeExample) {
         AnchorStoreSettings s;
         s.blendTime_s = blendTime_s;
         s.smoothInterpolation = false;  // the closed forms below are bilinear
-        AnchorStore store(s);
+        AnchorStore store(ownLevelFill(s));
         for (auto [key, v] : {std::pair<LatticeKey, float>{{2, 0, 0}, 1.0f},
                               {{2, 1, 0}, 2.0f},
                               {{2, 0, 1}, 4.0f},
@@ -557,7 +603,7 @@ TEST(AnchorInterpolation, PartialPresenceBlendsWithTheValueBeneath) {
     AnchorStoreSettings s;
     s.blendTime_s = 2.0;
     s.smoothInterpolation = false;
-    AnchorStore store(s);
+    AnchorStore store(ownLevelFill(s));
     const float f = 0.5f;
     store.setFallback(makeSh(f));
     store.insert({4, 2, 0}, makeSh(1.0f), {6, 2, 0}, 1e6);  // (6, 0)
