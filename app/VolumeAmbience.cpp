@@ -53,7 +53,7 @@ glm::vec3 MethodAmbient::cornerIrradiance(const glm::dvec3& position_m,
     const auto t0 = Clock::now();
     // Terrain (thesis 8.6): the colour at a patch corner from the SH interpolated there, with
     // the corner's normal; the renderer interpolates it across the patch.
-    const ShRgb sh = method_.shAt(position_m.x, position_m.z);
+    const ShRgb sh = method_.cornerShAt(position_m.x, position_m.z);
     const glm::vec3 e = glm::max(shIrradiance(sh, glm::vec3(normal)), glm::vec3(0.0f));
     ++lookups_;
     note(position_m);
@@ -69,7 +69,7 @@ void MethodAmbient::cornerIrradianceBatch(std::size_t count, const glm::dvec3* p
         batchX_[i] = positions_m[i].x;
         batchZ_[i] = positions_m[i].z;
     }
-    method_.shAt(count, batchX_.data(), batchZ_.data(), batchSh_.data());
+    method_.cornerShAt(count, batchX_.data(), batchZ_.data(), batchSh_.data());
     for (std::size_t i = 0; i < count; ++i) {
         out[i] = glm::max(shIrradiance(batchSh_[i], glm::vec3(normals[i])), glm::vec3(0.0f));
         note(positions_m[i]);

@@ -2,7 +2,8 @@
 // dynamic ambience volume, AmbienceVolume.h) and the baselines it is measured against
 // (Baselines.h; docs/DESIGN.md "Measuring speed against error"). The frame loop drives every
 // method through the same three stages with the same capture budget, and the draw and the
-// measurement read the same shAt, so what is measured is what is drawn.
+// measurement read the same shAt (objects) and cornerShAt (terrain corners), so what is
+// measured is what is drawn.
 #pragma once
 
 #include <cstddef>
@@ -49,6 +50,14 @@ class AmbienceMethod {
     // The same at many points.
     virtual void shAt(std::size_t count, const double* x_m, const double* z_m, ShRgb* out) const {
         for (std::size_t i = 0; i < count; ++i) out[i] = shAt(x_m[i], z_m[i]);
+    }
+    // The SH applied at a terrain patch corner: a point that does not move, whose colour the
+    // draw interpolates linearly across the patch, so it needs no smoothness across cells. By
+    // default shAt; the volume answers it from its bilinear cells (AnchorStore.h).
+    virtual ShRgb cornerShAt(double x_m, double z_m) const { return shAt(x_m, z_m); }
+    virtual void cornerShAt(std::size_t count, const double* x_m, const double* z_m,
+                            ShRgb* out) const {
+        shAt(count, x_m, z_m, out);
     }
 
     // Where the draw looked up ambience this frame (terrain corners, objects). Only methods that

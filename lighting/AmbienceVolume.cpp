@@ -61,6 +61,7 @@ AmbienceVolumeSettings ambienceSettingsFromJson(const std::string& jsonText,
             o.integer("coarseReachCells", t.coarseReachCells, 1, 16);
             o.number("finerWeight", t.finerWeight, 0.0, 1.0);
             o.boolean("smoothInterpolation", t.smoothInterpolation);
+            o.boolean("bilinearFixedPoints", t.bilinearFixedPoints);
         });
         f.object("scheduler", [&](JsonFields& o) {
             ProbeSchedulerSettings& t = s.scheduler;

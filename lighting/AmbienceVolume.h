@@ -120,6 +120,15 @@ class AmbienceVolume final : public AmbienceMethod {
               ShRgb* out) const override {
         store_.interpolateMany(count, x_m, z_m, out);
     }
+    // At terrain corners and road vertices (points that do not move): AnchorStore's fixed-point
+    // cells (bilinear by default).
+    ShRgb cornerShAt(double x_m, double z_m) const override {
+        return store_.interpolateFixed(x_m, z_m);
+    }
+    void cornerShAt(std::size_t count, const double* x_m, const double* z_m,
+                    ShRgb* out) const override {
+        store_.interpolateFixedMany(count, x_m, z_m, out);
+    }
     MethodStatistics methodStatistics() const override;
 
     const AmbienceStatistics& statistics() const { return stats_; }

@@ -96,6 +96,12 @@ struct AnchorStore::Impl {
     // moves it (values, presences, relight factors, removals, the fallback). A new anchor enters
     // at presence 0 and a refresh starts from the value shown, so neither moves it.
     mutable AnchorField field;
+    // Its bilinear twin for points that do not move (settings.bilinearFixedPoints with smooth
+    // cells; otherwise `field` serves them).
+    mutable AnchorField fixedField;
+    bool separateFixedField() const {
+        return settings.smoothInterpolation && settings.bilinearFixedPoints;
+    }
     // Coarsest level whose cells must be rebuilt (levels() or more: none). Stores happen while
     // no lookup runs, so a plain read-modify-write is enough.
     mutable std::atomic<int> fieldStaleFrom{0};
@@ -465,6 +471,10 @@ void AnchorStore::Impl::ensureField() const {
                            a.relight == 1.0f ? a.current : a.current * a.relight});
     }
     field.rebuild(lattice, anchors, fallback, from);
+    if (separateFixedField()) {
+        lattice.smooth = false;
+        fixedField.rebuild(lattice, anchors, fallback, from);
+    }
     fieldStaleFrom.store(kMaxAnchorLevels, std::memory_order_release);
 }
 
@@ -563,11 +573,10 @@ ShRgb AnchorStore::interpolate(double x_m, double z_m, InterpolationDetail* deta
     return impl_->interpolate(x_m, z_m, detail);
 }
 
-void AnchorStore::interpolateMany(std::size_t count, const double* x_m, const double* z_m,
-                                  ShRgb* out) const {
-    impl_->ensureField();
-    const AnchorField& field = impl_->field;
-    // A lookup is ~0.1 us: threads pay off only for large batches.
+namespace {
+// field.at at many points; a lookup is ~0.1 us: threads pay off only for large batches.
+void lookUpMany(const AnchorField& field, std::size_t count, const double* x_m,
+                const double* z_m, ShRgb* out) {
     constexpr std::size_t kGrain = 4096;
     if (count <= kGrain) {
         for (std::size_t i = 0; i < count; ++i) out[i] = field.at(x_m[i], z_m[i]);
@@ -579,6 +588,25 @@ void AnchorStore::interpolateMany(std::size_t count, const double* x_m, const do
                               out[i] = field.at(x_m[i], z_m[i]);
                       });
 }
+}  // namespace
+
+void AnchorStore::interpolateMany(std::size_t count, const double* x_m, const double* z_m,
+                                  ShRgb* out) const {
+    impl_->ensureField();
+    lookUpMany(impl_->field, count, x_m, z_m, out);
+}
+
+ShRgb AnchorStore::interpolateFixed(double x_m, double z_m) const {
+    impl_->ensureField();
+    return (impl_->separateFixedField() ? impl_->fixedField : impl_->field).at(x_m, z_m);
+}
+
+void AnchorStore::interpolateFixedMany(std::size_t count, const double* x_m, const double* z_m,
+                                       ShRgb* out) const {
+    impl_->ensureField();
+    lookUpMany(impl_->separateFixedField() ? impl_->fixedField : impl_->field, count, x_m, z_m,
+               out);
+}
 
 std::array<double, 27> AnchorStore::interpolationSlopeBound() const {
     impl_->ensureField();
@@ -587,7 +615,7 @@ std::array<double, 27> AnchorStore::interpolationSlopeBound() const {
 
 std::size_t AnchorStore::interpolationCacheBytes() const {
     impl_->ensureField();
-    return impl_->field.bytes();
+    return impl_->field.bytes() + (impl_->separateFixedField() ? impl_->fixedField.bytes() : 0);
 }
 
 // ---- Statistics ---------------------------------------------------------------------------------

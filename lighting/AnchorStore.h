@@ -77,6 +77,12 @@ struct AnchorStoreSettings {
     // Interpolation between lattice points (AnchorField.h): bicubic Hermite, smooth (C1: no
     // kink where a moving object crosses a lattice line), or bilinear (C0: cheaper lookups).
     bool smoothInterpolation = true;
+    // Points that do not move (terrain patch corners, road vertices: interpolateFixed) read the
+    // bilinear cells of the same anchors, kept beside the smooth ones. The draw interpolates
+    // their colours linearly across each patch, so a kink at a lattice line cannot show there,
+    // and the bilinear cells measured the lower error at those points on every shipped replay
+    // (docs/DESIGN.md, "Interpolation"). false: fixed points read interpolate() too.
+    bool bilinearFixedPoints = true;
 };
 
 // Spacing of the finest level, s_0 / 3^(levels - 1) [m].
@@ -250,8 +256,9 @@ class AnchorStore {
     //     A point holding a level-L anchor of presence weight p has p x (current x relight) +
     //     (1 - p) x (the value without it); a point without one takes the coarser levels'
     //     interpolated value there (the fallback below level 0), corrected by the weighted mean
-    //     of the residuals (anchor minus coarser value) of this level's anchors within
-    //     searchCells x s_L, in part where they cover it thinly.
+    //     of the residuals (anchor minus coarser value) of the anchors within reachCells x s_L
+    //     (coarseReachCells at level 0): this level's and, with weight finerWeight, the finer
+    //     levels', in part where they cover it thinly.
     //  2. Each point also gets a gradient: the coarser field's own where the level adds nothing,
     //     the central differences of its neighbours' values where the level's anchors cover it,
     //     blended by that coverage. The cells in reach of the level's anchors are bicubic
@@ -276,6 +283,12 @@ class AnchorStore {
     // interpolate() at `count` points (x_m[i], z_m[i]) into out[i]: one cache check for the
     // batch, then the lookups (in parallel with TBB for large batches). The per-frame path.
     void interpolateMany(std::size_t count, const double* x_m, const double* z_m, ShRgb* out) const;
+    // The value for a point that does not move (a terrain patch corner, a road vertex): the
+    // same rule on bilinear cells when bilinearFixedPoints (continuous, exact on anchors, a new
+    // anchor changes nothing; kinks at lattice lines), else interpolate().
+    ShRgb interpolateFixed(double x_m, double z_m) const;
+    void interpolateFixedMany(std::size_t count, const double* x_m, const double* z_m,
+                              ShRgb* out) const;
     // Per coefficient (ShRgb order, c[k][ch] at 3k + ch), a bound on the gradient of
     // interpolate() along x and along z [per m] (AnchorField::slopeBound).
     std::array<double, 27> interpolationSlopeBound() const;

@@ -165,6 +165,12 @@ ShRgb ErrorMeter::oracle(int frameIndex, double x_m, double z_m, double timeOfDa
     return sh;
 }
 
+// What the draw applies at a witness: the object path at the camera's ground point (ring 0: the
+// car on drives), the terrain-corner path at the rings' patch corners.
+ShRgb appliedAt(const AmbienceMethod& method, const Witness& w) {
+    return w.ring == 0 ? method.shAt(w.x_m, w.z_m) : method.cornerShAt(w.x_m, w.z_m);
+}
+
 void ErrorMeter::frame(int index, double time_s, double timeOfDay_h, const glm::dvec3& camera_m,
                        double speed_mps, const AmbienceMethod& method) {
     if (settings_.every <= 0) return;
@@ -172,7 +178,7 @@ void ErrorMeter::frame(int index, double time_s, double timeOfDay_h, const glm::
     // Pop: this frame's change at the held points.
     if (!popPoints_.empty()) {
         for (std::size_t i = 0; i < popPoints_.size(); ++i) {
-            const ShRgb now = method.shAt(popPoints_[i].x_m, popPoints_[i].z_m);
+            const ShRgb now = appliedAt(method, popPoints_[i]);
             pending_.push_back({i, now - popPrevious_[i]});
             popPrevious_[i] = now;
         }
@@ -205,7 +211,7 @@ void ErrorMeter::frame(int index, double time_s, double timeOfDay_h, const glm::
     for (const Witness& w : mf.witnesses) {
         const ShRgb o = oracle(index, w.x_m, w.z_m, timeOfDay_h);
         oracles.push_back(o);
-        mf.errors.push_back(relativeIrradianceError(method.shAt(w.x_m, w.z_m), o));
+        mf.errors.push_back(relativeIrradianceError(appliedAt(method, w), o));
     }
     // New pop points: the camera's ground point and the first ring-1 witnesses.
     popPoints_.clear();
@@ -216,7 +222,7 @@ void ErrorMeter::frame(int index, double time_s, double timeOfDay_h, const glm::
         if (mf.witnesses[i].ring > 1) break;
         popPoints_.push_back(mf.witnesses[i]);
         popOracleStart_.push_back(oracles[i]);
-        popPrevious_.push_back(method.shAt(mf.witnesses[i].x_m, mf.witnesses[i].z_m));
+        popPrevious_.push_back(appliedAt(method, mf.witnesses[i]));
     }
     measured_.push_back(std::move(mf));
 }

@@ -107,6 +107,10 @@ struct Witness {
 std::vector<Witness> witnessPoints(const MeasureSettings& settings, double cameraX_m,
                                    double cameraZ_m, int measuredIndex);
 
+// What the method applies at a witness, as the draw reads it: shAt at the camera's ground point
+// (ring 0, an object), cornerShAt at terrain patch corners (rings >= 1).
+ShRgb appliedAt(const AmbienceMethod& method, const Witness& w);
+
 // The oracle SH at ground point (x, z) at `timeOfDay_h` (see above).
 ShRgb oracleSh(CubeCapture& capture, const ProbeEnvironment& environment,
                const MeasureSettings& settings, double x_m, double z_m, double timeOfDay_h);

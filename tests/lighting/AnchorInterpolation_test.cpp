@@ -596,6 +596,48 @@ TEST(AnchorInterpolation, ManyPointsInParallelEqualOneByOne) {
   }
 }
 
+TEST(AnchorInterpolation, FixedPointsReadTheBilinearCells) {
+    // The same anchors (three levels with holes) in a smooth store and in a bilinear one: the
+    // smooth store's fixed-point lookups are the bilinear store's lookups, bit for bit, one by
+    // one and in batches; its moving-point lookups differ between lattice points. (Inserted at
+    // once: a blended insertion starts from the value each store shows, which differs.)
+    AnchorStore smooth = instantStore(true), bilinear = instantStore(false);
+    std::mt19937 rng(9);
+    std::uniform_int_distribution<int> level(2, 4), coord(-12, 12);
+    std::uniform_real_distribution<float> value(0.5f, 5.0f);
+    for (int n = 0; n < 400; ++n) {
+        const LatticeKey key = smooth.canonical({level(rng), coord(rng), coord(rng)});
+        const float v = value(rng);
+        put(smooth, key, v);
+        put(bilinear, key, v);
+    }
+    std::uniform_real_distribution<double> u(-90.0, 90.0);
+    std::vector<double> x(3000), z(3000);
+    for (std::size_t i = 0; i < x.size(); ++i) x[i] = u(rng), z[i] = u(rng);
+    std::vector<ShRgb> batch(x.size());
+    smooth.interpolateFixedMany(x.size(), x.data(), z.data(), batch.data());
+    double apart = 0.0;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+        const ShRgb fixed = smooth.interpolateFixed(x[i], z[i]);
+        ASSERT_EQ(maxDiff(fixed, bilinear.interpolate(x[i], z[i])), 0.0) << i;
+        ASSERT_EQ(maxDiff(batch[i], fixed), 0.0) << i;
+        apart = std::max(apart, maxDiff(fixed, smooth.interpolate(x[i], z[i])));
+    }
+    EXPECT_GT(apart, 1e-3);
+    // Without bilinearFixedPoints, fixed points read interpolate().
+    AnchorStoreSettings s;
+    s.blendTime_s = 0.0;
+    s.bilinearFixedPoints = false;
+    AnchorStore one(s);
+    put(one, {4, 0, 0}, 1.0f);
+    put(one, {4, 1, 1}, 3.0f);
+    put(one, {3, 1, 0}, 2.0f);
+    for (std::size_t i = 0; i < 500; ++i) {
+        const double px = 0.01 * u(rng), pz = 0.01 * u(rng);
+        ASSERT_EQ(maxDiff(one.interpolateFixed(px, pz), one.interpolate(px, pz)), 0.0);
+    }
+}
+
 TEST(AnchorInterpolation, PartialPresenceBlendsWithTheValueBeneath) {
     // A fading-in anchor of presence weight p at a corner gives it p x current + (1 - p) x (the value
     // without it). Without it, (3, 0) shows the fallback f plus the residual 1 - f of the anchor
