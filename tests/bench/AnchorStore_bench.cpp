@@ -1,7 +1,8 @@
 // AnchorStore_bench.cpp — cost of the anchor store: insert (new and refresh), find, advance, and
-// interpolation per query in a populated store (the per-corner cost of terrain colouring and the
-// per-instance cost of vegetation), one by one and in batches as a frame asks, and the rebuild of
-// the interpolation cache after the anchors change (once a frame while probes arrive).
+// interpolation per query in a populated store (the per-instance cost of vegetation and the car;
+// the per-corner cost of terrain colouring, at fixed points), one by one and in batches as a
+// frame asks, and the rebuild of the interpolation cache after the anchors change (once a frame
+// while probes arrive).
 //   build/bin/ambience_bench --benchmark_filter=Interpolat --benchmark_repetitions=9
 //       --benchmark_report_aggregates_only=true   (one command line; target <= 100 ns a lookup)
 #include <random>
@@ -85,7 +86,9 @@ void BM_AnchorStoreAdvance(benchmark::State& state) {
 }
 BENCHMARK(BM_AnchorStoreAdvance)->Unit(benchmark::kMicrosecond);
 
-void BM_AnchorStoreInterpolate(benchmark::State& state) {
+// One lookup at a time, at 4096 random points near the track: `lookUp(store, x, z)`.
+template <class LookUp>
+void lookUpOneByOne(benchmark::State& state, LookUp lookUp) {
     AnchorStore store;
     populate(store);
     std::mt19937 rng(2);
@@ -95,12 +98,65 @@ void BM_AnchorStoreInterpolate(benchmark::State& state) {
     std::size_t i = 0;
     for (auto _ : state) {
         const auto& q = queries[i++ & 4095];
-        benchmark::DoNotOptimize(store.interpolate(q.first, q.second));
+        benchmark::DoNotOptimize(lookUp(store, q.first, q.second));
     }
     state.SetItemsProcessed(state.iterations());
     state.counters["anchors"] = double(store.size());
 }
+
+// A frame's batch, 1024 random points near the track: `lookUpMany(store, n, x, z, out)`; the
+// time per lookup is the counter s_per_lookup (wall time).
+template <class LookUpMany>
+void lookUpInBatches(benchmark::State& state, LookUpMany lookUpMany) {
+    AnchorStore store;
+    populate(store);
+    std::mt19937 rng(4);
+    std::uniform_real_distribution<double> x(0.0, 1000.0), z(-40.0, 40.0);
+    constexpr std::size_t kBatch = 1024;
+    std::vector<double> qx(kBatch), qz(kBatch);
+    for (std::size_t i = 0; i < kBatch; ++i) qx[i] = x(rng), qz[i] = z(rng);
+    std::vector<ShRgb> out(kBatch);
+    for (auto _ : state) {
+        lookUpMany(store, kBatch, qx.data(), qz.data(), out.data());
+        benchmark::DoNotOptimize(out.data());
+        benchmark::ClobberMemory();
+    }
+    state.SetItemsProcessed(state.iterations() * std::int64_t(kBatch));
+    state.counters["s_per_lookup"] = benchmark::Counter(
+        double(kBatch) * double(state.iterations()),
+        benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+// A moving point (plants, the car): the smooth cells.
+void BM_AnchorStoreInterpolate(benchmark::State& state) {
+    lookUpOneByOne(state, [](const AnchorStore& s, double x, double z) {
+        return s.interpolate(x, z);
+    });
+}
 BENCHMARK(BM_AnchorStoreInterpolate);
+
+// A fixed point (terrain corners, road vertices): the bilinear cells.
+void BM_AnchorStoreInterpolateFixed(benchmark::State& state) {
+    lookUpOneByOne(state, [](const AnchorStore& s, double x, double z) {
+        return s.interpolateFixed(x, z);
+    });
+}
+BENCHMARK(BM_AnchorStoreInterpolateFixed);
+
+// A frame's objects through interpolateMany.
+void BM_AnchorStoreInterpolateBatch(benchmark::State& state) {
+    lookUpInBatches(state, [](const AnchorStore& s, std::size_t n, const double* x,
+                              const double* z, ShRgb* out) { s.interpolateMany(n, x, z, out); });
+}
+BENCHMARK(BM_AnchorStoreInterpolateBatch)->Unit(benchmark::kMicrosecond);
+
+// A frame's terrain corners through interpolateFixedMany.
+void BM_AnchorStoreInterpolateFixedBatch(benchmark::State& state) {
+    lookUpInBatches(state, [](const AnchorStore& s, std::size_t n, const double* x,
+                              const double* z,
+                              ShRgb* out) { s.interpolateFixedMany(n, x, z, out); });
+}
+BENCHMARK(BM_AnchorStoreInterpolateFixedBatch)->Unit(benchmark::kMicrosecond);
 
 // A moving object's lookups: one a frame along the track at 30 m/s and 60 frames a second
 // (0.5 m apart), so consecutive lookups share cells as a car's or a plant's do.
@@ -115,29 +171,6 @@ void BM_AnchorStoreInterpolateWalk(benchmark::State& state) {
     state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_AnchorStoreInterpolateWalk);
-
-// A frame's batch: 1024 points (terrain corners, plants) through interpolateMany; the time per
-// lookup is the counter s_per_lookup (wall time).
-void BM_AnchorStoreInterpolateBatch(benchmark::State& state) {
-    AnchorStore store;
-    populate(store);
-    std::mt19937 rng(4);
-    std::uniform_real_distribution<double> x(0.0, 1000.0), z(-40.0, 40.0);
-    constexpr std::size_t kBatch = 1024;
-    std::vector<double> qx(kBatch), qz(kBatch);
-    for (std::size_t i = 0; i < kBatch; ++i) qx[i] = x(rng), qz[i] = z(rng);
-    std::vector<ShRgb> out(kBatch);
-    for (auto _ : state) {
-        store.interpolateMany(kBatch, qx.data(), qz.data(), out.data());
-        benchmark::DoNotOptimize(out.data());
-        benchmark::ClobberMemory();
-    }
-    state.SetItemsProcessed(state.iterations() * std::int64_t(kBatch));
-    state.counters["s_per_lookup"] = benchmark::Counter(
-        double(kBatch) * double(state.iterations()),
-        benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
-}
-BENCHMARK(BM_AnchorStoreInterpolateBatch)->Unit(benchmark::kMicrosecond);
 
 // The interpolation cache rebuilt from ~3000 anchors (a relight that moves every anchor, then
 // one lookup).
