@@ -49,7 +49,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 struct BenchOptions {
-    std::string replays, methods, sweep, out = "out/bench";
+    std::string replays, methods, sweep, budgets, out = "out/bench";
     int jobs = 0;
     int measureEvery = 10;
     int maxFrames = 0;
@@ -485,6 +485,81 @@ std::string fmt(double v, const char* format) {
     return text;
 }
 
+// With --budgets: per replay, each method's mean error and ambience ms at each budget (the
+// default point's family), ours against the best other method at that budget, and the Pareto
+// front over every run of the replay (no other run both cheaper and more accurate).
+void writeBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
+                        const std::vector<std::string>& replays) {
+    std::vector<int> budgets;
+    std::vector<std::string> methods;
+    for (const Job& j : jobs) {
+        if (j.point.family.empty()) return;  // no --budgets
+        if (std::find(budgets.begin(), budgets.end(), j.point.facesPerFrame) == budgets.end())
+            budgets.push_back(j.point.facesPerFrame);
+        if (std::find(methods.begin(), methods.end(), j.method) == methods.end())
+            methods.push_back(j.method);
+    }
+    std::sort(budgets.begin(), budgets.end());
+    auto errorOf = [](const Job& j) {
+        return number(j.report.value("measurement", json::object()), {"error", "mean"});
+    };
+    auto msOf = [](const Job& j) { return number(j.report, {"ambience", "ambience_ms", "median"}); };
+    out << "## Budget: error against cost\n\n";
+    out << "Each cell: mean error / ambience ms per frame (median), default settings at each "
+           "capture budget (faces per frame). Ours / best other = our mean error over the "
+           "lowest of the other methods' at that budget.\n\n";
+    for (const std::string& replay : replays) {
+        out << "### " << replay << "\n\n| faces per frame |";
+        for (const auto& m : methods) out << " " << (m == "volume" ? "**volume (ours)**" : m) << " |";
+        out << " ours / best other |\n|---|";
+        for (std::size_t i = 0; i <= methods.size(); ++i) out << "---|";
+        out << "\n";
+        for (int b : budgets) {
+            out << "| " << b << " |";
+            double ours = std::nan(""), best = std::nan("");
+            for (const auto& m : methods) {
+                const Job* found = nullptr;
+                for (const Job& j : jobs)
+                    if (j.replay.name == replay && j.method == m && j.point.family == "default" &&
+                        j.point.facesPerFrame == b && j.ok)
+                        found = &j;
+                if (!found) {
+                    out << " — |";
+                    continue;
+                }
+                const double e = errorOf(*found);
+                out << " " << fmt(e, "%.4f") << " / " << fmt(msOf(*found), "%.2f") << " |";
+                if (m == "volume") ours = e;
+                else if (std::isfinite(e) && !(e >= best)) best = e;
+            }
+            out << " **" << fmt(ours / best, "%.3g") << "** |\n";
+        }
+        // Pareto front over every run of the replay.
+        std::vector<const Job*> runs;
+        for (const Job& j : jobs)
+            if (j.replay.name == replay && j.ok && std::isfinite(errorOf(j)) && std::isfinite(msOf(j)))
+                runs.push_back(&j);
+        std::vector<const Job*> front;
+        for (const Job* a : runs) {
+            bool dominated = false;
+            for (const Job* b : runs) {
+                const bool noWorse = msOf(*b) <= msOf(*a) && errorOf(*b) <= errorOf(*a);
+                const bool better = msOf(*b) < msOf(*a) || errorOf(*b) < errorOf(*a);
+                if (b != a && noWorse && better) dominated = true;
+            }
+            if (!dominated) front.push_back(a);
+        }
+        std::sort(front.begin(), front.end(),
+                  [&](const Job* a, const Job* b) { return msOf(*a) < msOf(*b); });
+        out << "\nPareto front (cheapest first): ";
+        for (std::size_t i = 0; i < front.size(); ++i)
+            out << (i ? ", " : "") << front[i]->method << " " << front[i]->point.label << " ("
+                << fmt(errorOf(*front[i]), "%.3f") << " at " << fmt(msOf(*front[i]), "%.2f")
+                << " ms)";
+        out << "\n\n";
+    }
+}
+
 void writeSummary(const std::vector<Job>& jobs, const std::string& path,
                   const std::string& commandLine, double wall_s, int workers) {
     std::ofstream out(path);
@@ -559,6 +634,7 @@ void writeSummary(const std::vector<Job>& jobs, const std::string& path,
             << " |\n";
     }
     out << "\n";
+    writeBudgetSection(out, jobs, replays);
     out << "## Plots\n\n";
     for (const std::string& replay : replays)
         out << "- `pareto-" << replay << ".png`, `error-over-time-" << replay << ".png`\n";
@@ -746,7 +822,9 @@ void runBench(const BenchOptions& o, const std::string& commandLine) {
     for (const auto& m : methods) checkAmbienceMethod(m, "--methods");
     if (parseBackend(o.backend, "--backend") == Backend::Glfw)
         throw InputError("--backend", "bench runs headless: auto, egl or osmesa");
-    const auto points = readSweep(o.sweep, ambienceMethodNames());
+    auto points = readSweep(o.sweep, ambienceMethodNames());
+    if (!o.budgets.empty())
+        points = withBudgets(points, parseBudgets(o.budgets, "--budgets"), "--budgets");
     const int workers = o.jobs > 0 ? o.jobs : std::max(1, int(std::thread::hardware_concurrency()));
     std::error_code ec;
     fs::create_directories(fs::path(o.out) / "oracle", ec);
@@ -841,6 +919,10 @@ void addBenchCommand(CLI::App& app) {
     cmd->add_option("--sweep", o->sweep,
                     "JSON parameter points: {\"points\": [{\"label\", \"methods\", \"volume\", "
                     "\"baseline\", \"facesPerFrame\"}]}");
+    cmd->add_option("--budgets", o->budgets,
+                    "comma-separated capture budgets, faces per frame (1 to 64): every point runs "
+                    "at each, and summary.md gets error against cost per budget and the Pareto "
+                    "front");
     cmd->add_option("--jobs", o->jobs, "runs side by side (default: the number of cores)");
     cmd->add_option("--out", o->out, "output folder (default out/bench)");
     cmd->add_option("--measure-every", o->measureEvery,

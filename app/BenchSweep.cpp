@@ -93,6 +93,49 @@ std::vector<SweepPoint> parseSweep(const std::string& text, const std::string& w
     return points;
 }
 
+std::vector<int> parseBudgets(const std::string& list, const std::string& where) {
+    std::vector<int> budgets;
+    std::size_t start = 0;
+    while (start <= list.size()) {
+        const std::size_t end = std::min(list.find(',', start), list.size());
+        const std::string item = list.substr(start, end - start);
+        std::size_t used = 0;
+        long n = 0;
+        try {
+            n = std::stol(item, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (item.empty() || used != item.size() || n < 1 || n > kMaxFacesPerFrame)
+            throw InputError(where, "'" + item + "': expected faces per frame, 1 to " +
+                                        std::to_string(kMaxFacesPerFrame));
+        budgets.push_back(int(n));
+        if (budgets.size() > 16) throw InputError(where, "at most 16 budgets");
+        start = end + 1;
+    }
+    std::sort(budgets.begin(), budgets.end());
+    budgets.erase(std::unique(budgets.begin(), budgets.end()), budgets.end());
+    return budgets;
+}
+
+std::vector<SweepPoint> withBudgets(const std::vector<SweepPoint>& points,
+                                    const std::vector<int>& budgets, const std::string& where) {
+    std::vector<SweepPoint> out;
+    std::set<std::string> labels;
+    for (const SweepPoint& p : points) {
+        for (int b : budgets) {
+            SweepPoint q = p;
+            q.family = p.family.empty() ? p.label : p.family;
+            q.facesPerFrame = b;
+            if (b != 1) q.label = p.label + "-f" + std::to_string(b);
+            if (!labels.insert(q.label).second)
+                throw InputError(where, "label '" + q.label + "' would be used twice");
+            out.push_back(std::move(q));
+        }
+    }
+    return out;
+}
+
 std::vector<SweepPoint> readSweep(const std::string& path,
                                   const std::vector<std::string>& methodNames) {
     if (path.empty()) return std::vector<SweepPoint>(1);

@@ -20,6 +20,7 @@ struct SweepPoint {
     nlohmann::json volume = nlohmann::json::object(), baseline = nlohmann::json::object();
     int facesPerFrame = 1;
     std::string params;  // "key=value;..." for the CSV
+    std::string family;  // the label before --budgets added "-f<faces>" (empty: the label)
 };
 
 // Deepest nesting of objects and arrays a sweep file may have: the settings are two levels
@@ -37,5 +38,16 @@ std::vector<SweepPoint> parseSweep(const std::string& text, const std::string& w
 // Reads and parses a sweep file (bounded read); an empty path gives the default point alone.
 std::vector<SweepPoint> readSweep(const std::string& path,
                                   const std::vector<std::string>& methodNames);
+
+// The capture budgets of `ambience bench --budgets 1,3,6`: faces per frame, each 1 to
+// kMaxFacesPerFrame, sorted, without repeats. Throws InputError(where, ...) for an empty list,
+// a value that is not a whole number in range, or more than 16 budgets.
+std::vector<int> parseBudgets(const std::string& list, const std::string& where);
+
+// Every point at every budget: budget 1 keeps the point's label, budget b > 1 is labelled
+// "<label>-f<b>"; `family` keeps the point's own label. A budget overrides the point's own
+// facesPerFrame. Throws InputError(where, ...) when two points end with the same label.
+std::vector<SweepPoint> withBudgets(const std::vector<SweepPoint>& points,
+                                    const std::vector<int>& budgets, const std::string& where);
 
 }  // namespace amb

@@ -314,7 +314,7 @@ void AnchorField::buildLevel(int L, const std::vector<FieldAnchor>& anchors) {
                 w -= p;
                 for (int j = 0; j < kN; ++j) g[j] -= p * own[j];
             }
-            w = std::max(w, kCoverageFloor);
+            w = coverageDivisor(w);
             for (int j = 0; j < kN; ++j) g[j] = base[j] + g[j] / w;
             if (anchor && anchor->level == L) {
                 toFloats(anchor->value, v.data());

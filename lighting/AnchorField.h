@@ -12,7 +12,7 @@
 //   F_{-1}      = the fallback everywhere.
 //   r_a         = v_a - F_{L-1}(a) for each anchor a of canonical level >= L: what it adds to
 //                 the coarser levels' value at its point (its residual against level L).
-//   G_L(c)      = F_{L-1}(c) + sum_a K_a p_a r_a / max(sum_a K_a p_a, kCoverageFloor), over
+//   G_L(c)      = F_{L-1}(c) + sum_a K_a p_a r_a / coverageDivisor(sum_a K_a p_a), over
 //                 the anchors a other than c within R_L = reachCells x s_L of the lattice point
 //                 c (coarseReachCells at level 0): this level's with K_a = (1 - (|c - a| /
 //                 R_L)^2)^2, the finer levels' (at their own positions) with finerWeight x K_a.
@@ -130,6 +130,17 @@ class AnchorField {
     // Coverage below which G_L takes only part of the residuals nearby (the rest is the
     // coarser value), in units of one anchor at the corner itself.
     static constexpr double kCoverageFloor = 0.25;
+    // The divisor of G_L's weighted residuals at coverage W = sum K p: W from 2 kCoverageFloor
+    // up (the whole weighted mean), f + W^2 / (4 f) below (f = kCoverageFloor): at least f,
+    // and with a continuous derivative, so that a hole filling as anchors fade in does not
+    // stop rising abruptly when its coverage reaches the floor (a hard max(W, f) gave the
+    // moving point a second-difference spike of 0.16 while an empty store filled at one probe
+    // a frame).
+    static double coverageDivisor(double W) {
+        constexpr double f = kCoverageFloor;
+        W = W > 0.0 ? W : 0.0;
+        return W >= 2.0 * f ? W : f + W * W / (4.0 * f);
+    }
 
   private:
     struct CellKey {

@@ -3,6 +3,7 @@
 // bad input.
 #include <cmath>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <vector>
 
@@ -148,12 +149,36 @@ TEST(BenchCommand, SweepRecordsAFailureAndGoesOn) {
     EXPECT_TRUE(fs::exists(dir / "out" / "oracle" / "highway-drive.json"));
 }
 
+// Two budgets: every method runs at both, and the summary gives error against cost per budget
+// with ours against the best other method and the Pareto front.
+TEST(BenchCommand, BudgetsAddPointsAndTheirSection) {
+    const fs::path dir = scratchDir("bench-budgets");
+    const auto r = runAmbience(
+        "bench --replays highway-drive --methods volume,constant --max-frames 60 "
+        "--measure-every 20 --jobs 2 --budgets 2,1 --out " + (dir / "out").string());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const auto rows = readCsv((dir / "out" / "results.csv").string());
+    ASSERT_EQ(rows.size(), 1u + 4u);
+    const auto& h = rows[0];
+    std::multiset<std::string> labels;
+    for (std::size_t i = 1; i < rows.size(); ++i) {
+        EXPECT_EQ(rows[i][column(h, "status")], "ok");
+        labels.insert(rows[i][column(h, "point")]);
+    }
+    EXPECT_EQ(labels, (std::multiset<std::string>{"default", "default", "default-f2", "default-f2"}));
+    const std::string summary = slurp((dir / "out" / "summary.md").string());
+    EXPECT_NE(summary.find("## Budget: error against cost"), std::string::npos);
+    EXPECT_NE(summary.find("| 2 |"), std::string::npos);
+    EXPECT_NE(summary.find("Pareto front"), std::string::npos);
+}
+
 TEST(BenchCommand, BadInputIsOneLineAndExitCode2) {
     const fs::path dir = scratchDir("bench-bad");
     for (const std::string& args :
          {std::string("bench --methods volume,nonsense"), std::string("bench --replays nowhere"),
           std::string("bench --sweep ") + (dir / "missing.json").string(),
           std::string("bench --measure-every 0"), std::string("bench --jobs -1"),
+          std::string("bench --budgets 0,3"), std::string("bench --budgets 3,x"),
           std::string("run --oracle x.json"), std::string("run --ambient nonsense")}) {
         const auto r = runAmbience(args + " --out " + (dir / "o").string());
         EXPECT_EQ(r.exitCode, 2) << args;

@@ -100,5 +100,40 @@ TEST(BenchSweep, DeepNestingRefusedNotACrash) {
     EXPECT_NE(refusal(nested(kMaxSweepJsonDepth - 2)), "accepted");
 }
 
+TEST(BenchSweep, BudgetsAreSortedDistinctAndInRange) {
+    EXPECT_EQ(parseBudgets("24,1,6,6,3", "--budgets"), (std::vector<int>{1, 3, 6, 24}));
+    EXPECT_EQ(parseBudgets("64", "--budgets"), (std::vector<int>{64}));
+    for (const std::string bad : {"", "0", "65", "x", "3,", ",3", "1.5", "2x", "-1",
+                                  "99999999999999999999", "1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17"}) {
+        try {
+            parseBudgets(bad, "--budgets");
+            ADD_FAILURE() << "accepted '" << bad << "'";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("--budgets"), std::string::npos) << e.what();
+        }
+    }
+}
+
+TEST(BenchSweep, EveryPointRunsAtEveryBudget) {
+    const auto points = parseSweep(
+        R"({"points": [{"label": "b1", "methods": ["volume"], "facesPerFrame": 2}]})", "s.json",
+        kMethods);
+    const auto all = withBudgets(points, {1, 6}, "--budgets");
+    ASSERT_EQ(all.size(), 4u);
+    EXPECT_EQ(all[0].label, "default");
+    EXPECT_EQ(all[0].facesPerFrame, 1);
+    EXPECT_EQ(all[1].label, "default-f6");
+    EXPECT_EQ(all[1].facesPerFrame, 6);
+    EXPECT_EQ(all[1].family, "default");
+    EXPECT_EQ(all[2].label, "b1");
+    EXPECT_EQ(all[2].facesPerFrame, 1);  // the budget overrides the point's own
+    EXPECT_EQ(all[3].label, "b1-f6");
+    EXPECT_EQ(all[3].family, "b1");
+    EXPECT_EQ(all[3].methods, points[1].methods);
+    // A point already named like a budget's label is refused, not run twice.
+    const auto clash = parseSweep(R"({"points": [{"label": "default-f6"}]})", "s.json", kMethods);
+    EXPECT_THROW(withBudgets(clash, {1, 6}, "--budgets"), InputError);
+}
+
 }  // namespace
 }  // namespace amb

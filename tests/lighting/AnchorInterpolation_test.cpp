@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include "lighting/AnchorField.h"
 #include "lighting/AnchorStore.h"
 
 namespace amb {
@@ -117,9 +118,10 @@ TEST(AnchorInterpolation, MissingCornersComeFromTheCoarserLevel) {
     // A complete 9 m cell (0..9)^2 of level-3 points ((0, 0) is a level-0 point) and one 3 m
     // anchor b at (3, 0). The query (1.2, 2.1) lies in the 3 m cell (0..3)^2: corners (0, 0) and
     // (3, 0) hold anchors; (0, 3) and (3, 3) are missing and take the 9 m cell's bilinear value
-    // plus b's residual r = b - (9 m value at (3, 0)): they are within b's reach (2 cells, 6 m)
-    // with weights K = (1 - d^2 / 4)^2 = 0.25 and 0.5625, at least the coverage floor 0.25, so
-    // the whole residual. (A level's own fill, ownLevelFill.)
+    // plus b's share of its residual r = b - (9 m value at (3, 0)): they are within b's reach
+    // (2 cells, 6 m) with weights K = (1 - d^2 / 4)^2 = 0.25 and 0.5625, and take K /
+    // coverageDivisor(K) of r: 0.25 / (0.25 + 0.25^2) = 0.8 and (K >= 0.5) all of it. (A
+    // level's own fill, ownLevelFill.)
     AnchorStoreSettings s;
     s.blendTime_s = 0.0;
     s.smoothInterpolation = false;
@@ -135,7 +137,7 @@ TEST(AnchorInterpolation, MissingCornersComeFromTheCoarserLevel) {
         return (1 - u) * (1 - w) * a00 + u * (1 - w) * a10 + (1 - u) * w * a01 + u * w * a11;
     };
     const double r = b - coarse(3.0, 0.0);
-    const double c00 = a00, c10 = b, c01 = coarse(0.0, 3.0) + r, c11 = coarse(3.0, 3.0) + r;
+    const double c00 = a00, c10 = b, c01 = coarse(0.0, 3.0) + 0.8 * r, c11 = coarse(3.0, 3.0) + r;
     const double u = 1.2 / 3.0, w = 2.1 / 3.0;
     const double expected =
         (1 - u) * (1 - w) * c00 + u * (1 - w) * c10 + (1 - u) * w * c01 + u * w * c11;
@@ -155,9 +157,10 @@ TEST(AnchorInterpolation, MissingCornersComeFromTheCoarserLevel) {
             EXPECT_NEAR(used.weight, (1 - u) * (1 - w), 1e-12);
         }
     }
-    // In the 3 m cell (6..9, 3..6) only corner (6, 3) is in reach (d^2 = 2): r x its weight 1/3
-    // at (7.5, 4); beyond z = 6 m (out of reach) the 9 m cell alone.
-    EXPECT_LT(maxDiff(store.interpolate(7.5, 4.0), makeSh(float(coarse(7.5, 4.0) + r / 3.0))),
+    // In the 3 m cell (6..9, 3..6) only corner (6, 3) is in reach (d^2 = 2): 0.8 r x its weight
+    // 1/3 at (7.5, 4); beyond z = 6 m (out of reach) the 9 m cell alone.
+    EXPECT_LT(maxDiff(store.interpolate(7.5, 4.0),
+                      makeSh(float(coarse(7.5, 4.0) + 0.8 * r / 3.0))),
               2e-5);
     EXPECT_LT(maxDiff(store.interpolate(4.5, 7.5), makeSh(float(coarse(4.5, 7.5)))), 2e-5);
 }
@@ -165,9 +168,9 @@ TEST(AnchorInterpolation, MissingCornersComeFromTheCoarserLevel) {
 TEST(AnchorInterpolation, FinerAnchorsFillTheCoarserLevelsHoles) {
     // One 3 m anchor b at (3, 0) over the fallback f, default reach (1 cell; 2 at level 0) with
     // the finer anchors counted. Level 0 (243 m) has no anchor of its own: its points take
-    // f + K (b - f) / max(K, 0.25) with K = (1 - d^2 / 4)^2 over b's distance d in 243 m cells,
-    // so all of b where K >= 0.25. The coarser value at b is then b, so the finer levels add
-    // nothing, and the 243 m cells are bilinear between those corners.
+    // f + K (b - f) / coverageDivisor(K) with K = (1 - d^2 / 4)^2 over b's distance d in 243 m
+    // cells, so all of b where K >= 0.5. The coarser value at b is then b, so the finer levels
+    // add nothing, and the 243 m cells are bilinear between those corners.
     AnchorStore store = instantStore();
     const float b = 3.0f, f = 0.5f;
     store.setFallback(makeSh(f));
@@ -176,15 +179,19 @@ TEST(AnchorInterpolation, FinerAnchorsFillTheCoarserLevelsHoles) {
         const double du = (3.0 - x) / 243.0, dw = -z / 243.0, t2 = (du * du + dw * dw) / 4.0;
         if (t2 >= 1.0) return double(f);
         const double K = (1.0 - t2) * (1.0 - t2);
-        return f + K * (b - f) / std::max(K, 0.25);
+        return f + K * (b - f) / AnchorField::coverageDivisor(K);
     };
-    ASSERT_NEAR(corner(243.0, 243.0), b, 1e-12);  // K = 0.256: whole
-    ASSERT_LT(corner(-243.0, 243.0), b - 0.01);   // K = 0.244: in part
-    EXPECT_LT(maxDiff(store.interpolate(100.0, 100.0), makeSh(b)), 1e-5);
-    const double u = (-100.0 + 243.0) / 243.0, w = 100.0 / 243.0;
-    const double expected = (1 - u) * (1 - w) * corner(-243.0, 0.0) + u * (1 - w) * corner(0.0, 0.0) +
-                            (1 - u) * w * corner(-243.0, 243.0) + u * w * corner(0.0, 243.0);
-    EXPECT_LT(maxDiff(store.interpolate(-100.0, 100.0), makeSh(float(expected))), 1e-5);
+    ASSERT_NEAR(corner(243.0, 0.0), b, 1e-12);   // K = 0.572: whole
+    ASSERT_LT(corner(243.0, 243.0), b - 0.1);    // K = 0.256: in part
+    auto cell = [&](double x, double z) {  // bilinear in the 243 m cell holding (x, z)
+        const double x0 = std::floor(x / 243.0) * 243.0, z0 = std::floor(z / 243.0) * 243.0;
+        const double u = (x - x0) / 243.0, w = (z - z0) / 243.0;
+        return (1 - u) * (1 - w) * corner(x0, z0) + u * (1 - w) * corner(x0 + 243.0, z0) +
+               (1 - u) * w * corner(x0, z0 + 243.0) + u * w * corner(x0 + 243.0, z0 + 243.0);
+    };
+    EXPECT_LT(maxDiff(store.interpolate(100.0, 100.0), makeSh(float(cell(100.0, 100.0)))), 1e-5);
+    EXPECT_LT(maxDiff(store.interpolate(-100.0, 100.0), makeSh(float(cell(-100.0, 100.0)))), 1e-5);
+    EXPECT_GT(cell(100.0, 100.0), f + 0.9 * (b - f));  // mostly b, 100 m from it
     EXPECT_LT(maxDiff(store.interpolate(3.0, 0.0), makeSh(b)), 1e-6);  // exact on the anchor
     // A level's own fill alone: b reaches 2 x 3 m, so (100, 100) shows the fallback.
     AnchorStoreSettings s;
@@ -196,17 +203,36 @@ TEST(AnchorInterpolation, FinerAnchorsFillTheCoarserLevelsHoles) {
     EXPECT_LT(maxDiff(own.interpolate(100.0, 100.0), makeSh(f)), 1e-6);
 }
 
+TEST(AnchorInterpolation, CoverageDivisorIsAtLeastTheFloorAndSmooth) {
+    // f + W^2 / (4 f) below 2 f = 0.5, W above: 0.25 at 0, 0.3125 at 0.25, 0.5 at 0.5, and the
+    // slope continuous at 0.5 (1 on both sides).
+    EXPECT_DOUBLE_EQ(AnchorField::coverageDivisor(0.0), 0.25);
+    EXPECT_DOUBLE_EQ(AnchorField::coverageDivisor(-1.0), 0.25);
+    EXPECT_DOUBLE_EQ(AnchorField::coverageDivisor(0.25), 0.3125);
+    EXPECT_DOUBLE_EQ(AnchorField::coverageDivisor(0.5), 0.5);
+    EXPECT_DOUBLE_EQ(AnchorField::coverageDivisor(2.0), 2.0);
+    const double h = 1e-6;
+    const double below = (AnchorField::coverageDivisor(0.5) - AnchorField::coverageDivisor(0.5 - h)) / h;
+    const double above = (AnchorField::coverageDivisor(0.5 + h) - AnchorField::coverageDivisor(0.5)) / h;
+    EXPECT_NEAR(below, 1.0, 1e-5);
+    EXPECT_NEAR(above, 1.0, 1e-5);
+    for (double W = 0.0; W < 3.0; W += 0.01) {
+        EXPECT_GE(AnchorField::coverageDivisor(W), std::max(W, 0.25) - 1e-15) << W;
+        EXPECT_LE(W / AnchorField::coverageDivisor(W), 1.0 + 1e-15) << W;  // never more than all
+    }
+}
+
 TEST(AnchorInterpolation, CoarsestLevelReachesIntoHolesAndFadesToTheFallback) {
     // One level-0 anchor (value v) over the fallback f: its residual is v - f. A level-0 corner
-    // at d cells takes f + K p (v - f) / max(K p, 0.25), K = (1 - (d / 2)^2)^2 (reach 2 cells,
-    // coverage floor 0.25): all of v at d = 1 and sqrt 2, f at d = 2; the 243 m cells are
-    // bilinear between corners.
+    // at d cells takes f + K p (v - f) / coverageDivisor(K p), K = (1 - (d / 2)^2)^2 (reach 2
+    // cells): all of v at d = 1 (K = 0.5625), 0.8 of it at d = sqrt 2 (K = 0.25: 0.25 / 0.3125),
+    // f at d = 2; the 243 m cells are bilinear between corners.
     AnchorStore store = instantStore();
     const float v = 3.0f, f = 0.5f;
     store.setFallback(makeSh(f));
     put(store, {0, 0, 0}, v);
     EXPECT_LT(maxDiff(store.interpolate(243.0, 0.0), makeSh(v)), 1e-5);
-    EXPECT_LT(maxDiff(store.interpolate(-243.0, 243.0), makeSh(v)), 1e-5);
+    EXPECT_LT(maxDiff(store.interpolate(-243.0, 243.0), makeSh(f + 0.8f * (v - f))), 1e-5);
     EXPECT_LT(maxDiff(store.interpolate(486.0, 0.0), makeSh(f)), 1e-6);  // d = 2: out of reach
     EXPECT_LT(maxDiff(store.interpolate(364.5, 0.0), makeSh(0.5f * (v + f))), 1e-5);
     // The hole between two anchors 2 cells apart is filled from both (K = 0.5625 each).
@@ -215,7 +241,8 @@ TEST(AnchorInterpolation, CoarsestLevelReachesIntoHolesAndFadesToTheFallback) {
 
     // Fading in (presence 0.2 after 0.4 s of a 2 s blend; blends and fades are read through
     // smoothstep, so its weight is p = easeInOut(0.2) = 0.104 and its current f + p (v - f)),
-    // the coverage at d = 1 is 0.5625 p < 0.25: the corner takes 0.5625 p / 0.25 of the residual.
+    // the coverage at d = 1 is W = 0.5625 p < 0.5: the corner takes W / (0.25 + W^2) of the
+    // residual.
     AnchorStoreSettings s;
     s.blendTime_s = 2.0;
     s.smoothInterpolation = false;
@@ -229,7 +256,8 @@ TEST(AnchorInterpolation, CoarsestLevelReachesIntoHolesAndFadesToTheFallback) {
     EXPECT_NEAR(easeInOut(a->presence), p, 1e-6);
     EXPECT_NEAR(residual, p * (v - f), 1e-5);
     EXPECT_LT(maxDiff(fading.interpolate(243.0, 0.0),
-                      makeSh(float(f + 0.5625 * p * residual / 0.25))),
+                      makeSh(float(f + 0.5625 * p * residual /
+                                   (0.25 + 0.5625 * p * 0.5625 * p)))),
               1e-5);
 }
 
@@ -523,14 +551,19 @@ TEST(AnchorInterpolation, ThesisPatternChangeExample) {
     };
     const LatticeKey k8{3, 0, 2};
     // Probes: 7, two points in the 9 m cells beside 8, a point two cells below it, one beyond
-    // 8's reach (18 m); and, for a capture 3 above what the square shows at 8, the bilinear
-    // weight of the probe's 9 m corners within 8's reach (d^2 < 4 cells^2, where the residual 3
-    // is taken whole) that are not corners of the square (present anchors keep their values):
-    // 1 - u for 7 (u = 0.8 in cell (9..18, 18..27)); 1; 1 - (1 - u) w = 0.8 for (4.5, 21.6)
-    // ((0, 27) is corner 4); w = 4 / 9 for (3, 4); 0.
+    // 8's reach (18 m); and, for a capture 3 above what the square shows at 8, the sum over the
+    // probe's 9 m corners that are not corners of the square (present anchors keep their
+    // values) of bilinear weight x the share of the residual 3 each takes: 1 at 8 itself and at
+    // d^2 = 1 cell^2 (K = 0.5625), 0.8 at d^2 = 2 (K = 0.25: K / coverageDivisor(K)), 0 from
+    // d^2 = 4 on. 7 (u = 0.8, w = 0.1 in cell (9..18, 18..27)): corners (9, 18) and (9, 27);
+    // (2.7, 16.2) (u = 0.3, w = 0.8): all four, (9, 9) at d^2 = 2; (4.5, 21.6) (u = 0.5,
+    // w = 0.4): 8, (9, 18) and (9, 27), (0, 27) being corner 4; (3, 4) (u = 1/3, w = 4/9):
+    // (0, 9) and (9, 9); (25, 2): none.
     const std::vector<std::pair<double, double>> probes = {
         {0.6 * 27.0, 0.7 * 27.0}, {2.7, 16.2}, {4.5, 21.6}, {3.0, 4.0}, {25.0, 2.0}};
-    const std::vector<double> share = {1.0 - 0.8, 1.0, 1.0 - 0.5 * 0.4, 4.0 / 9.0, 0.0};
+    const std::vector<double> share = {
+        0.2 * 0.9 + 0.2 * 0.1 * 0.8, 1.0 - 0.3 * 0.2 * (1.0 - 0.8), 0.5 * 0.6 + 0.5 * 0.6 + 0.5 * 0.4 * 0.8,
+        (4.0 / 9.0) * (2.0 / 3.0 + 0.8 / 3.0), 0.0};
     auto values = [&](const AnchorStore& store) {
         std::vector<ShRgb> out;
         for (auto [x, z] : probes) out.push_back(store.interpolate(x, z));
