@@ -157,8 +157,10 @@ void AnchorField::rebuild(const FieldLattice& lattice, const std::vector<FieldAn
         for (const auto& block : m.blocks) {
             for (std::int64_t n = 0; n < (std::int64_t(1) << (2 * kBlockShift)); ++n) {
                 if (m.refs[block.second + std::size_t(n)].row0 == kNoCell) continue;
-                const std::int64_t i = (block.first.i << kBlockShift) + (n & kBlockMask);
-                const std::int64_t k = (block.first.k << kBlockShift) + (n >> kBlockShift);
+                // (A product, not a left shift: block coordinates may be negative.)
+                constexpr std::int64_t side = std::int64_t(1) << kBlockShift;
+                const std::int64_t i = block.first.i * side + (n & kBlockMask);
+                const std::int64_t k = block.first.k * side + (n >> kBlockShift);
                 levelsIn_[CellKey{floorDiv(i, ratio), floorDiv(k, ratio)}] |= 1u << L;
             }
         }

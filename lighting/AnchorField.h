@@ -160,6 +160,8 @@ class AnchorField {
     // 64 cell references (row0 = kNoCell where a cell is not stored). The map stays small
     // enough to sit in the cache, and a probe costs one hash of a few dozen entries and one
     // load, stored cell or not.
+    // (A block is (i >> kBlockShift, k >> kBlockShift): the shift of a negative coordinate is
+    // arithmetic, floor division by 8, with GCC and Clang, and in every C++20 compiler.)
     static constexpr std::uint32_t kNoCell = 0xFFFFFFFFu;
     static constexpr int kBlockShift = 3;
     static constexpr std::int64_t kBlockMask = (1 << kBlockShift) - 1;
