@@ -3,7 +3,9 @@
 // what and where, exit code 2, and no crash.
 #include <cstdio>
 #include <fstream>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -28,6 +30,16 @@ std::string writeTemp(const std::string& name, const std::string& text) {
     const std::string path = testing::TempDir() + name;
     std::ofstream(path) << text;
     return path;
+}
+
+// The test harness splits argument text as a shell would, without running one.
+TEST(Cli, HarnessSplitsWordsWithShellQuoting) {
+    EXPECT_EQ(test::splitWords("  a 'b c'  \"d\\\"e$\" f\\ g 'it'\\''s' "),
+              (std::vector<std::string>{"a", "b c", "d\"e$", "f g", "it's"}));
+    EXPECT_EQ(test::splitWords("'$(touch x); echo'"),
+              (std::vector<std::string>{"$(touch x); echo"}));
+    EXPECT_TRUE(test::splitWords("").empty());
+    EXPECT_THROW(test::splitWords("'open"), std::invalid_argument);
 }
 
 TEST(Cli, HelpListsEverySubcommand) {

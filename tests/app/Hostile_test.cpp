@@ -89,8 +89,8 @@ TEST(Hostile, ReplayNameCannotLeaveTheOutputFolder) {
     const fs::path cwd = dir / "a" / "b" / "c";
     fs::create_directories(cwd);
     const std::string replay = makeReplay(dir, "x/../../../../evil");
-    const auto r = runAmbience("run --replay " + quoted(replay) + " --max-frames 3 --no-video",
-                               "cd " + quoted(cwd.string()) + " &&");
+    const auto r =
+        runAmbience("run --replay " + quoted(replay) + " --max-frames 3 --no-video", "", cwd);
     ASSERT_EQ(r.exitCode, 0) << r.err;
     // Everything went under <cwd>/out/run-<safe name>/.
     for (const fs::path& p : {dir / "evil", dir / "a" / "evil", dir / "a" / "b" / "evil",

@@ -1,15 +1,25 @@
 // RunAmbience.h — runs the built `ambience` executable with arguments and captures its exit
-// code, stdout and stderr, for tests of the command line.
+// code, stdout and stderr, for tests of the command line. No shell is involved: the argument
+// text is split into words (with the shell's quoting rules, nothing expanded) and the child is
+// started from an argument vector.
 #pragma once
 
+#include <fcntl.h>
+#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cerrno>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 #include <string>
+#include <vector>
+
+extern char** environ;
 
 #include <gtest/gtest.h>
 
@@ -44,21 +54,90 @@ inline std::filesystem::path scratchDir(const std::string& name) {
     return dir;
 }
 
-// Runs `prefix ambience args`: `args` is appended to the command line as is (shell syntax;
-// quote what needs quoting); `prefix` is a wrapper such as xvfb-run.
-inline CommandResult runAmbience(const std::string& args, const std::string& prefix = "") {
+// The words of `text` as a POSIX shell would split them, with no expansion: blanks separate
+// words; '...' keeps everything literally; "..." keeps everything but \" \\ \$ \` (the
+// backslash escapes those); a backslash outside quotes escapes the next character.
+inline std::vector<std::string> splitWords(const std::string& text) {
+    std::vector<std::string> words;
+    std::string word;
+    bool inWord = false;
+    for (std::size_t i = 0; i < text.size(); ++i) {
+        const char c = text[i];
+        if (c == ' ' || c == '\t' || c == '\n') {
+            if (inWord) words.push_back(word), word.clear(), inWord = false;
+        } else if (c == '\'') {
+            const std::size_t end = text.find('\'', i + 1);
+            if (end == std::string::npos) throw std::invalid_argument("unclosed ' in: " + text);
+            word += text.substr(i + 1, end - i - 1), i = end, inWord = true;
+        } else if (c == '"') {
+            for (++i; i < text.size() && text[i] != '"'; ++i) {
+                if (text[i] == '\\' && i + 1 < text.size() &&
+                    std::string("\"\\$`").find(text[i + 1]) != std::string::npos)
+                    ++i;
+                word += text[i];
+            }
+            if (i >= text.size()) throw std::invalid_argument("unclosed \" in: " + text);
+            inWord = true;
+        } else if (c == '\\' && i + 1 < text.size()) {
+            word += text[++i], inWord = true;
+        } else {
+            word += c, inWord = true;
+        }
+    }
+    if (inWord) words.push_back(word);
+    return words;
+}
+
+// An executable of that name in a directory of PATH.
+inline bool onPath(const std::string& name) {
+    const char* path = std::getenv("PATH");
+    const std::string dirs = path ? path : "";
+    for (std::size_t start = 0; start <= dirs.size();) {
+        const std::size_t end = std::min(dirs.find(':', start), dirs.size());
+        const std::filesystem::path candidate =
+            std::filesystem::path(dirs.substr(start, end - start)) / name;
+        if (end > start && ::access(candidate.c_str(), X_OK) == 0) return true;
+        start = end + 1;
+    }
+    return false;
+}
+
+// Runs `prefix ambience args` (splitWords of each; `prefix` is a wrapper such as xvfb-run,
+// found on PATH) with stdin from /dev/null, stdout and stderr captured, in `workDir` if given.
+inline CommandResult runAmbience(const std::string& args, const std::string& prefix = "",
+                                 const std::filesystem::path& workDir = {}) {
     static int counter = 0;
     // ctest runs tests as parallel processes: the pid keeps their files apart.
     const std::string base = testing::TempDir() + "ambience_cli_" + std::to_string(getpid()) +
                              "_" + std::to_string(++counter);
-    const std::string cmd = prefix + " " + std::string(AMBIENCE_BINARY_DIR) + "/bin/ambience " +
-                            args + " >" +
-                            base + ".out 2>" + base + ".err </dev/null";
-    const int status = std::system(cmd.c_str());
+    std::vector<std::string> words = splitWords(prefix);
+    words.push_back(std::string(AMBIENCE_BINARY_DIR) + "/bin/ambience");
+    for (std::string& w : splitWords(args)) words.push_back(std::move(w));
+    std::vector<char*> argv;
+    for (std::string& w : words) argv.push_back(w.data());
+    argv.push_back(nullptr);
+    const std::string outPath = base + ".out", errPath = base + ".err";
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+    posix_spawn_file_actions_addopen(&actions, 1, outPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&actions, 2, errPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (!workDir.empty()) posix_spawn_file_actions_addchdir_np(&actions, workDir.c_str());
+    pid_t pid = -1;
+    const int spawned = posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
     CommandResult r;
+    if (spawned != 0) {
+        r.exitCode = 127;  // as a shell reports a command it cannot start
+        r.err = std::string("cannot start ") + argv[0] + "\n";
+        return r;
+    }
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
     r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    r.out = slurp(base + ".out");
-    r.err = slurp(base + ".err");
+    r.out = slurp(outPath);
+    r.err = slurp(errPath);
     return r;
 }
 

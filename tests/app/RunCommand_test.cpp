@@ -55,7 +55,7 @@ TEST(RunCommand, ShortRunWritesFramesAndAConsistentReport) {
 }
 
 TEST(RunCommand, VideoThroughFfmpeg) {
-    if (std::system("command -v ffmpeg >/dev/null 2>&1") != 0) GTEST_SKIP() << "no ffmpeg";
+    if (!test::onPath("ffmpeg")) GTEST_SKIP() << "no ffmpeg";
     AMB_REQUIRE_PLATFORM(platform, Backend::Auto, 16, 16);
     platform.reset();
     const fs::path dir = test::scratchDir("video");

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,7 @@
 #include <glm/geometric.hpp>
 #include <nlohmann/json.hpp>
 
+#include "RunAmbience.h"
 #include "lighting/CubeMapFile.h"
 #include "world/Conventions.h"
 
@@ -24,18 +26,12 @@ struct RunResult {
     std::string out;
 };
 
-// Runs the executable with `args`; stdout is captured, stderr goes to `errPath`.
+// Runs the executable with `args` (no shell: RunAmbience.h); stdout is returned, stderr is
+// written to `errPath`.
 RunResult run(const std::string& args, const std::string& errPath) {
-    const std::string cmd =
-        std::string(AMBIENCE_BINARY_DIR) + "/bin/ambience " + args + " 2>" + errPath;
-    FILE* pipe = popen(cmd.c_str(), "r");
-    if (!pipe) return {-1, ""};
-    std::string out;
-    char buf[4096];
-    std::size_t got;
-    while ((got = fread(buf, 1, sizeof buf, pipe)) > 0) out.append(buf, got);
-    const int status = pclose(pipe);
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+    const test::CommandResult r = test::runAmbience(args);
+    std::ofstream(errPath) << r.err;
+    return {r.exitCode, r.out};
 }
 
 std::string readFile(const std::string& path) {

@@ -18,21 +18,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// An executable of that name in a directory of PATH.
-bool onPath(const std::string& name) {
-    const char* path = std::getenv("PATH");
-    std::string dirs = path ? path : "";
-    for (std::size_t start = 0; start <= dirs.size();) {
-        const std::size_t end = std::min(dirs.find(':', start), dirs.size());
-        const fs::path candidate = fs::path(dirs.substr(start, end - start)) / name;
-        if (end > start && ::access(candidate.c_str(), X_OK) == 0) return true;
-        start = end + 1;
-    }
-    return false;
-}
-
 TEST(ViewCommand, RunsUnderXvfbAndSavesANonBlankScreenshot) {
-    if (!onPath("xvfb-run")) {
+    if (!test::onPath("xvfb-run")) {
         GTEST_SKIP() << "xvfb-run is not installed";
     }
     const fs::path dir = test::scratchDir("view");
