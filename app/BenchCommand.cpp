@@ -37,6 +37,7 @@
 #include "app/Commands.h"
 #include "app/Platform.h"
 #include "app/VolumeAmbience.h"
+#include "lighting/Metrics.h"
 #include "world/Error.h"
 
 extern char** environ;
@@ -50,6 +51,8 @@ using nlohmann::json;
 
 struct BenchOptions {
     std::string replays, methods, sweep, budgets, out = "out/bench";
+    std::string oracle = "self";
+    int referenceEvery = 6;
     int jobs = 0;
     int measureEvery = 10;
     int maxFrames = 0;
@@ -198,6 +201,12 @@ struct Runner {
     std::string exe, out, backend;
     int measureEvery = 30, maxFrames = 0, stride = 2;
     bool frames = false;
+    // The reference oracle (lighting/ReferenceOracle.h) for every run, and the capture budget
+    // whose runs also capture the ideal volume for the error budget (the others report its
+    // spacing and schedule terms as one).
+    bool reference = false;
+    int referenceEvery = 6;
+    int idealBudget = 1;
 
     void run(Job& job) const {
         const fs::path dir = fs::path(out) / job.runDir;
@@ -230,6 +239,13 @@ struct Runner {
             "--out",
             dir.string(),
             "--no-vehicle"};
+        if (reference) {
+            args.insert(args.end(),
+                        {"--oracle-kind", "reference", "--reference",
+                         (fs::path(out) / "oracle" / (job.replay.name + "-reference.json")).string(),
+                         "--reference-every", std::to_string(referenceEvery)});
+            if (job.point.facesPerFrame != idealBudget) args.push_back("--no-ideal-volume");
+        }
         if (frames) {
             args.insert(args.end(), {"--frames", "none", "--no-video"});
         } else {
@@ -391,6 +407,19 @@ const std::vector<std::string> kColumns = {"replay",
                                            "rejected_probes",
                                            "mean_speed_mps",
                                            "oracle_s",
+                                           "oracle",
+                                           "self_error_mean",
+                                           "budget_witnesses",
+                                           "budget_total_rms",
+                                           "budget_truncation",
+                                           "budget_capture",
+                                           "budget_spacing",
+                                           "budget_schedule",
+                                           "budget_closure",
+                                           "car_error_mean",
+                                           "tree_base_error_mean",
+                                           "tree_crown_error_mean",
+                                           "reference_s",
                                            "wall_s",
                                            "run_dir"};
 
@@ -434,6 +463,19 @@ std::map<std::string, std::string> resultRow(const Job& job) {
     put("pop_move_max", number(m, {"pop_move", "max"}));
     put("mean_speed_mps", number(m, {"meanSpeed_mps"}));
     put("oracle_s", number(m, {"oracle_s"}));
+    row["oracle"] = m.value("oracle", std::string("self"));
+    if (m.contains("reference")) {
+        const json& ref = m["reference"];
+        const json& b = ref.value("budget", json::object());
+        put("self_error_mean", number(b, {"selfError", "mean"}));
+        put("budget_witnesses", number(b, {"count"}));
+        put("budget_total_rms", number(b, {"rmsTotal"}));
+        for (const char* term : {"truncation", "capture", "spacing", "schedule", "closure"})
+            put(std::string("budget_") + term, number(b, {term}));
+        for (const char* kind : {"car", "tree_base", "tree_crown"})
+            put(std::string(kind) + "_error_mean", number(ref, {"objects", kind, "error", "mean"}));
+        put("reference_s", number(ref, {"reference_s"}));
+    }
     put("ambience_ms_median", number(r, {"ambience", "ambience_ms", "median"}));
     put("ambience_ms_p95", number(r, {"ambience", "ambience_ms", "p95"}));
     put("frame_ms_median", number(r, {"frame_ms", "median"}));
@@ -560,15 +602,79 @@ void writeBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
     }
 }
 
+// With the reference oracle: per replay, the error budget of each method at the default point
+// of the ideal budget (RMS over the terrain witnesses of the reference frames), the errors on
+// objects, and the pop along the car.
+void writeErrorBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
+                             const std::vector<std::string>& replays, int idealBudget) {
+    bool any = false;
+    for (const Job& j : jobs)
+        any |= j.ok && j.report.value("measurement", json::object()).contains("reference");
+    if (!any) return;
+    out << "## Error budget against the reference oracle\n\n"
+           "RMS over the terrain witnesses of the reference frames, each term relative to the "
+           "reference irradiance (lighting/ReferenceOracle.h): **a** SH order-2 truncation, "
+           "**b** capture resolution and scene simplification (16 x 16 coarse capture against "
+           "the 64 x 64 full scene), **c** spacing and interpolation (an ideal volume of fresh "
+           "captures at the lattice points the method reads, against a capture at the point), "
+           "**d** scheduling, staleness and blending (the method against its ideal volume). "
+           "Closure = (a² + b² + c² + d²) / total²: 1 when the terms add up as squares. Methods "
+           "without a lattice show c + d in column d. Objects: mean error against the reference "
+           "at the car (1 m above its ground point) and at tree bases and crowns within 6-48 m. "
+           "Pop moving: along the car.\n\n";
+    for (const std::string& replay : replays) {
+        out << "### " << replay << "\n\n| method | total (RMS) | a truncation | b capture | "
+               "c spacing | d schedule | closure | dominant | mean error | self-oracle error | "
+               "car | tree base | tree crown | pop moving p99 / max |\n"
+               "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+        for (const Job& j : jobs) {
+            if (j.replay.name != replay || !j.ok) continue;
+            if (j.point.family.empty() && j.point.label != "default") continue;
+            if (!j.point.family.empty() &&
+                (j.point.family != "default" || j.point.facesPerFrame != idealBudget))
+                continue;
+            const json m = j.report.value("measurement", json::object());
+            if (!m.contains("reference")) continue;
+            const json& ref = m["reference"];
+            const json b = ref.value("budget", json::object());
+            const double terms[4] = {number(b, {"truncation"}), number(b, {"capture"}),
+                                     number(b, {"spacing"}), number(b, {"schedule"})};
+            const char* names[4] = {"a", "b", "c", "d"};
+            int dominant = 0;
+            for (int t = 1; t < 4; ++t)
+                if (std::isfinite(terms[t]) && !(terms[t] <= terms[dominant])) dominant = t;
+            out << "| " << (j.method == "volume" ? "**volume (ours)**" : j.method) << " | "
+                << fmt(number(b, {"rmsTotal"}), "%.4f");
+            for (double t : terms) out << " | " << fmt(t, "%.4f");
+            out << " | " << fmt(number(b, {"closure"}), "%.2f") << " | " << names[dominant]
+                << " | " << fmt(number(b, {"error", "mean"}), "%.4f") << " | "
+                << fmt(number(b, {"selfError", "mean"}), "%.4f");
+            for (const char* kind : {"car", "tree_base", "tree_crown"})
+                out << " | " << fmt(number(ref, {"objects", kind, "error", "mean"}), "%.3f");
+            out << " | " << fmt(number(m, {"pop_move", "p99"}), "%.4f") << " / "
+                << fmt(number(m, {"pop_move", "max"}), "%.3f") << " |\n";
+        }
+        out << "\n";
+    }
+    out << "Plot: `error-budget.png` (squared terms stacked, per replay and method).\n\n";
+}
+
 void writeSummary(const std::vector<Job>& jobs, const std::string& path,
-                  const std::string& commandLine, double wall_s, int workers) {
+                  const std::string& commandLine, double wall_s, int workers,
+                  const std::string& oracle, int idealBudget) {
     std::ofstream out(path);
     if (!out) throw InputError(path, "cannot write the summary");
     out << "# Ambience bench: speed against error\n\n";
     out << "Command: `" << commandLine << "`  \n";
     out << "Wall time " << fmt(wall_s / 60.0, "%.1f") << " min on " << workers
-        << " job(s). Error = relative L2 distance of the applied irradiance from a fresh capture "
-           "(the oracle) over the sphere of normals, luminance-weighted, at the witness points "
+        << " job(s). **Oracle: " << oracle
+        << (oracle == "reference"
+                ? "** (the full scene at 64 x 64, irradiance straight from the cube map, on every "
+                  "reference frame; lighting/ReferenceOracle.h)."
+                : "** (the methods' own 16 x 16 coarse capture at the point, projected to order-2 "
+                  "SH: it leaves out capture resolution, scene simplification and SH truncation).")
+        << " Error = relative L2 distance of the applied irradiance from the oracle's over the "
+           "sphere of normals, luminance-weighted, at the witness points "
            "(the camera's ground point and terrain patch corners in rings of 16-48, 48-144 and "
            "144-432 m). Pop = per-frame change of applied irradiance at fixed points less the "
            "oracle's own change; pop moving = along the camera's ground point (the car on "
@@ -635,6 +741,7 @@ void writeSummary(const std::vector<Job>& jobs, const std::string& path,
     }
     out << "\n";
     writeBudgetSection(out, jobs, replays);
+    writeErrorBudgetSection(out, jobs, replays, idealBudget);
     out << "## Plots\n\n";
     for (const std::string& replay : replays)
         out << "- `pareto-" << replay << ".png`, `error-over-time-" << replay << ".png`\n";
@@ -839,6 +946,12 @@ void runBench(const BenchOptions& o, const std::string& commandLine) {
     runner.maxFrames = o.maxFrames;
     runner.stride = o.stride;
     runner.frames = o.frames;
+    runner.reference = parseOracleKind(o.oracle, "--oracle") == OracleKind::Reference;
+    if (o.referenceEvery < 1 || o.referenceEvery > 1000000)
+        throw InputError("--reference-every", "expected 1 to 1000000");
+    runner.referenceEvery = o.referenceEvery;
+    runner.idealBudget = points.empty() ? 1 : points.front().facesPerFrame;
+    for (const Point& p : points) runner.idealBudget = std::min(runner.idealBudget, p.facesPerFrame);
     const auto start = std::chrono::steady_clock::now();
     if (o.tune) {
         tune(o, runner, workers);
@@ -893,7 +1006,8 @@ void runBench(const BenchOptions& o, const std::string& commandLine) {
     });
     const std::string results = (fs::path(o.out) / "results.csv").string();
     writeResultsCsv(jobs, results);
-    writeSummary(jobs, (fs::path(o.out) / "summary.md").string(), commandLine, wall, workers);
+    writeSummary(jobs, (fs::path(o.out) / "summary.md").string(), commandLine, wall, workers,
+                 o.oracle, runner.idealBudget);
     drawPlots(o.out);
     int failed = 0;
     for (const Job& j : jobs) failed += !j.ok;
@@ -923,6 +1037,13 @@ void addBenchCommand(CLI::App& app) {
                     "comma-separated capture budgets, faces per frame (1 to 64): every point runs "
                     "at each, and summary.md gets error against cost per budget and the Pareto "
                     "front");
+    cmd->add_option("--oracle", o->oracle,
+                    "self (the methods' own coarse capture, fast: for tuning) or reference (the "
+                    "full scene at 64 x 64 on every --reference-every-th measured frame, with the "
+                    "error budget and errors on objects) (default self)");
+    cmd->add_option("--reference-every", o->referenceEvery,
+                    "with --oracle reference: a reference on every K-th measured frame "
+                    "(default 6)");
     cmd->add_option("--jobs", o->jobs, "runs side by side (default: the number of cores)");
     cmd->add_option("--out", o->out, "output folder (default out/bench)");
     cmd->add_option("--measure-every", o->measureEvery,

@@ -53,8 +53,40 @@ CubeCaptureGl::CubeCaptureGl(RendererScene& scene, int faceSize) : scene_(&scene
     init();
 }
 
-CubeCaptureGl::CubeCaptureGl(const World& world, int faceSize)
-    : ownedScene_(std::make_unique<RendererScene>(world)), scene_(ownedScene_.get()), n_(faceSize) {
+CaptureScene parseCaptureScene(const std::string& text, const std::string& where) {
+    if (text == "coarse") return CaptureScene::Coarse;
+    if (text == "full") return CaptureScene::Full;
+    throw InputError(where, "expected coarse or full, got '" + text + "'");
+}
+
+const char* toString(CaptureScene scene) {
+    return scene == CaptureScene::Full ? "full" : "coarse";
+}
+
+RendererSceneSettings fullCaptureSceneSettings(int faceSize) {
+    RendererSceneSettings s;
+    s.pixelsPerRadian = double(faceSize) / (0.5 * kPi);
+    s.fullMeshMinPixels = 3.0;
+    s.proxyMinPixels = 0.0;
+    s.farMinPixels = 0.25;  // leave out plants smaller than a quarter texel
+    return s;
+}
+
+static std::unique_ptr<RendererScene> ownScene(const World& world, int faceSize,
+                                               CaptureScene kind) {
+    if (kind == CaptureScene::Full) {
+        if (faceSize < 1 || faceSize > 2048)
+            throw InputError("--size", "face size must be in [1, 2048]");
+        return std::make_unique<RendererScene>(world, fullCaptureSceneSettings(faceSize));
+    }
+    return std::make_unique<RendererScene>(world);
+}
+
+CubeCaptureGl::CubeCaptureGl(const World& world, int faceSize, CaptureScene scene)
+    : ownedScene_(ownScene(world, faceSize, scene)),
+      scene_(ownedScene_.get()),
+      n_(faceSize),
+      kind_(scene) {
     init();
 }
 
@@ -92,7 +124,7 @@ CubeCaptureStats CubeCaptureGl::capture(const glm::dvec3& position_m, double tim
     // Static coarse scene, first bounce only: surfaces lit by the main light and the
     // sky/ground hemisphere ambient.
     const FixedAmbient ambient(AmbientMode::Hemisphere, sky_);
-    scene_->buildCapture(position_m, ambient, list_);
+    if (kind_ == CaptureScene::Coarse) scene_->buildCapture(position_m, ambient, list_);
 
     glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
     glBindFramebuffer(GL_FRAMEBUFFER, fbo_.id());
@@ -115,7 +147,9 @@ CubeCaptureStats CubeCaptureGl::capture(const glm::dvec3& position_m, double tim
         glDisable(GL_SCISSOR_TEST);
         fc.viewProj = faceViewProj(f, kCaptureNear_m);
         fc.invViewProj = glm::inverse(fc.viewProj);
-        stats.triangles = drawer_->draw(list_, fc, false, false);
+        // The full scene is culled to each face's frustum, as the main view culls its own.
+        if (kind_ == CaptureScene::Full) scene_->buildView(position_m, fc.viewProj, ambient, list_);
+        stats.triangles = std::max(stats.triangles, drawer_->draw(list_, fc, false, false));
         ++stats.faces;
     }
     // One read-back covering the rendered faces.

@@ -1,5 +1,6 @@
-// ProbeCommand.cpp — `ambience probe`: capture one cube map of the static coarse scene at a
-// point and write it as the vertical-strip EXR of docs/DESIGN.md ("Cube maps").
+// ProbeCommand.cpp — `ambience probe`: capture one cube map at a point, of the static coarse
+// scene the methods capture or of the full scene the reference oracle captures (--scene), and
+// write it as the vertical-strip EXR of docs/DESIGN.md ("Cube maps").
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -31,6 +32,7 @@ struct ProbeOptions {
     std::string out;
     std::string backend = "auto";
     std::string shaders;
+    std::string scene = "coarse";
 };
 
 void runProbe(const ProbeOptions& o) {
@@ -51,6 +53,7 @@ void runProbe(const ProbeOptions& o) {
         throw InputError("--height", "height above the ground must be in [0, 1e5] m");
     }
     if (o.size < 1 || o.size > 2048) throw InputError("--size", "face size must be in [1, 2048]");
+    const CaptureScene scene = parseCaptureScene(o.scene, "--scene");
     WorldSettings ws;
     ws.seed = o.seed;
     if (!o.replay.empty()) ws = readReplay(o.replay).world;
@@ -64,7 +67,7 @@ void runProbe(const ProbeOptions& o) {
 
     const World world(ws);
     auto platform = createOffscreenPlatform(backend, 16, 16);
-    CubeCaptureGl capture(world, o.size);
+    CubeCaptureGl capture(world, o.size, scene);
     const glm::dvec3 probe(x, world.height(x, z) + o.height_m, z);
     CubeCaptureStats stats;
     const std::vector<float> cube = capture.captureAll(probe, o.time_h, &stats);
@@ -75,9 +78,10 @@ void runProbe(const ProbeOptions& o) {
     std::printf("probe at (%.2f, %.2f, %.2f) m, %.2f h: %d x %d x 6 -> %s\n", probe.x, probe.y,
                 probe.z, o.time_h, o.size, o.size, o.out.c_str());
     std::printf(
-        "backend %s (%s); capture scene %zu triangles per face; %.2f ms per face "
+        "backend %s (%s); %s capture scene, %zu triangles per face (most); %.2f ms per face "
         "(%.2f ms in the first call, which builds the scene)\n",
-        toString(platform->backend()), platform->glRenderer().c_str(), stats.triangles,
+        toString(platform->backend()), platform->glRenderer().c_str(), toString(scene),
+        stats.triangles,
         warm.msPerFace(), stats.msPerFace());
 }
 
@@ -94,6 +98,9 @@ void addProbeCommand(CLI::App& app) {
     cmd->add_option("--replay", o->replay, "take the world settings from this replay")
         ->excludes(seed);
     cmd->add_option("--size", o->size, "face size N in texels (default 16)");
+    cmd->add_option("--scene", o->scene,
+                    "coarse (what the methods capture) or full (what the main view draws: the "
+                    "reference oracle's scene) (default coarse)");
     cmd->add_option("--out", o->out, "output file (vertical strip, N x 6N; .exr for HDR)")
         ->required();
     cmd->add_option("--backend", o->backend, "auto, egl or osmesa (default auto)");

@@ -62,6 +62,11 @@ struct RunOptions {
     bool noFrames = false;
     int measureEvery = 0;
     std::string oracle;
+    std::string oracleKind = "self";
+    std::string reference;
+    ReferenceSettings referenceSettings;
+    bool referenceOn = false;
+    bool noIdealVolume = false;
     int loops = 1;
 };
 
@@ -188,6 +193,18 @@ void runReplay(RunOptions o) {
     if (o.measureEvery < 0) throw InputError("--measure-every", "must be >= 0");
     if (!o.oracle.empty() && o.measureEvery == 0)
         throw InputError("--oracle", "needs --measure-every K");
+    const OracleKind oracleKind = parseOracleKind(o.oracleKind, "--oracle-kind");
+    o.referenceOn = oracleKind == OracleKind::Reference || !o.reference.empty();
+    if (o.referenceOn && o.measureEvery == 0)
+        throw InputError(o.reference.empty() ? "--oracle-kind" : "--reference",
+                         "needs --measure-every K");
+    o.referenceSettings.idealVolume = !o.noIdealVolume;
+    if (o.referenceSettings.every < 1 || o.referenceSettings.every > 1000000)
+        throw InputError("--reference-every", "expected 1 to 1000000");
+    if (o.referenceSettings.faceSize < 1 || o.referenceSettings.faceSize > 256)
+        throw InputError("--reference-size", "expected 1 to 256");
+    if (o.referenceSettings.objectTrees < 0 || o.referenceSettings.objectTrees > 64)
+        throw InputError("--reference-trees", "expected 0 to 64");
     if (o.noFrames) {
         if (!o.video.empty()) throw InputError("--video", "--no-frames draws no main view");
         o.frames = "none";
@@ -227,6 +244,10 @@ void runReplay(RunOptions o) {
         files.output("--video", o.video);
         files.output("--save-anchors", o.saveAnchors);
         files.output("--oracle", o.oracle);
+        files.output("--reference", o.reference);
+        if (o.referenceOn)
+            files.output("--report (reference.csv)",
+                         (fs::path(o.report).parent_path() / "reference.csv").string());
         files.check();
     }
 
@@ -261,6 +282,19 @@ void runReplay(RunOptions o) {
         meter = std::make_unique<ErrorMeter>(stages->cubeCapture(), stages->environment(),
                                              measureSettings);
         if (!o.oracle.empty() && fs::exists(o.oracle)) meter->loadOracle(o.oracle, oracleSignature);
+    }
+    // The reference oracle: the full scene at 64 x 64 (lighting/ReferenceOracle.h).
+    std::unique_ptr<CubeCaptureGl> referenceCapture;
+    const ReferenceSettings& ref = o.referenceSettings;
+    const std::string referenceSignature =
+        oracleSignature + " reference: face=" + std::to_string(ref.faceSize) +
+        " scene=full rule=" + std::to_string(ref.legendreNodes) +
+        " every=" + std::to_string(ref.every) + " trees=" + std::to_string(ref.objectTrees);
+    if (meter && o.referenceOn) {
+        referenceCapture = std::make_unique<CubeCaptureGl>(world, ref.faceSize, CaptureScene::Full);
+        meter->attachReference(*referenceCapture, ref, oracleKind == OracleKind::Reference);
+        if (!o.reference.empty() && fs::exists(o.reference))
+            meter->loadReference(o.reference, referenceSignature);
     }
     std::vector<double> standInX, standInZ;
     std::vector<ShRgb> standInSh;
@@ -385,6 +419,11 @@ void runReplay(RunOptions o) {
         writeMeasureCsv(*meter, (fs::path(o.report).parent_path() / "measure.csv").string());
         if (!o.oracle.empty() && meter->oracleCaptures() > 0)
             meter->saveOracle(o.oracle, oracleSignature);
+        if (meter->hasReference()) {
+            writeReferenceCsv(*meter, (fs::path(o.report).parent_path() / "reference.csv").string());
+            if (!o.reference.empty() && meter->referenceCaptures() > 0)
+                meter->saveReference(o.reference, referenceSignature);
+        }
     }
 
     // (4) report
@@ -398,10 +437,21 @@ void runReplay(RunOptions o) {
     if (meter) {
         const Summary e = summarize(meter->errors()), p = summarize(meter->pops());
         std::printf(
-            "error vs oracle: mean %.4f, p95 %.4f, max %.4f over %zu witnesses; "
+            "error vs %s oracle: mean %.4f, p95 %.4f, max %.4f over %zu witnesses; "
             "pop p99 %.5f, max %.5f (oracle %.1f s, %lld captures, %lld from cache)\n",
-            e.mean, e.p95, e.max, e.count, p.p99, p.max, meter->oracleSeconds(),
-            (long long)meter->oracleCaptures(), (long long)meter->oracleCacheHits());
+            toString(meter->oracleKind()), e.mean, e.p95, e.max, e.count, p.p99, p.max,
+            meter->oracleSeconds(), (long long)meter->oracleCaptures(),
+            (long long)meter->oracleCacheHits());
+        if (meter->hasReference()) {
+            const BudgetSummary b = summarizeBudget(meter->terrainBudget());
+            std::printf(
+                "error budget (RMS over %zu terrain witnesses against the reference): total "
+                "%.4f = truncation %.4f, capture %.4f, spacing %.4f, schedule %.4f (squares add "
+                "to %.2f of the total's; reference %.1f s, %lld captures, %lld from cache)\n",
+                b.count, b.total, b.truncation, b.capture, b.spacing, b.schedule, b.closure(),
+                meter->referenceSeconds(), (long long)meter->referenceCaptures(),
+                (long long)meter->referenceCacheHits());
+        }
     }
     if (volume) {
         const AmbienceStatistics& st = volume->statistics();
@@ -471,6 +521,23 @@ void addRunCommand(CLI::App& app) {
                     "measure the error against the oracle every K-th frame (default 0: off)");
     cmd->add_option("--oracle", o->oracle,
                     "oracle cache (JSON): read if it exists and matches, else written");
+    cmd->add_option("--oracle-kind", o->oracleKind,
+                    "what the headline error is measured against: self (the methods' own 16 x 16 "
+                    "coarse capture at the point, fast) or reference (the full scene at 64 x 64, "
+                    "irradiance straight from the cube map; lighting/ReferenceOracle.h) "
+                    "(default self)");
+    cmd->add_option("--reference", o->reference,
+                    "reference cache (JSON): read if it exists and matches, else written; also "
+                    "turns on the reference and the error budget with --oracle-kind self");
+    cmd->add_option("--reference-every", o->referenceSettings.every,
+                    "take the reference on every K-th measured frame (default 3)");
+    cmd->add_option("--reference-size", o->referenceSettings.faceSize,
+                    "reference face size N (default 64)");
+    cmd->add_option("--reference-trees", o->referenceSettings.objectTrees,
+                    "trees per reference frame with a base and a crown witness (default 2)");
+    cmd->add_flag("--no-ideal-volume", o->noIdealVolume,
+                  "error budget without the ideal volume (no extra captures; spacing and "
+                  "schedule reported as one term)");
     cmd->add_option("--config,--ambience-config", o->ambienceConfig,
                     "JSON file of ambience volume settings (AmbienceVolumeSettings fields, "
                     "lighting/AmbienceVolume.h)");

@@ -442,9 +442,39 @@ std::string measurementJson(const ErrorMeter& meter) {
            {"oracle_s", meter.oracleSeconds()},
            {"oracleCaptures", meter.oracleCaptures()},
            {"oracleCacheHits", meter.oracleCacheHits()},
+           {"oracle", toString(meter.oracleKind())},
            {"metric",
             "relative L2 distance of irradiance over the sphere of normals, luminance-weighted "
             "channels (lighting/Metrics.h)"}};
+    if (meter.hasReference()) {
+        const auto budgetJson = [&summaryJson](const std::vector<BudgetTerms>& terms) {
+            const BudgetSummary b = summarizeBudget(terms);
+            const auto num = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
+            std::vector<double> totals, selfs;
+            for (const BudgetTerms& t : terms) totals.push_back(t.total), selfs.push_back(t.self);
+            return json{{"count", b.count},           {"rmsTotal", num(b.total)},
+                        {"truncation", num(b.truncation)}, {"capture", num(b.capture)},
+                        {"spacing", num(b.spacing)},    {"schedule", num(b.schedule)},
+                        {"closure", num(b.closure())},  {"error", summaryJson(summarize(totals))},
+                        {"selfError", summaryJson(summarize(selfs))}};
+        };
+        const ReferenceSettings& rs = meter.referenceSettings();
+        json rings = json::array();
+        for (int r = 0; r < ms.rings(); ++r) rings.push_back(budgetJson(meter.terrainBudget(r)));
+        json objects = json::object();
+        for (int k = 0; k < kObjectKinds; ++k)
+            objects[toString(ObjectKind(k))] = budgetJson(meter.objectBudget(ObjectKind(k)));
+        j["reference"] = {{"faceSize", rs.faceSize},
+                          {"scene", "full"},
+                          {"every", rs.every},
+                          {"ruleDirections", json(sphereProductRule(rs.legendreNodes).directions.size())},
+                          {"budget", budgetJson(meter.terrainBudget())},
+                          {"budgetByRing", rings},
+                          {"objects", objects},
+                          {"reference_s", meter.referenceSeconds()},
+                          {"referenceCaptures", meter.referenceCaptures()},
+                          {"referenceCacheHits", meter.referenceCacheHits()}};
+    }
     return j.dump();
 }
 
@@ -467,6 +497,22 @@ void writeMeasureCsv(const ErrorMeter& meter, const std::string& path) {
         out << "\n";
     }
     if (!out) throw InputError(path, "cannot write the measurement CSV");
+}
+
+void writeReferenceCsv(const ErrorMeter& meter, const std::string& path) {
+    std::ofstream out(path);
+    if (!out) throw InputError(path, "cannot write the reference CSV");
+    out << "frame,witness,x,y,z,total,truncation,capture,spacing,schedule,self\n";
+    out.precision(9);
+    for (const ReferenceWitness& r : meter.referenceWitnesses()) {
+        out << r.frame << ','
+            << (r.ring >= 0 ? "ring_" + std::to_string(r.ring) : std::string(toString(r.object)))
+            << ',' << r.position_m.x << ',' << r.position_m.y << ',' << r.position_m.z << ','
+            << r.terms.total << ',' << r.terms.truncation << ',' << r.terms.capture << ',';
+        if (std::isfinite(r.terms.spacing)) out << r.terms.spacing;
+        out << ',' << r.terms.schedule << ',' << r.terms.self << "\n";
+    }
+    if (!out) throw InputError(path, "cannot write the reference CSV");
 }
 
 }  // namespace amb

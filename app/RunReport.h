@@ -75,6 +75,9 @@ std::string measurementJson(const ErrorMeter& meter);
 // One row per measured frame: frame, time_s, time_of_day_h, speed_mps, error_mean, error_max,
 // error_ring0 .. error_ring<R-1>.
 void writeMeasureCsv(const ErrorMeter& meter, const std::string& path);
+// One row per reference witness: frame, witness (ring_<r> or the object kind), x, y, z, the
+// budget terms (total, truncation, capture, spacing, schedule) and the self-oracle's error.
+void writeReferenceCsv(const ErrorMeter& meter, const std::string& path);
 
 struct RunReport {
     std::string replay, backend, glVersion, glRenderer, ambient;

@@ -6,6 +6,8 @@
 // measured is what is drawn.
 #pragma once
 
+#include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -30,6 +32,17 @@ struct MethodStatistics {
     // Wall time of this frame's stages [s] (project = SH projection of captured faces).
     double predict_s = 0.0, capture_s = 0.0, project_s = 0.0, store_s = 0.0;
 };
+
+// The lattice points a method's interpolation reads at a ground point, with their weights: the
+// "ideal volume" of the error budget (lighting/ReferenceOracle.h, term c) puts a fresh capture
+// at each and interpolates those. count 0: the method has no lattice there (a constant, a probe
+// per object, a nearest-anchor lookup).
+struct IdealSupport {
+    int count = 0;
+    std::array<double, 4> x_m{}, z_m{}, weight{};
+};
+// The four corners of the cell of the lattice {(i s, k s)} that holds (x, z), bilinear weights.
+IdealSupport bilinearSupport(double x_m, double z_m, double spacing_m);
 
 class AmbienceMethod {
   public:
@@ -69,6 +82,25 @@ class AmbienceMethod {
     virtual bool wantsLookups() const { return false; }
 
     virtual MethodStatistics methodStatistics() const = 0;
+    // Where the interpolation at (x, z) reads its probes now (see IdealSupport); none by default.
+    virtual IdealSupport idealSupport(double x_m, double z_m) const {
+        (void)x_m, (void)z_m;
+        return {};
+    }
 };
+
+inline IdealSupport bilinearSupport(double x_m, double z_m, double spacing_m) {
+    IdealSupport s;
+    const double i0 = std::floor(x_m / spacing_m), k0 = std::floor(z_m / spacing_m);
+    const double fx = x_m / spacing_m - i0, fz = z_m / spacing_m - k0;
+    s.count = 4;
+    for (int c = 0; c < 4; ++c) {
+        const int di = c & 1, dk = c >> 1;
+        s.x_m[c] = (i0 + di) * spacing_m;
+        s.z_m[c] = (k0 + dk) * spacing_m;
+        s.weight[c] = (di ? fx : 1.0 - fx) * (dk ? fz : 1.0 - fz);
+    }
+    return s;
+}
 
 }  // namespace amb

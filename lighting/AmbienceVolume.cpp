@@ -306,4 +306,10 @@ MethodStatistics AmbienceVolume::methodStatistics() const {
     return m;
 }
 
+IdealSupport AmbienceVolume::idealSupport(double x_m, double z_m) const {
+    InterpolationDetail detail;
+    store_.interpolate(x_m, z_m, &detail);
+    return bilinearSupport(x_m, z_m, store_.spacing_m(std::max(0, detail.level)));
+}
+
 }  // namespace amb

@@ -115,6 +115,9 @@ class AmbienceVolume final : public AmbienceMethod {
     std::string methodName() const override { return "volume"; }
     // Interpolated SH at ground point (x, z); finite everywhere.
     ShRgb shAt(double x_m, double z_m) const override { return store_.interpolate(x_m, z_m); }
+    // The corners of the cell of the level the interpolation reads at (x, z) (the coarsest
+    // level where it falls back to the sky).
+    IdealSupport idealSupport(double x_m, double z_m) const override;
     // The same at many points (terrain-patch corners, object instances), in parallel.
     void shAt(std::size_t count, const double* x_m, const double* z_m,
               ShRgb* out) const override {

@@ -463,6 +463,10 @@ ShRgb ScrollingGridMethod::shAt(double x_m, double z_m) const {
     return out;
 }
 
+IdealSupport ScrollingGridMethod::idealSupport(double x_m, double z_m) const {
+    return bilinearSupport(x_m, z_m, spacing_m_);
+}
+
 std::size_t ScrollingGridMethod::bytesHeld() const {
     return slots_.capacity() * sizeof(Slot);
 }
@@ -551,6 +555,10 @@ ShRgb ReactiveCacheMethod::shAt(double x_m, double z_m) const {
     ShRgb out;
     if (!bilinear(x_m, z_m, spacing_m_, lookup, out)) return fallback();
     return out;
+}
+
+IdealSupport ReactiveCacheMethod::idealSupport(double x_m, double z_m) const {
+    return bilinearSupport(x_m, z_m, spacing_m_);
 }
 
 std::size_t ReactiveCacheMethod::bytesHeld() const {

@@ -222,6 +222,7 @@ class ScrollingGridMethod final : public CapturingBaseline {
     std::string methodName() const override { return "grid"; }
     ShRgb shAt(double x_m, double z_m) const override;
     using AmbienceMethod::shAt;
+    IdealSupport idealSupport(double x_m, double z_m) const override;
 
     // Lowest cell of the grid (the grid holds cells origin .. origin + G - 1 on each axis).
     CellKey gridOrigin() const { return origin_; }
@@ -272,6 +273,7 @@ class ReactiveCacheMethod final : public CapturingBaseline {
     std::string methodName() const override { return "reactive"; }
     ShRgb shAt(double x_m, double z_m) const override;
     using AmbienceMethod::shAt;
+    IdealSupport idealSupport(double x_m, double z_m) const override;
     void noteLookups(std::size_t count, const double* x_m, const double* z_m) override;
     bool wantsLookups() const override { return true; }
 

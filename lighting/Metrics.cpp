@@ -133,12 +133,31 @@ ShRgb oracleSh(CubeCapture& capture, const ProbeEnvironment& environment,
     return toFloat(p.sh);
 }
 
+ShRgb oracleShAt(CubeCapture& capture, const MeasureSettings& settings,
+                 const glm::dvec3& position_m, double timeOfDay_h) {
+    const std::vector<float> cube = capture.captureAll(position_m, timeOfDay_h);
+    CubeMapProjector::Options options;
+    options.sunThreshold = settings.sunThreshold;
+    return toFloat(projectCubeMap(capture.faceSize(), cube, options).sh);
+}
+
+OracleKind parseOracleKind(const std::string& text, const std::string& where) {
+    if (text == "self") return OracleKind::Self;
+    if (text == "reference") return OracleKind::Reference;
+    throw InputError(where, "expected self or reference, got '" + text + "'");
+}
+
+const char* toString(OracleKind kind) {
+    return kind == OracleKind::Reference ? "reference" : "self";
+}
+
 // ---- Error meter -----------------------------------------------------------------------------
 
 bool ErrorMeter::Key::operator<(const Key& o) const {
     if (frame != o.frame) return frame < o.frame;
     if (x != o.x) return x < o.x;
-    return z < o.z;
+    if (z != o.z) return z < o.z;
+    return y < o.y;
 }
 
 ErrorMeter::ErrorMeter(CubeCapture& capture, const ProbeEnvironment& environment,
@@ -163,6 +182,112 @@ ShRgb ErrorMeter::oracle(int frameIndex, double x_m, double z_m, double timeOfDa
     ++oracleCaptures_;
     oracleCache_.emplace(key, sh);
     return sh;
+}
+
+ShRgb ErrorMeter::oracleAt(int frameIndex, const glm::dvec3& position_m, double timeOfDay_h) {
+    const Key key{frameIndex, position_m.x, position_m.z, position_m.y};
+    const auto it = oracleCache_.find(key);
+    if (it != oracleCache_.end()) {
+        ++oracleHits_;
+        return it->second;
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    const ShRgb sh = oracleShAt(capture_, settings_, position_m, timeOfDay_h);
+    oracle_s_ += secondsSince(t0);
+    ++oracleCaptures_;
+    oracleCache_.emplace(key, sh);
+    return sh;
+}
+
+void ErrorMeter::attachReference(CubeCapture& reference, const ReferenceSettings& settings,
+                                 bool headline) {
+    if (settings.faceSize < 1 || settings.faceSize > 2048)
+        throw InputError("--reference-size", "face size must be in [1, 2048]");
+    if (settings.every < 1) throw InputError("--reference-every", "must be >= 1");
+    if (settings.legendreNodes < 3 || settings.legendreNodes > 8)
+        throw InputError("reference rule", "Legendre nodes must be in [3, 8]");
+    if (settings.objectTrees < 0 || !(settings.objectNear_m >= 0.0) ||
+        !(settings.objectFar_m >= settings.objectNear_m) || !(settings.carHeight_m >= 0.0))
+        throw InputError("reference objects", "need trees >= 0 and 0 <= near <= far");
+    reference_ = &reference;
+    referenceSettings_ = settings;
+    rule_ = sphereProductRule(settings.legendreNodes);
+    headline_ = headline ? OracleKind::Reference : OracleKind::Self;
+}
+
+const ReferenceSample& ErrorMeter::reference(int frameIndex, const glm::dvec3& position_m,
+                                             double timeOfDay_h) {
+    const Key key{frameIndex, position_m.x, position_m.z, position_m.y};
+    const auto it = referenceCache_.find(key);
+    if (it != referenceCache_.end()) {
+        ++referenceHits_;
+        return it->second;
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::vector<float> cube = reference_->captureAll(position_m, timeOfDay_h);
+    ReferenceSample sample =
+        referenceSample(reference_->faceSize(), cube, settings_.sunThreshold, rule_);
+    reference_s_ += secondsSince(t0);
+    ++referenceCaptures_;
+    return referenceCache_.emplace(key, std::move(sample)).first->second;
+}
+
+void ErrorMeter::referenceFrame(int index, double timeOfDay_h, const glm::dvec3& camera_m,
+                                const std::vector<Witness>& witnesses,
+                                const std::vector<ShRgb>& oracles, const AmbienceMethod& method,
+                                int measuredIndex) {
+    // The ideal volume at a ground point: fresh coarse captures (placed as the volume places
+    // its probes) at the lattice points the method reads there, with its weights.
+    const auto ideal = [&](double x, double z) -> std::optional<ShRgb> {
+        if (!referenceSettings_.idealVolume) return std::nullopt;
+        const IdealSupport support = method.idealSupport(x, z);
+        if (support.count == 0) return std::nullopt;
+        ShRgb sum;
+        for (int c = 0; c < support.count; ++c) {
+            if (!(support.weight[c] > 0.0)) continue;
+            sum += oracle(index, support.x_m[c], support.z_m[c], timeOfDay_h) *
+                   float(support.weight[c]);
+        }
+        return sum;
+    };
+    for (std::size_t i = 0; i < witnesses.size(); ++i) {
+        const Witness& w = witnesses[i];
+        ReferenceWitness r;
+        r.frame = index;
+        r.ring = w.ring;
+        r.position_m = environment_.placeProbe(w.x_m, w.z_m, settings_.maxAside_m);
+        const ReferenceSample& ref = reference(index, r.position_m, timeOfDay_h);
+        r.terms = budgetTerms(ref, oracles[i], ideal(w.x_m, w.z_m), appliedAt(method, w), rule_);
+        referenceWitnesses_.push_back(r);
+    }
+    const ReferenceSettings& rs = referenceSettings_;
+    for (const ObjectWitness& o :
+         environment_.objectWitnesses(camera_m.x, camera_m.z, rs.objectTrees, rs.objectNear_m,
+                                      rs.objectFar_m, rs.carHeight_m, measuredIndex)) {
+        ReferenceWitness r;
+        r.frame = index;
+        r.object = o.kind;
+        r.position_m = o.position_m;
+        const ReferenceSample& ref = reference(index, o.position_m, timeOfDay_h);
+        const ShRgb coarse = oracleAt(index, o.position_m, timeOfDay_h);
+        r.terms = budgetTerms(ref, coarse, ideal(o.groundX_m, o.groundZ_m),
+                              method.shAt(o.groundX_m, o.groundZ_m), rule_);
+        referenceWitnesses_.push_back(r);
+    }
+}
+
+std::vector<BudgetTerms> ErrorMeter::terrainBudget(int ring) const {
+    std::vector<BudgetTerms> out;
+    for (const ReferenceWitness& r : referenceWitnesses_)
+        if (r.ring >= 0 && (ring < 0 || r.ring == ring)) out.push_back(r.terms);
+    return out;
+}
+
+std::vector<BudgetTerms> ErrorMeter::objectBudget(ObjectKind kind) const {
+    std::vector<BudgetTerms> out;
+    for (const ReferenceWitness& r : referenceWitnesses_)
+        if (r.ring < 0 && r.object == kind) out.push_back(r.terms);
+    return out;
 }
 
 // What the draw applies at a witness: the object path at the camera's ground point (ring 0: the
@@ -206,13 +331,16 @@ void ErrorMeter::frame(int index, double time_s, double timeOfDay_h, const glm::
     mf.time_s = time_s;
     mf.timeOfDay_h = timeOfDay_h;
     mf.speed_mps = speed_mps;
-    mf.witnesses = witnessPoints(settings_, camera_m.x, camera_m.z, measuredCount_++);
+    const int measuredIndex = measuredCount_++;
+    mf.witnesses = witnessPoints(settings_, camera_m.x, camera_m.z, measuredIndex);
     std::vector<ShRgb> oracles;
     for (const Witness& w : mf.witnesses) {
         const ShRgb o = oracle(index, w.x_m, w.z_m, timeOfDay_h);
         oracles.push_back(o);
         mf.errors.push_back(relativeIrradianceError(appliedAt(method, w), o));
     }
+    if (reference_ && measuredIndex % referenceSettings_.every == 0)
+        referenceFrame(index, timeOfDay_h, camera_m, mf.witnesses, oracles, method, measuredIndex);
     // New pop points: the camera's ground point and the first ring-1 witnesses.
     popPoints_.clear();
     popOracleStart_.clear();
@@ -268,12 +396,20 @@ double ErrorMeter::MeasuredFrame::ringMean(int ring) const {
 
 std::vector<double> ErrorMeter::errors() const {
     std::vector<double> out;
+    if (headline_ == OracleKind::Reference) {
+        for (const BudgetTerms& t : terrainBudget()) out.push_back(t.total);
+        return out;
+    }
     for (const auto& m : measured_) out.insert(out.end(), m.errors.begin(), m.errors.end());
     return out;
 }
 
 std::vector<double> ErrorMeter::ringErrors(int ring) const {
     std::vector<double> out;
+    if (headline_ == OracleKind::Reference) {
+        for (const BudgetTerms& t : terrainBudget(ring)) out.push_back(t.total);
+        return out;
+    }
     for (const auto& m : measured_)
         for (std::size_t i = 0; i < m.witnesses.size(); ++i)
             if (m.witnesses[i].ring == ring) out.push_back(m.errors[i]);
@@ -292,7 +428,9 @@ void ErrorMeter::saveOracle(const std::string& path, const std::string& signatur
         nlohmann::json coefficients = nlohmann::json::array();
         for (int k = 0; k < kShCoefficients; ++k)
             for (int c = 0; c < 3; ++c) coefficients.push_back(sh.c[k][c]);
-        entries.push_back({{"frame", key.frame}, {"x", key.x}, {"z", key.z}, {"sh", coefficients}});
+        nlohmann::json entry{{"frame", key.frame}, {"x", key.x}, {"z", key.z}, {"sh", coefficients}};
+        if (key.y != kPlaced) entry["y"] = key.y;
+        entries.push_back(std::move(entry));
     }
     j["entries"] = std::move(entries);
     const std::string tmp = path + ".part";
@@ -403,11 +541,99 @@ void ErrorMeter::parseOracle(const nlohmann::json& j, const std::string& where,
     for (std::size_t e = 0; e < entries.size(); ++e) {
         const std::string at = where + ": entries[" + std::to_string(e) + "]";
         const auto [frame, xz] = oracleKey(entries[e], at);
-        const Key key{frame, xz[0], xz[1]};
+        Key key{frame, xz[0], xz[1]};
+        if (entries[e].contains("y")) key.y = oracleNumber(entries[e]["y"], at, "y");
         if (!loaded.emplace(key, oracleCoefficients(entries[e], at)).second)
-            throw InputError(at, "repeats an earlier entry's frame, x and z");
+            throw InputError(at, "repeats an earlier entry's frame, x, y and z");
     }
     oracleCache_ = std::move(loaded);
+}
+
+// ---- Reference cache -------------------------------------------------------------------------
+
+void ErrorMeter::saveReference(const std::string& path, const std::string& signature) const {
+    nlohmann::json j;
+    j["format"] = "ambience-reference";
+    j["version"] = 1;
+    j["signature"] = signature;
+    nlohmann::json entries = nlohmann::json::array();
+    for (const auto& [key, sample] : referenceCache_) {
+        nlohmann::json coefficients = nlohmann::json::array(), e = nlohmann::json::array();
+        for (int k = 0; k < kShCoefficients; ++k)
+            for (int c = 0; c < 3; ++c) coefficients.push_back(sample.sh.c[k][c]);
+        for (const glm::vec3& v : sample.irradiance)
+            for (int c = 0; c < 3; ++c) e.push_back(v[c]);
+        entries.push_back({{"frame", key.frame},
+                           {"x", key.x},
+                           {"y", key.y},
+                           {"z", key.z},
+                           {"sh", coefficients},
+                           {"e", e}});
+    }
+    j["entries"] = std::move(entries);
+    const std::string tmp = path + ".part";
+    {
+        std::ofstream out(tmp);
+        if (!out) throw InputError(path, "cannot write the reference file");
+        out << j.dump() << "\n";
+        if (!out) throw InputError(path, "cannot write the reference file");
+    }
+    if (std::rename(tmp.c_str(), path.c_str()) != 0)
+        throw InputError(path, "cannot write the reference file");
+}
+
+void ErrorMeter::loadReference(const std::string& path, const std::string& signature) {
+    loadReferenceText(readTextFile(path, "reference file", kMaxOracleFileBytes), path, signature);
+}
+
+void ErrorMeter::loadReferenceText(const std::string& text, const std::string& where,
+                                   const std::string& signature) {
+    if (!reference_) throw InputError(where, "no reference oracle attached");
+    nlohmann::json j;
+    try {
+        j = nlohmann::json::parse(text);
+    } catch (const nlohmann::json::exception& e) {
+        throw InputError(where, std::string("malformed reference file: ") + e.what());
+    }
+    if (!j.is_object() || !j.contains("format") || j["format"] != "ambience-reference" ||
+        !j.contains("version") || j["version"] != 1)
+        throw InputError(where, "not an ambience reference file (format/version)");
+    if (!j.contains("signature") || !j["signature"].is_string())
+        throw InputError(where, "'signature' must be a string");
+    const std::string fileSignature = j["signature"].get<std::string>();
+    if (fileSignature != signature) {
+        throw InputError(where, "reference made for other settings: '" + fileSignature +
+                                    "', this run is '" + signature + "'");
+    }
+    const nlohmann::json& entries = requireField(j, "entries", where);
+    if (!entries.is_array()) throw InputError(where, "'entries' must be an array");
+    std::map<Key, ReferenceSample> loaded;
+    const std::size_t values = 3 * rule_.directions.size();
+    for (std::size_t n = 0; n < entries.size(); ++n) {
+        const std::string at = where + ": entries[" + std::to_string(n) + "]";
+        const auto [frame, xz] = oracleKey(entries[n], at);
+        const Key key{frame, xz[0], xz[1], oracleNumber(requireField(entries[n], "y", at), at, "y")};
+        ReferenceSample sample;
+        sample.sh = oracleCoefficients(entries[n], at);
+        const nlohmann::json& e = requireField(entries[n], "e", at);
+        if (!e.is_array() || e.size() != values)
+            throw InputError(at, "e: expected " + std::to_string(values) + " numbers");
+        for (std::size_t k = 0; k < values; k += 3) {
+            glm::vec3 v;
+            for (int c = 0; c < 3; ++c) {
+                const std::string field = "e[" + std::to_string(k + c) + "]";
+                const double x = oracleNumber(e[k + c], at, field);
+                if (!(std::fabs(x) <= kMaxOracleCoefficient))
+                    throw InputError(at, field + ": beyond +-" +
+                                             std::to_string(kMaxOracleCoefficient));
+                v[c] = float(x);
+            }
+            sample.irradiance.push_back(v);
+        }
+        if (!loaded.emplace(key, std::move(sample)).second)
+            throw InputError(at, "repeats an earlier entry's frame, x, y and z");
+    }
+    referenceCache_ = std::move(loaded);
 }
 
 }  // namespace amb

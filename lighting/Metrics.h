@@ -52,6 +52,8 @@
 #include <glm/vec3.hpp>
 #include <nlohmann/json_fwd.hpp>
 
+#include "lighting/ProbeEnvironment.h"
+#include "lighting/ReferenceOracle.h"
 #include "lighting/SH.h"
 #include "world/Conventions.h"
 
@@ -59,7 +61,6 @@ namespace amb {
 
 class AmbienceMethod;
 class CubeCapture;
-class ProbeEnvironment;
 
 // ---- Irradiance distance ---------------------------------------------------------------------
 // (luminance weights w_c: kLuminanceWeights, world/Conventions.h)
@@ -114,6 +115,24 @@ ShRgb appliedAt(const AmbienceMethod& method, const Witness& w);
 // The oracle SH at ground point (x, z) at `timeOfDay_h` (see above).
 ShRgb oracleSh(CubeCapture& capture, const ProbeEnvironment& environment,
                const MeasureSettings& settings, double x_m, double z_m, double timeOfDay_h);
+// The same for a capture at `position_m` itself (an object witness: not moved).
+ShRgb oracleShAt(CubeCapture& capture, const MeasureSettings& settings,
+                 const glm::dvec3& position_m, double timeOfDay_h);
+
+// Which oracle the headline error (errors(), ringErrors()) is taken against.
+enum class OracleKind { Self, Reference };
+OracleKind parseOracleKind(const std::string& text, const std::string& where);
+const char* toString(OracleKind kind);
+
+// One witness of a reference frame (lighting/ReferenceOracle.h): a terrain corner (ring >= 0,
+// as the measured frame's witnesses) or an object (ring -1, `object`).
+struct ReferenceWitness {
+    int frame = 0;
+    int ring = -1;
+    ObjectKind object = ObjectKind::Car;
+    glm::dvec3 position_m{0.0};  // where the reference and the coarse capture look from
+    BudgetTerms terms;
+};
 
 // ---- Error meter -----------------------------------------------------------------------------
 // Drives the measurement along a run: call frame() once per frame after the method's store
@@ -136,8 +155,34 @@ class ErrorMeter {
         double ringMean(int ring) const;  // NaN when the ring has no witness
     };
     const std::vector<MeasuredFrame>& measured() const { return measured_; }
-    std::vector<double> errors() const;  // every witness of every measured frame
+    // The headline error: every terrain witness of every measured frame against the oracle of
+    // oracleKind() (with the reference, the reference frames' witnesses: their `total`).
+    std::vector<double> errors() const;
     std::vector<double> ringErrors(int ring) const;
+
+    // The reference oracle (lighting/ReferenceOracle.h) on every settings.every-th measured
+    // frame, captured with `reference` (a full-scene capture; it must outlive the meter). With
+    // `headline` the headline error is taken against it. Each reference frame adds the terrain
+    // witnesses and the object witnesses of the environment, with their budget terms.
+    void attachReference(CubeCapture& reference, const ReferenceSettings& settings,
+                         bool headline);
+    OracleKind oracleKind() const { return headline_; }
+    bool hasReference() const { return reference_ != nullptr; }
+    const ReferenceSettings& referenceSettings() const { return referenceSettings_; }
+    const std::vector<ReferenceWitness>& referenceWitnesses() const { return referenceWitnesses_; }
+    // Budget terms of the terrain witnesses (ring >= 0, or one ring), or of one object kind.
+    std::vector<BudgetTerms> terrainBudget(int ring = -1) const;
+    std::vector<BudgetTerms> objectBudget(ObjectKind kind) const;
+    double referenceSeconds() const { return reference_s_; }
+    std::int64_t referenceCaptures() const { return referenceCaptures_; }
+    std::int64_t referenceCacheHits() const { return referenceHits_; }
+    // Reference cache, as the oracle cache but keyed by (frame, x, y, z):
+    //   {"format": "ambience-reference", "version": 1, "signature": string,
+    //    "entries": [{"frame", "x", "y", "z", "sh": [27 numbers], "e": [3 x rule size]}, ...]}
+    void loadReference(const std::string& path, const std::string& signature);
+    void loadReferenceText(const std::string& text, const std::string& where,
+                           const std::string& signature);
+    void saveReference(const std::string& path, const std::string& signature) const;
     const std::vector<double>& pops() const { return pops_; }
     // Pop along the camera's ground point, one per frame from the third on (see above).
     const std::vector<double>& movingPops() const { return movingPops_; }
@@ -184,13 +229,31 @@ class ErrorMeter {
     ShRgb movingPrevious_[2];
     double movingX_m_ = 0.0, movingZ_m_ = 0.0;
     int movingSeen_ = 0;
-    // Oracle values by (frame, x, z) (the cache).
+    ShRgb oracleAt(int frameIndex, const glm::dvec3& position_m, double timeOfDay_h);
+    void referenceFrame(int index, double timeOfDay_h, const glm::dvec3& camera_m,
+                        const std::vector<Witness>& witnesses, const std::vector<ShRgb>& oracles,
+                        const AmbienceMethod& method, int measuredIndex);
+    const ReferenceSample& reference(int frameIndex, const glm::dvec3& position_m,
+                                     double timeOfDay_h);
+    // Oracle values by (frame, x, z) (the cache); y is kPlaced for a probe placed as the
+    // volume's, or the explicit height of an object witness.
+    static constexpr double kPlaced = -1e300;
     struct Key {
         int frame;
         double x, z;
+        double y = kPlaced;
         bool operator<(const Key& o) const;
     };
     std::map<Key, ShRgb> oracleCache_;
+    // The reference.
+    CubeCapture* reference_ = nullptr;
+    ReferenceSettings referenceSettings_;
+    SphereRule rule_;
+    OracleKind headline_ = OracleKind::Self;
+    std::map<Key, ReferenceSample> referenceCache_;
+    std::vector<ReferenceWitness> referenceWitnesses_;
+    double reference_s_ = 0.0;
+    std::int64_t referenceCaptures_ = 0, referenceHits_ = 0;
     double oracle_s_ = 0.0;
     std::int64_t oracleCaptures_ = 0, oracleHits_ = 0;
     // Pop tracking between measured frames.

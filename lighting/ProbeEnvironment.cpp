@@ -103,4 +103,68 @@ void WorldProbeEnvironment::fallbackCubeMap(double timeOfDay_h, int n,
     evaluateSkyGround(world_.sky(), timeOfDay_h, dirs, omegas, rgb);
 }
 
+const char* toString(ObjectKind kind) {
+    switch (kind) {
+        case ObjectKind::Car:
+            return "car";
+        case ObjectKind::TreeBase:
+            return "tree_base";
+        case ObjectKind::TreeCrown:
+            return "tree_crown";
+    }
+    return "?";
+}
+
+std::vector<ObjectWitness> WorldProbeEnvironment::objectWitnesses(double cameraX_m,
+                                                                  double cameraZ_m, int trees,
+                                                                  double near_m, double far_m,
+                                                                  double carHeight_m,
+                                                                  int measuredIndex) const {
+    std::vector<ObjectWitness> out;
+    ObjectWitness car;
+    car.kind = ObjectKind::Car;
+    car.groundX_m = cameraX_m, car.groundZ_m = cameraZ_m;
+    car.position_m = glm::dvec3(
+        cameraX_m,
+        std::max(world_.height(cameraX_m, cameraZ_m), world_.settings().waterLevel_m) + carHeight_m,
+        cameraZ_m);
+    out.push_back(car);
+    if (trees <= 0) return out;
+    // Trees in the ring, ordered by a hash of their position and the measured frame.
+    std::vector<std::pair<std::uint64_t, Plant>> candidates;
+    for (const Plant& p : world_.vegetation().inDisc(cameraX_m, cameraZ_m, far_m)) {
+        if (p.kind != PlantKind::Conifer && p.kind != PlantKind::Broadleaf) continue;
+        const double d = std::hypot(p.position_m.x - cameraX_m, p.position_m.z - cameraZ_m);
+        if (d < near_m || d > far_m) continue;
+        std::uint64_t h = std::uint64_t(std::int64_t(std::llround(p.position_m.x * 16.0))) *
+                              0x9E3779B97F4A7C15ull ^
+                          std::uint64_t(std::int64_t(std::llround(p.position_m.z * 16.0))) *
+                              0xC2B2AE3D27D4EB4Full ^
+                          std::uint64_t(measuredIndex) * 0x165667B19E3779F9ull;
+        h ^= h >> 29;
+        h *= 0xBF58476D1CE4E5B9ull;
+        h ^= h >> 32;
+        candidates.emplace_back(h, p);
+    }
+    std::sort(candidates.begin(), candidates.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (int t = 0; t < trees && t < int(candidates.size()); ++t) {
+        const Plant& p = candidates[std::size_t(t)].second;
+        glm::dvec3 toward(cameraX_m - p.position_m.x, 0.0, cameraZ_m - p.position_m.z);
+        toward /= std::max(glm::length(toward), 1e-9);
+        const double crown = Vegetation::footprintRadius_m(p.kind) * p.scale;
+        ObjectWitness base;
+        base.kind = ObjectKind::TreeBase;
+        base.groundX_m = p.position_m.x, base.groundZ_m = p.position_m.z;
+        base.position_m = p.position_m + 0.5 * crown * toward + glm::dvec3(0.0, 1.0, 0.0);
+        out.push_back(base);
+        ObjectWitness top = base;
+        top.kind = ObjectKind::TreeCrown;
+        top.position_m = p.position_m + (crown + settings_.clearance_m) * toward +
+                         glm::dvec3(0.0, 0.6 * plantTop_m(p.kind) * p.scale, 0.0);
+        out.push_back(top);
+    }
+    return out;
+}
+
 }  // namespace amb

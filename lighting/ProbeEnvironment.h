@@ -15,6 +15,12 @@
 //   kGroundAlbedo lit by that sky and the sun and moon: L_ground = albedo / pi x
 //   (E_sky(up) + E_sun max(0, sun.y) + E_moon max(0, moon.y)), evaluated by world/SkyGround.h.
 //   Its SH is the "no anchor" ambience: what a probe over open flat ground would see.
+// [SECTION] Object witnesses (lighting/ReferenceOracle.h: error where users look)
+//   The car: carHeight_m above the camera's ground point. Trees: `trees` of those between near_m
+//   and far_m from the camera, chosen by a hash of (tree, measuredIndex) so that every tree in
+//   range is as likely; each gives a base witness (1 m up, half its crown radius out from the
+//   trunk, towards the camera: the lit trunk) and a crown witness (at 60 % of its height, just
+//   outside its crown towards the camera). An object's ambience is read at its ground point.
 #pragma once
 
 #include <memory>
@@ -26,6 +32,16 @@ namespace amb {
 
 class World;
 
+enum class ObjectKind { Car, TreeBase, TreeCrown };
+inline constexpr int kObjectKinds = 3;
+const char* toString(ObjectKind kind);
+
+struct ObjectWitness {
+    ObjectKind kind = ObjectKind::Car;
+    glm::dvec3 position_m{0.0};        // where the reference looks from
+    double groundX_m = 0.0, groundZ_m = 0.0;  // where the draw reads the object's ambience
+};
+
 class ProbeEnvironment {
   public:
     virtual ~ProbeEnvironment() = default;
@@ -36,6 +52,15 @@ class ProbeEnvironment {
     // Fallback radiance as a cube map: 6 n^2 texels x RGB, face-major, row-major
     // (world/Conventions.h).
     virtual void fallbackCubeMap(double timeOfDay_h, int n, std::vector<float>& rgb) const = 0;
+    // Witnesses on objects near a camera at (x, z) (see above); none by default.
+    virtual std::vector<ObjectWitness> objectWitnesses(double cameraX_m, double cameraZ_m,
+                                                       int trees, double near_m, double far_m,
+                                                       double carHeight_m,
+                                                       int measuredIndex) const {
+        (void)cameraX_m, (void)cameraZ_m, (void)trees, (void)near_m, (void)far_m;
+        (void)carHeight_m, (void)measuredIndex;
+        return {};
+    }
 };
 
 struct WorldProbeEnvironmentSettings {
@@ -50,6 +75,9 @@ class WorldProbeEnvironment : public ProbeEnvironment {
     glm::dvec3 placeProbe(double x_m, double z_m, double maxAside_m) const override;
     double sunAngularSpeed_radPerHour() const override;
     void fallbackCubeMap(double timeOfDay_h, int n, std::vector<float>& rgb) const override;
+    std::vector<ObjectWitness> objectWitnesses(double cameraX_m, double cameraZ_m, int trees,
+                                               double near_m, double far_m, double carHeight_m,
+                                               int measuredIndex) const override;
 
   private:
     const World& world_;
