@@ -53,6 +53,7 @@ struct BenchOptions {
     std::string replays, methods, sweep, budgets, out = "out/bench";
     std::string oracle = "self";
     int referenceEvery = 6;
+    int fullLengthBudget = 3;
     int jobs = 0;
     int measureEvery = 10;
     int maxFrames = 0;
@@ -207,6 +208,8 @@ struct Runner {
     bool reference = false;
     int referenceEvery = 6;
     int idealBudget = 1;
+    // Runs above this many faces per frame play the first fullLengthBudget / faces of the replay.
+    int fullLengthBudget = 64;
 
     void run(Job& job) const {
         const fs::path dir = fs::path(out) / job.runDir;
@@ -252,6 +255,12 @@ struct Runner {
             args.push_back("--no-frames");
         }
         if (maxFrames > 0) args.insert(args.end(), {"--max-frames", std::to_string(maxFrames)});
+        if (job.point.facesPerFrame > fullLengthBudget) {
+            char share[32];
+            std::snprintf(share, sizeof(share), "%.6f",
+                          double(fullLengthBudget) / double(job.point.facesPerFrame));
+            args.insert(args.end(), {"--share", share});
+        }
         const std::string log = (dir / "log.txt").string();
         {
             std::ofstream cmd((dir / "command.txt").string());
@@ -531,7 +540,7 @@ std::string fmt(double v, const char* format) {
 // default point's family), ours against the best other method at that budget, and the Pareto
 // front over every run of the replay (no other run both cheaper and more accurate).
 void writeBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
-                        const std::vector<std::string>& replays) {
+                        const std::vector<std::string>& replays, int fullLengthBudget) {
     std::vector<int> budgets;
     std::vector<std::string> methods;
     for (const Job& j : jobs) {
@@ -549,7 +558,10 @@ void writeBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
     out << "## Budget: error against cost\n\n";
     out << "Each cell: mean error / ambience ms per frame (median), default settings at each "
            "capture budget (faces per frame). Ours / best other = our mean error over the "
-           "lowest of the other methods' at that budget.\n\n";
+           "lowest of the other methods' at that budget. Runs above "
+        << fullLengthBudget
+        << " faces per frame play the first (" << fullLengthBudget
+        << " / faces) of each replay, every method alike.\n\n";
     for (const std::string& replay : replays) {
         out << "### " << replay << "\n\n| faces per frame |";
         for (const auto& m : methods) out << " " << (m == "volume" ? "**volume (ours)**" : m) << " |";
@@ -661,7 +673,7 @@ void writeErrorBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
 
 void writeSummary(const std::vector<Job>& jobs, const std::string& path,
                   const std::string& commandLine, double wall_s, int workers,
-                  const std::string& oracle, int idealBudget) {
+                  const std::string& oracle, int idealBudget, int fullLengthBudget) {
     std::ofstream out(path);
     if (!out) throw InputError(path, "cannot write the summary");
     out << "# Ambience bench: speed against error\n\n";
@@ -740,7 +752,7 @@ void writeSummary(const std::vector<Job>& jobs, const std::string& path,
             << " |\n";
     }
     out << "\n";
-    writeBudgetSection(out, jobs, replays);
+    writeBudgetSection(out, jobs, replays, fullLengthBudget);
     writeErrorBudgetSection(out, jobs, replays, idealBudget);
     out << "## Plots\n\n";
     for (const std::string& replay : replays)
@@ -950,6 +962,10 @@ void runBench(const BenchOptions& o, const std::string& commandLine) {
     if (o.referenceEvery < 1 || o.referenceEvery > 1000000)
         throw InputError("--reference-every", "expected 1 to 1000000");
     runner.referenceEvery = o.referenceEvery;
+    if (o.fullLengthBudget < 1 || o.fullLengthBudget > kMaxFacesPerFrame)
+        throw InputError("--full-length-budget",
+                         "expected 1 to " + std::to_string(kMaxFacesPerFrame));
+    runner.fullLengthBudget = o.fullLengthBudget;
     runner.idealBudget = points.empty() ? 1 : points.front().facesPerFrame;
     for (const Point& p : points) runner.idealBudget = std::min(runner.idealBudget, p.facesPerFrame);
     const auto start = std::chrono::steady_clock::now();
@@ -1007,7 +1023,7 @@ void runBench(const BenchOptions& o, const std::string& commandLine) {
     const std::string results = (fs::path(o.out) / "results.csv").string();
     writeResultsCsv(jobs, results);
     writeSummary(jobs, (fs::path(o.out) / "summary.md").string(), commandLine, wall, workers,
-                 o.oracle, runner.idealBudget);
+                 o.oracle, runner.idealBudget, runner.fullLengthBudget);
     drawPlots(o.out);
     int failed = 0;
     for (const Job& j : jobs) failed += !j.ok;
@@ -1044,6 +1060,9 @@ void addBenchCommand(CLI::App& app) {
     cmd->add_option("--reference-every", o->referenceEvery,
                     "with --oracle reference: a reference on every K-th measured frame "
                     "(default 6)");
+    cmd->add_option("--full-length-budget", o->fullLengthBudget,
+                    "runs above B faces per frame play the first B / faces of each replay, all "
+                    "methods alike (their cost grows with the budget) (default 3)");
     cmd->add_option("--jobs", o->jobs, "runs side by side (default: the number of cores)");
     cmd->add_option("--out", o->out, "output folder (default out/bench)");
     cmd->add_option("--measure-every", o->measureEvery,

@@ -49,6 +49,7 @@ struct RunOptions {
     std::string video;
     std::string report;
     int maxFrames = 0;
+    double share = 1.0;  // play the first share of the frames (not part of the oracle's signature)
     int stride = 2;
     std::string ambient = "volume";
     std::string ambienceConfig, saveAnchors, loadAnchors;
@@ -218,6 +219,7 @@ void runReplay(RunOptions o) {
     if (o.every < 1) throw InputError("--every", "must be at least 1");
     if (o.stride < 1) throw InputError("--stride", "must be at least 1");
     if (o.maxFrames < 0) throw InputError("--max-frames", "must be >= 0");
+    if (!(o.share > 0.0 && o.share <= 1.0)) throw InputError("--share", "expected (0, 1]");
     // The replay's name is only a label: as a file name it is reduced to a safe stem, so a
     // replay cannot make a run write outside its output folder.
     const std::string name = replay.name.empty() ? fs::path(o.replay).stem().string() : replay.name;
@@ -298,8 +300,11 @@ void runReplay(RunOptions o) {
     }
     std::vector<double> standInX, standInZ;
     std::vector<ShRgb> standInSh;
-    const int frames =
-        o.maxFrames > 0 ? std::min(o.maxFrames, loop.frameCount()) : loop.frameCount();
+    // A shorter run (--share) measures a prefix of the full run's witnesses: the same frames,
+    // so it reads the same oracle caches.
+    const int frames = std::max(
+        1, int(std::ceil(o.share * double(o.maxFrames > 0 ? std::min(o.maxFrames, loop.frameCount())
+                                                          : loop.frameCount()))));
 
     RunReport report;
     report.replay = o.replay;
@@ -506,6 +511,9 @@ void addRunCommand(CLI::App& app) {
     cmd->add_flag("--no-video", o->noVideo, "do not write a video");
     cmd->add_option("--report", o->report, "report JSON (default <out>/report.json)");
     cmd->add_option("--max-frames", o->maxFrames, "stop after N frames (default: whole replay)");
+    cmd->add_option("--share", o->share,
+                    "play the first share (0 to 1] of those frames; oracle caches of the whole "
+                    "run still match (default 1)");
     cmd->add_option("--loop", o->loops,
                     "play the replay N times back to back (1 to 10000, default 1); the clock and "
                     "the time of day keep going, each jump back to the start is a camera cut");

@@ -20,7 +20,8 @@ Sections:
   [5] Error against camera speed    -> error-vs-speed.png
   [6] Error over time per replay    -> error-over-time-<replay>.png
   [7] Error by witness ring         -> error-by-ring.png
-  [8] Main
+  [8] Error budget (reference)      -> error-budget.png
+  [9] Main
 """
 
 import argparse
@@ -108,7 +109,21 @@ def ordered_methods(methods):
 # [2] Reading the CSV files
 # ---------------------------------------------------------------------------------------------
 
-RESULT_NUMBER_COLUMNS = ["error_mean", "ambience_ms_median"]
+RESULT_NUMBER_COLUMNS = [
+    "error_mean",
+    "ambience_ms_median",
+    "budget_total_rms",
+    "budget_truncation",
+    "budget_capture",
+    "budget_spacing",
+    "budget_schedule",
+]
+BUDGET_TERMS = [
+    ("budget_truncation", "a: SH order-2 truncation", "#4c72b0"),
+    ("budget_capture", "b: capture resolution and scene", "#55a868"),
+    ("budget_spacing", "c: spacing and interpolation", "#c44e52"),
+    ("budget_schedule", "d: schedule, staleness, blending (c + d without a lattice)", "#8172b2"),
+]
 MEASURE_COLUMNS = [
     "time_s",
     "time_of_day_h",
@@ -654,7 +669,70 @@ def plot_error_by_ring(directory, defaults, measures, all_methods, written):
 
 
 # ---------------------------------------------------------------------------------------------
-# [8] Main
+# [8] Error budget (reference oracle)
+# ---------------------------------------------------------------------------------------------
+
+
+def budget_rows(ok_rows):
+    """Per (replay, method) the row carrying the full error budget: the first with a spacing
+    term (its runs captured the ideal volume), else the first with any budget."""
+    chosen = {}
+    for row in ok_rows:
+        if row["budget_total_rms"] is None:
+            continue
+        key = (row["replay"], row["method"])
+        has_spacing = row["budget_spacing"] is not None
+        if key not in chosen or (has_spacing and chosen[key]["budget_spacing"] is None):
+            chosen[key] = row
+    return chosen
+
+
+def plot_error_budget(directory, ok_rows, written):
+    """Squared terms stacked per replay and method, the squared total as a marker: where they
+    meet, the terms add up as squares."""
+    chosen = budget_rows(ok_rows)
+    if not chosen:
+        return
+    replays = sorted({replay for replay, _ in chosen})
+    methods = ordered_methods({method for _, method in chosen})
+    figure, axis = plt.subplots(figsize=(max(8.0, 1.2 * len(replays) * len(methods) / 3), 5.0))
+    width = 0.8 / len(methods)
+    labelled = set()
+    for r_index, replay in enumerate(replays):
+        for m_index, method in enumerate(methods):
+            row = chosen.get((replay, method))
+            if row is None:
+                continue
+            x = r_index - 0.4 + width * (m_index + 0.5)
+            bottom = 0.0
+            for column, label, colour in BUDGET_TERMS:
+                value = row[column]
+                if value is None:
+                    continue
+                height = value * value
+                axis.bar(x, height, width=width * 0.9, bottom=bottom, color=colour,
+                         edgecolor="black" if method == "volume" else "none", linewidth=0.8,
+                         label=None if label in labelled else label)
+                labelled.add(label)
+                bottom += height
+            total = row["budget_total_rms"]
+            axis.plot([x], [total * total], marker="_", markersize=14, color="black",
+                      label=None if "total" in labelled else "total² (method against reference)")
+            labelled.add("total")
+            axis.text(x, 0.0, method_label(method), rotation=90, fontsize=6, ha="center",
+                      va="bottom", color="white")
+    axis.set_xticks(range(len(replays)))
+    axis.set_xticklabels(replays, fontsize=8)
+    axis.set_ylabel("squared relative error (RMS over witnesses)²")
+    axis.set_title("Error budget against the reference (ours outlined)")
+    axis.grid(True, axis="y", alpha=0.3)
+    place_legend(axis)
+    figure.tight_layout()
+    save(figure, directory, "error-budget.png", written)
+
+
+# ---------------------------------------------------------------------------------------------
+# [9] Main
 # ---------------------------------------------------------------------------------------------
 
 
@@ -688,6 +766,7 @@ def main():
         if any(rp == replay for rp, _ in defaults):
             plot_error_over_time(directory, replay, defaults, measures, all_methods, written)
     plot_error_by_ring(directory, defaults, measures, all_methods, written)
+    plot_error_budget(directory, ok_rows, written)
     return 0
 
 
