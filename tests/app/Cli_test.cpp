@@ -115,5 +115,22 @@ TEST(Cli, WorldMapIsWritten) {
     std::remove(map.c_str());
 }
 
+// The reference oracle's options: unknown kinds and absurd sizes are one clear error.
+TEST(Cli, ReferenceOracleBadOptions) {
+    const std::string replay = sourcePath("replays/highway-drive.json");
+    expectInputError("run --replay " + replay + " --no-frames --measure-every 10 --oracle-kind truth",
+                     {"--oracle-kind", "truth"});
+    expectInputError("run --replay " + replay + " --no-frames --oracle-kind reference",
+                     {"--oracle-kind", "--measure-every"});
+    expectInputError("run --replay " + replay +
+                         " --no-frames --measure-every 10 --oracle-kind reference --reference-size 0",
+                     {"--reference-size"});
+    expectInputError("run --replay " + replay + " --no-frames --measure-every 10 --share 0",
+                     {"--share"});
+    expectInputError("probe --at 0,0 --scene detailed --out " + testing::TempDir() + "p.exr",
+                     {"--scene", "detailed"});
+    expectInputError("bench --oracle perfect --out " + testing::TempDir() + "b", {"--oracle"});
+}
+
 }  // namespace
 }  // namespace amb

@@ -13,6 +13,8 @@
 #include "GlTestContext.h"
 #include "lighting/CubeMapProjector.h"
 #include "world/Conventions.h"
+#include "lighting/SH.h"
+#include "world/Error.h"
 #include "world/World.h"
 
 namespace amb {
@@ -180,6 +182,39 @@ TEST_F(CubeCaptureTest, FaceSubsetsFillTheSameCube) {
     for (size_t k = 0; k < whole.size(); ++k) {
         ASSERT_NEAR(pieces[k], whole[k], 1e-4f * std::max(1.0f, std::abs(whole[k])));
     }
+}
+
+// The reference oracle's full scene (CaptureScene::Full): the same world seen through the main
+// view's meshes. It draws far more triangles than the coarse capture scene, its cube is finite
+// and non-negative, and over open ground the two agree in what they share: the sky above (+Y
+// face, mean luminance within 10 %) and the irradiance of an upward surface within 25 % (the
+// full scene adds bushes, rocks and real crowns, so some difference is the point of it).
+TEST_F(CubeCaptureTest, FullSceneAgreesWithTheCoarseSceneWhereTheyShareIt) {
+    AMB_REQUIRE_PLATFORM(platform, Backend::Auto, 16, 16);
+    const int n = 32;
+    CubeCaptureGl coarse(*world_, n), full(*world_, n, CaptureScene::Full);
+    EXPECT_EQ(full.scene(), CaptureScene::Full);
+    CubeCaptureStats cs, fs;
+    const std::vector<float> a = coarse.captureAll(probe_, kMorning_h, &cs);
+    const std::vector<float> b = full.captureAll(probe_, kMorning_h, &fs);
+    EXPECT_GT(fs.triangles, 3 * cs.triangles);
+    for (float v : b) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f);
+    const auto faceMean = [&](const std::vector<float>& cube, int face) {
+        double sum = 0.0;
+        for (std::size_t t = std::size_t(face) * n * n; t < std::size_t(face + 1) * n * n; ++t)
+            sum += amb::luminance(glm::vec3(cube[3 * t], cube[3 * t + 1], cube[3 * t + 2]));
+        return sum / double(n * n);
+    };
+    const int up = int(CubeFace::PosY);
+    EXPECT_NEAR(faceMean(b, up), faceMean(a, up), 0.10 * faceMean(a, up));
+    CubeMapProjector::Options options;
+    options.sunThreshold = kSunThreshold_Wpsrm2;
+    const ShRgb sa = toFloat(projectCubeMap(n, a, options).sh);
+    const ShRgb sb = toFloat(projectCubeMap(n, b, options).sh);
+    const double ea = amb::luminance(shIrradiance(sa, glm::vec3(0, 1, 0)));
+    const double eb = amb::luminance(shIrradiance(sb, glm::vec3(0, 1, 0)));
+    EXPECT_NEAR(eb, ea, 0.25 * ea);
+    EXPECT_THROW(parseCaptureScene("fine", "--scene"), InputError);
 }
 
 }  // namespace

@@ -1,0 +1,220 @@
+// The reference oracle and the error budget (lighting/ReferenceOracle.h): exact on a constant
+// environment, the sun left out as the methods leave it out, the quadrature equal to the closed
+// form on SH inputs, budget terms that add up as squares on a synthetic case, and a cache that
+// round-trips and refuses bad files.
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "FakeCubeCapture.h"
+#include "lighting/AmbienceMethod.h"
+#include "lighting/Metrics.h"
+#include "lighting/ReferenceOracle.h"
+#include "lighting/SH.h"
+#include "world/Conventions.h"
+#include "world/Error.h"
+
+using namespace amb;
+
+namespace {
+
+std::vector<float> constantCube(int n, glm::vec3 L) {
+    std::vector<float> rgb(std::size_t(kCubeFaces) * n * n * 3);
+    for (std::size_t t = 0; t < rgb.size(); t += 3) rgb[t] = L.x, rgb[t + 1] = L.y, rgb[t + 2] = L.z;
+    return rgb;
+}
+
+ShRgb randomSh(std::mt19937& rng, float scale = 1.0f) {
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    ShRgb sh;
+    for (int k = 0; k < kShCoefficients; ++k)
+        for (int c = 0; c < 3; ++c) sh.c[k][c] = scale * u(rng);
+    sh.c[0][0] += 3.0f, sh.c[0][1] += 3.0f, sh.c[0][2] += 3.0f;  // a positive mean
+    return sh;
+}
+
+// A reference sample whose irradiance is E_sh(n) + extra(n) at the rule's directions.
+ReferenceSample sampleOf(const ShRgb& sh, const SphereRule& rule,
+                         double (*extra)(const glm::dvec3&) = nullptr) {
+    ReferenceSample s;
+    s.sh = sh;
+    const ShRgbD d = toDouble(sh);
+    for (const glm::dvec3& n : rule.directions) {
+        glm::dvec3 e = shIrradiance(d, n);
+        if (extra) e += glm::dvec3(extra(n));
+        s.irradiance.emplace_back(e);
+    }
+    return s;
+}
+
+// A band-4 zonal harmonic (unnormalised P4(y)): orthogonal to every order-2 field.
+double band4(const glm::dvec3& n) {
+    const double y = n.y;
+    return 0.5 * (35.0 * y * y * y * y - 30.0 * y * y + 3.0) / 8.0;
+}
+
+}  // namespace
+
+// A constant environment L gives E = pi L at every direction of the rule, whatever the face
+// size, and its P2 is the exact constant (truncation 0).
+TEST(ReferenceOracle, ConstantEnvironmentIsExact) {
+    const SphereRule rule = sphereProductRule(5);
+    for (int n : {4, 16, 64}) {
+        const ReferenceSample s =
+            referenceSample(n, constantCube(n, {1.0f, 0.5f, 2.0f}), kSunThreshold_Wpsrm2, rule);
+        ASSERT_EQ(s.irradiance.size(), rule.directions.size());
+        for (const glm::vec3& e : s.irradiance) {
+            EXPECT_NEAR(e.x, kPi * 1.0, 1e-5);
+            EXPECT_NEAR(e.y, kPi * 0.5, 1e-5);
+            EXPECT_NEAR(e.z, kPi * 2.0, 1e-5);
+        }
+        EXPECT_LT(referenceDistance(s, s.sh, rule), 1e-5 * referenceNorm(s, rule)) << n;
+    }
+}
+
+// A texel above the sun threshold is left out of both the irradiance and the SH, exactly as the
+// methods' projection leaves it out: the sample equals that of the cube without it.
+TEST(ReferenceOracle, SunTexelsAreLeftOutAsTheMethodsLeaveThemOut) {
+    const SphereRule rule = sphereProductRule(5);
+    const int n = 16;
+    std::vector<float> cube = constantCube(n, {1.0f, 1.0f, 1.0f}), withoutSun = cube;
+    const std::size_t sunTexel = (std::size_t(2) * n + 5) * n + 7;  // on +Y
+    for (int c = 0; c < 3; ++c) cube[3 * sunTexel + c] = 1.0e6f;
+    for (int c = 0; c < 3; ++c) withoutSun[3 * sunTexel + c] = 0.0f;
+    const ReferenceSample a = referenceSample(n, cube, kSunThreshold_Wpsrm2, rule);
+    const ReferenceSample b = referenceSample(n, withoutSun, kSunThreshold_Wpsrm2, rule);
+    for (std::size_t k = 0; k < a.irradiance.size(); ++k)
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(a.irradiance[k][c], b.irradiance[k][c], 1e-5);
+    EXPECT_LT(irradianceDistance(a.sh, b.sh), 1e-5 * irradianceNorm(b.sh));
+    // Without a threshold the sun is kept: far brighter.
+    const ReferenceSample kept = referenceSample(n, cube, 1e30, rule);
+    EXPECT_GT(referenceNorm(kept, rule), 10.0 * referenceNorm(b, rule));
+}
+
+// On SH inputs the quadrature distance equals irradianceDistance (Metrics.h) to 1e-6.
+TEST(ReferenceOracle, QuadratureEqualsTheClosedFormOnSh) {
+    std::mt19937 rng(5);
+    const SphereRule rule = sphereProductRule(5);
+    for (int trial = 0; trial < 100; ++trial) {
+        const ShRgb a = randomSh(rng), b = randomSh(rng);
+        const ReferenceSample ref = sampleOf(a, rule);
+        const double closed = irradianceDistance(a, b);
+        EXPECT_NEAR(referenceDistance(ref, b, rule), closed, 1e-6 * closed);
+        EXPECT_NEAR(referenceNorm(ref, rule), irradianceNorm(a), 1e-6 * irradianceNorm(a));
+    }
+}
+
+// Synthetic budget: the reference is P2 plus a band-4 part (truncation), and the coarse
+// capture, the ideal volume and the applied value each move one different coefficient, so the
+// four differences are orthogonal: a^2 + b^2 + c^2 + d^2 = total^2 (the rule of degree 9
+// integrates the band-4 part's square, degree 8, exactly), and each term is what was put in.
+TEST(ReferenceOracle, BudgetTermsOfASyntheticCaseAddUp) {
+    std::mt19937 rng(9);
+    const SphereRule rule = sphereProductRule(5);
+    for (int trial = 0; trial < 20; ++trial) {
+        const ShRgb p2 = randomSh(rng);
+        const ReferenceSample ref = sampleOf(p2, rule, band4);
+        ShRgb coarse = p2, ideal, applied;
+        coarse.c[1][0] += 0.3f;   // b: band 1
+        ideal = coarse;
+        ideal.c[4][1] += 0.5f;    // c: band 2
+        applied = ideal;
+        applied.c[2][2] -= 0.4f;  // d: band 1, another coefficient
+        const BudgetTerms t = budgetTerms(ref, coarse, ideal, applied, rule);
+        const double norm = referenceNorm(ref, rule);
+        EXPECT_NEAR(t.capture, irradianceDistance(p2, coarse) / norm, 1e-6);
+        EXPECT_NEAR(t.spacing, irradianceDistance(coarse, ideal) / norm, 1e-6);
+        EXPECT_NEAR(t.schedule, irradianceDistance(ideal, applied) / norm, 1e-6);
+        EXPECT_GT(t.truncation, 0.0);
+        const double squares = t.truncation * t.truncation + t.capture * t.capture +
+                               t.spacing * t.spacing + t.schedule * t.schedule;
+        EXPECT_NEAR(squares, t.total * t.total, 1e-6 * t.total * t.total);
+
+        // Without an ideal volume, d holds c and d together and the squares still add up.
+        const BudgetTerms merged = budgetTerms(ref, coarse, std::nullopt, applied, rule);
+        EXPECT_TRUE(std::isnan(merged.spacing));
+        EXPECT_NEAR(merged.schedule * merged.schedule, t.spacing * t.spacing + t.schedule * t.schedule,
+                    1e-6);
+    }
+    // The summary: RMS per term; closure 1 for orthogonal terms.
+    std::vector<BudgetTerms> terms;
+    for (int trial = 0; trial < 10; ++trial) {
+        const ShRgb p2 = randomSh(rng);
+        const ReferenceSample ref = sampleOf(p2, rule, band4);
+        ShRgb coarse = p2;
+        coarse.c[3][0] += 0.2f * float(trial);
+        terms.push_back(budgetTerms(ref, coarse, coarse, coarse, rule));
+    }
+    const BudgetSummary s = summarizeBudget(terms);
+    EXPECT_EQ(s.count, terms.size());
+    EXPECT_TRUE(s.hasSpacing);
+    EXPECT_NEAR(s.spacing, 0.0, 1e-12);
+    EXPECT_NEAR(s.closure(), 1.0, 1e-6);
+}
+
+// The meter with a reference: every reference frame adds its terrain witnesses with terms that
+// are finite and below the constant method's; the cache round-trips, and a damaged cache is one
+// InputError that leaves the loaded values alone.
+TEST(ReferenceOracle, MeterCacheRoundTripsAndRefusesBadFiles) {
+    using testing_support::FakeCubeCapture;
+    using testing_support::FlatProbeEnvironment;
+    FakeCubeCapture coarse(8), full(16);
+    FlatProbeEnvironment environment;
+    MeasureSettings ms;
+    ms.every = 2;
+    ErrorMeter meter(coarse, environment, ms);
+    ReferenceSettings rs;
+    rs.every = 2;
+    meter.attachReference(full, rs, true);
+    EXPECT_EQ(meter.oracleKind(), OracleKind::Reference);
+    // A method that applies a constant: the budget still adds its terms.
+    struct Constant final : AmbienceMethod {
+        ShRgb value;
+        std::string methodName() const override { return "c"; }
+        void predictStage(const glm::dvec3&, const glm::dvec3&, double, double) override {}
+        void captureStage() override {}
+        void storeStage() override {}
+        ShRgb shAt(double, double) const override { return value; }
+        MethodStatistics methodStatistics() const override { return {}; }
+    } method;
+    method.value.c[0][0] = method.value.c[0][1] = method.value.c[0][2] = 1.0f;
+    for (int f = 0; f < 9; ++f)
+        meter.frame(f, f / 30.0, 12.0, {100.0 * f, 0.0, 50.0}, 10.0, method);
+    ASSERT_FALSE(meter.referenceWitnesses().empty());
+    const std::size_t captured = std::size_t(meter.referenceCaptures());
+    EXPECT_GT(captured, 0u);
+    for (const ReferenceWitness& r : meter.referenceWitnesses()) {
+        EXPECT_TRUE(std::isfinite(r.terms.total));
+        EXPECT_TRUE(std::isnan(r.terms.spacing));  // no lattice
+    }
+    EXPECT_EQ(meter.errors().size(), meter.terrainBudget().size());
+
+    const std::string path = ::testing::TempDir() + "reference-cache.json";
+    meter.saveReference(path, "sig");
+    ErrorMeter again(coarse, environment, ms);
+    again.attachReference(full, rs, true);
+    again.loadReference(path, "sig");
+    for (int f = 0; f < 9; ++f)
+        again.frame(f, f / 30.0, 12.0, {100.0 * f, 0.0, 50.0}, 10.0, method);
+    EXPECT_EQ(again.referenceCaptures(), 0);
+    ASSERT_EQ(again.referenceWitnesses().size(), meter.referenceWitnesses().size());
+    for (std::size_t i = 0; i < again.referenceWitnesses().size(); ++i)
+        EXPECT_NEAR(again.referenceWitnesses()[i].terms.total,
+                    meter.referenceWitnesses()[i].terms.total, 1e-5);
+
+    EXPECT_THROW(again.loadReference(path, "other"), InputError);
+    EXPECT_THROW(again.loadReferenceText("{", "bad", "sig"), InputError);
+    EXPECT_THROW(again.loadReferenceText(
+                     R"({"format":"ambience-reference","version":1,"signature":"sig",)"
+                     R"("entries":[{"frame":0,"x":0,"y":1,"z":0,"sh":[1],"e":[]}]})",
+                     "short", "sig"),
+                 InputError);
+    EXPECT_THROW(again.loadReferenceText(
+                     R"({"format":"ambience-oracle","version":1,"signature":"sig","entries":[]})",
+                     "kind", "sig"),
+                 InputError);
+    std::remove(path.c_str());
+}
