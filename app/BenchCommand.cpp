@@ -54,6 +54,7 @@ struct BenchOptions {
     std::string oracle = "self";
     int referenceEvery = 6;
     int fullLengthBudget = 3;
+    int screenWitnesses = 0;
     int jobs = 0;
     int measureEvery = 10;
     int maxFrames = 0;
@@ -208,6 +209,7 @@ struct Runner {
     bool reference = false;
     int referenceEvery = 6;
     int idealBudget = 1;
+    int screenWitnesses = 0;  // per reference frame, in the runs at idealBudget
     // Runs above this many faces per frame play the first fullLengthBudget / faces of the replay.
     int fullLengthBudget = 64;
 
@@ -240,14 +242,17 @@ struct Runner {
             "--backend",
             backend,
             "--out",
-            dir.string(),
-            "--no-vehicle"};
+            dir.string()};
         if (reference) {
             args.insert(args.end(),
                         {"--oracle-kind", "reference", "--reference",
                          (fs::path(out) / "oracle" / (job.replay.name + "-reference.json")).string(),
                          "--reference-every", std::to_string(referenceEvery)});
-            if (job.point.facesPerFrame != idealBudget) args.push_back("--no-ideal-volume");
+            if (job.point.facesPerFrame != idealBudget) {
+                args.push_back("--no-ideal-volume");
+            } else if (screenWitnesses > 0) {
+                args.insert(args.end(), {"--screen-witnesses", std::to_string(screenWitnesses)});
+            }
         }
         if (frames) {
             args.insert(args.end(), {"--frames", "none", "--no-video"});
@@ -428,6 +433,11 @@ const std::vector<std::string> kColumns = {"replay",
                                            "car_error_mean",
                                            "tree_base_error_mean",
                                            "tree_crown_error_mean",
+                                           "screen_error_mean",
+                                           "screen_terrain_error_mean",
+                                           "screen_road_error_mean",
+                                           "screen_object_error_mean",
+                                           "screen_witnesses",
                                            "reference_s",
                                            "wall_s",
                                            "run_dir"};
@@ -484,6 +494,14 @@ std::map<std::string, std::string> resultRow(const Job& job) {
         for (const char* kind : {"car", "tree_base", "tree_crown"})
             put(std::string(kind) + "_error_mean", number(ref, {"objects", kind, "error", "mean"}));
         put("reference_s", number(ref, {"reference_s"}));
+        if (number(ref, {"screen", "error", "count"}) > 0) {
+            put("screen_error_mean", number(ref, {"screen", "error", "mean"}));
+            put("screen_witnesses", number(ref, {"screen", "error", "count"}));
+            for (const char* kind : {"terrain", "road", "object"})
+                if (number(ref, {"screen", kind, "count"}) > 0)
+                    put(std::string("screen_") + kind + "_error_mean",
+                        number(ref, {"screen", kind, "mean"}));
+        }
     }
     put("ambience_ms_median", number(r, {"ambience", "ambience_ms", "median"}));
     put("ambience_ms_p95", number(r, {"ambience", "ambience_ms", "p95"}));
@@ -633,12 +651,16 @@ void writeErrorBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
            "Closure = (a² + b² + c² + d²) / total²: 1 when the terms add up as squares. Methods "
            "without a lattice show c + d in column d. Objects: mean error against the reference "
            "at the car (1 m above its ground point) and at tree bases and crowns within 6-48 m. "
-           "Pop moving: along the car.\n\n";
+           "Screen: the screen-weighted mean error, at random pixels of the main view (terrain, "
+           "road, plants and the car), of the ambient irradiance as the draw applies it against "
+           "the reference at that surface point and normal (terrain / road / object means in "
+           "brackets). Pop moving: along the car.\n\n";
     for (const std::string& replay : replays) {
         out << "### " << replay << "\n\n| method | total (RMS) | a truncation | b capture | "
                "c spacing | d schedule | closure | dominant | mean error | self-oracle error | "
-               "car | tree base | tree crown | pop moving p99 / max |\n"
-               "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+               "car | tree base | tree crown | screen (terrain / road / object) | "
+               "pop moving p99 / max |\n"
+               "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
         for (const Job& j : jobs) {
             if (j.replay.name != replay || !j.ok) continue;
             if (j.point.family.empty() && j.point.label != "default") continue;
@@ -663,6 +685,14 @@ void writeErrorBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
                 << fmt(number(b, {"selfError", "mean"}), "%.4f");
             for (const char* kind : {"car", "tree_base", "tree_crown"})
                 out << " | " << fmt(number(ref, {"objects", kind, "error", "mean"}), "%.3f");
+            const auto screenMean = [&](const char* kind) {
+                return number(ref, {"screen", kind, "count"}) > 0
+                           ? number(ref, {"screen", kind, "mean"})
+                           : std::nan("");
+            };
+            out << " | " << fmt(screenMean("error"), "%.3f") << " ("
+                << fmt(screenMean("terrain"), "%.2f") << " / " << fmt(screenMean("road"), "%.2f")
+                << " / " << fmt(screenMean("object"), "%.2f") << ")";
             out << " | " << fmt(number(m, {"pop_move", "p99"}), "%.4f") << " / "
                 << fmt(number(m, {"pop_move", "max"}), "%.3f") << " |\n";
         }
@@ -966,6 +996,11 @@ void runBench(const BenchOptions& o, const std::string& commandLine) {
         throw InputError("--full-length-budget",
                          "expected 1 to " + std::to_string(kMaxFacesPerFrame));
     runner.fullLengthBudget = o.fullLengthBudget;
+    if (o.screenWitnesses < 0 || o.screenWitnesses > 4096)
+        throw InputError("--screen-witnesses", "expected 0 to 4096");
+    if (o.screenWitnesses > 0 && !runner.reference)
+        throw InputError("--screen-witnesses", "needs --oracle reference");
+    runner.screenWitnesses = o.screenWitnesses;
     runner.idealBudget = points.empty() ? 1 : points.front().facesPerFrame;
     for (const Point& p : points) runner.idealBudget = std::min(runner.idealBudget, p.facesPerFrame);
     const auto start = std::chrono::steady_clock::now();
@@ -1063,6 +1098,10 @@ void addBenchCommand(CLI::App& app) {
     cmd->add_option("--full-length-budget", o->fullLengthBudget,
                     "runs above B faces per frame play the first B / faces of each replay, all "
                     "methods alike (their cost grows with the budget) (default 3)");
+    cmd->add_option("--screen-witnesses", o->screenWitnesses,
+                    "with --oracle reference: random pixels of the main view per reference frame "
+                    "compared with the reference, in the runs at the lowest budget (opt-in, "
+                    "slow; default 0)");
     cmd->add_option("--jobs", o->jobs, "runs side by side (default: the number of cores)");
     cmd->add_option("--out", o->out, "output folder (default out/bench)");
     cmd->add_option("--measure-every", o->measureEvery,

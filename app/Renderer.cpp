@@ -115,7 +115,8 @@ glm::mat4 Renderer::viewProjection(const CameraSample& camera) const {
     return reversedInfinitePerspective(settings_.fovY_rad, aspect, settings_.near_m) * view;
 }
 
-RenderStats Renderer::render(const CameraSample& camera, const AmbientSource& ambient) {
+RenderStats Renderer::render(const CameraSample& camera, const AmbientSource& ambient,
+                             RenderOutput output) {
     using Clock = std::chrono::steady_clock;
     RenderStats stats;
     const auto t0 = Clock::now();
@@ -131,7 +132,7 @@ RenderStats Renderer::render(const CameraSample& camera, const AmbientSource& am
     fc.viewProj = viewProjection(camera);
     fc.invViewProj = glm::inverse(fc.viewProj);
     sky_.fill(fc);
-    fc.fog = glm::vec4(settings_.fogExtinction_perM, 0.0f, 0.0f, 0.0f);
+    fc.fog = glm::vec4(settings_.fogExtinction_perM, 0.0f, float(int(output)), 0.0f);
 
     SceneStats ss;
     scene_->buildView(camera.position_m, fc.viewProj, ambient, list_, &ss);
@@ -145,8 +146,10 @@ RenderStats Renderer::render(const CameraSample& camera, const AmbientSource& am
     glClearNamedFramebufferfv(hdrFbo_.id(), GL_DEPTH, 0, &far);
     stats.triangles = drawer_->draw(list_, fc, true, false);
 
-    glBindFramebuffer(GL_FRAMEBUFFER, ldrFbo_.id());
-    drawer_->drawTonemap(hdr_.id(), exposureFor(sky_, noon_));
+    if (output == RenderOutput::Shaded) {
+        glBindFramebuffer(GL_FRAMEBUFFER, ldrFbo_.id());
+        drawer_->drawTonemap(hdr_.id(), exposureFor(sky_, noon_));
+    }
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     const auto t2 = Clock::now();
 
@@ -169,6 +172,37 @@ std::vector<float> Renderer::readHdr() {
     std::vector<float> out(gl.size());
     for (int y = 0; y < h; ++y) {
         std::copy_n(&gl[size_t(h - 1 - y) * w * 3], size_t(w) * 3, &out[size_t(y) * w * 3]);
+    }
+    return out;
+}
+
+SurfaceImage Renderer::readSurface(const CameraSample& camera) {
+    const int w = settings_.width, h = settings_.height;
+    SurfaceImage out;
+    out.width = w, out.height = h;
+    std::vector<float> rgba(std::size_t(w) * h * 4), depth(std::size_t(w) * h);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, hdrFbo_.id());
+    glReadBuffer(GL_COLOR_ATTACHMENT0);
+    glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    glReadPixels(0, 0, w, h, GL_RGBA, GL_FLOAT, rgba.data());
+    glReadPixels(0, 0, w, h, GL_DEPTH_COMPONENT, GL_FLOAT, depth.data());
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+    const glm::mat4 inv = glm::inverse(viewProjection(camera));
+    out.rgba.resize(rgba.size());
+    out.position.assign(std::size_t(w) * h, glm::vec3(0.0f));
+    for (int y = 0; y < h; ++y) {
+        const int glRow = h - 1 - y;
+        std::copy_n(&rgba[std::size_t(glRow) * w * 4], std::size_t(w) * 4,
+                    &out.rgba[std::size_t(y) * w * 4]);
+        for (int x = 0; x < w; ++x) {
+            const std::size_t src = std::size_t(glRow) * w + x;
+            if (!(rgba[4 * src + 3] > 0.0f)) continue;
+            // Pixel centre in clip space; depth in [0, 1] (glClipControl zero-to-one).
+            const glm::vec4 clip(2.0f * (float(x) + 0.5f) / float(w) - 1.0f,
+                                 2.0f * (float(glRow) + 0.5f) / float(h) - 1.0f, depth[src], 1.0f);
+            const glm::vec4 p = inv * clip;
+            out.position[std::size_t(y) * w + x] = glm::vec3(p) / p.w;
+        }
     }
     return out;
 }

@@ -57,6 +57,21 @@ struct RenderSettings {
     double vehicleEyeHeight_m = 1.5;
 };
 
+// What render() writes into the HDR target: the shaded view, or an output of the screen
+// witnesses (lighting/Metrics.h): per pixel the ambient irradiance exactly as the draw applies it
+// (corner colours for terrain, per-vertex for roads, per-pixel SH for objects), or the world
+// normal; alpha names the surface (1 terrain, 2 road, 3 object; 0 sky). Outputs other than
+// Shaded skip tone mapping.
+enum class RenderOutput { Shaded = 0, AmbientIrradiance = 1, Normal = 2 };
+
+// One output read back: RGBA per pixel and the camera-relative position of its surface (from
+// the depth buffer), top row first.
+struct SurfaceImage {
+    int width = 0, height = 0;
+    std::vector<float> rgba;
+    std::vector<glm::vec3> position;  // world - camera [m]; only where alpha > 0
+};
+
 struct RenderStats {
     std::size_t triangles = 0;
     std::size_t terrainPatches = 0, terrainPatchesDrawn = 0, objectsDrawn = 0;
@@ -77,7 +92,10 @@ class Renderer {
     // Maps camera-relative positions (world - camera.position_m) to clip space.
     glm::mat4 viewProjection(const CameraSample& camera) const;
     // Renders the view from `camera` with `ambient` into the HDR target and tone maps it.
-    RenderStats render(const CameraSample& camera, const AmbientSource& ambient);
+    RenderStats render(const CameraSample& camera, const AmbientSource& ambient,
+                       RenderOutput output = RenderOutput::Shaded);
+    // The HDR target of the last render() with its surface positions (after a non-shaded output).
+    SurfaceImage readSurface(const CameraSample& camera);
     // The tone-mapped image, top row first, RGB 8-bit (waits for the GPU).
     std::vector<unsigned char> readRgb8();
     // The linear HDR image, top row first, RGB float.

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <random>
 #include <sstream>
 
 #include <CLI/CLI.hpp>
@@ -25,6 +26,7 @@
 #include "app/Gl.h"
 #include "app/Platform.h"
 #include "app/OutputPaths.h"
+#include "app/Renderer.h"
 #include "app/RunReport.h"
 #include "app/VolumeAmbience.h"
 #include "lighting/Baselines.h"
@@ -68,6 +70,7 @@ struct RunOptions {
     ReferenceSettings referenceSettings;
     bool referenceOn = false;
     bool noIdealVolume = false;
+    int screenWitnesses = 0;
     int loops = 1;
 };
 
@@ -103,6 +106,34 @@ void drawLookupStandIn(const CameraSample& camera, std::vector<double>& x, std::
             const bool inCone = r <= kFar && len > 1e-6 && glm::dot(d, ahead) >= kCosCone * r;
             if (near || inCone) x.push_back(px), z.push_back(pz);
         }
+}
+
+// Screen witnesses (lighting/Metrics.h): the main view rendered twice more, as the ambient
+// irradiance the draw applies and as the world normal, and `count` random surface pixels of it
+// (the same pixels for every method: the generator is seeded by the frame) handed to the meter.
+void takeScreenWitnesses(Renderer& renderer, const CameraSample& camera,
+                         const AmbientSource& ambient, int count, int frameIndex,
+                         double timeOfDay_h, ErrorMeter& meter) {
+    renderer.render(camera, ambient, RenderOutput::AmbientIrradiance);
+    const SurfaceImage applied = renderer.readSurface(camera);
+    renderer.render(camera, ambient, RenderOutput::Normal);
+    const SurfaceImage normals = renderer.readSurface(camera);
+    std::mt19937_64 rng(0x5C4EE7ull ^ std::uint64_t(frameIndex));
+    std::uniform_int_distribution<std::size_t> pick(0, applied.position.size() - 1);
+    std::vector<ScreenWitness> pixels;
+    for (int tries = 0; tries < 100 * count && int(pixels.size()) < count; ++tries) {
+        const std::size_t p = pick(rng);
+        const float kind = applied.rgba[4 * p + 3];
+        if (!(kind > 0.5f) || !(normals.rgba[4 * p + 3] > 0.5f)) continue;  // sky
+        ScreenWitness w;
+        w.kind = SurfaceKind(std::clamp(int(std::lround(kind)), 1, kSurfaceKinds));
+        w.position_m = camera.position_m + glm::dvec3(applied.position[p]);
+        w.normal = glm::dvec3(normals.rgba[4 * p], normals.rgba[4 * p + 1], normals.rgba[4 * p + 2]);
+        if (!(glm::length(w.normal) > 0.5)) continue;
+        w.applied = glm::dvec3(applied.rgba[4 * p], applied.rgba[4 * p + 1], applied.rgba[4 * p + 2]);
+        pixels.push_back(w);
+    }
+    meter.screenFrame(frameIndex, timeOfDay_h, pixels);
 }
 
 // Anchors holding a NaN or an infinity anywhere in what interpolation and blending read. The
@@ -204,6 +235,10 @@ void runReplay(RunOptions o) {
         throw InputError("--reference-every", "expected 1 to 1000000");
     if (o.referenceSettings.faceSize < 1 || o.referenceSettings.faceSize > 256)
         throw InputError("--reference-size", "expected 1 to 256");
+    if (o.screenWitnesses < 0 || o.screenWitnesses > 4096)
+        throw InputError("--screen-witnesses", "expected 0 to 4096");
+    if (o.screenWitnesses > 0 && !o.referenceOn)
+        throw InputError("--screen-witnesses", "needs the reference (--oracle-kind reference)");
     if (o.referenceSettings.objectTrees < 0 || o.referenceSettings.objectTrees > 64)
         throw InputError("--reference-trees", "expected 0 to 64");
     if (o.noFrames) {
@@ -362,6 +397,9 @@ void runReplay(RunOptions o) {
             meter->frame(rec.index, rec.time_s, rec.timeOfDay_h, camera.position_m,
                          glm::length(stages->velocity()), stages->method());
             rec.popMove = meter->lastMovingPop();
+            if (o.screenWitnesses > 0 && meter->referenceFrameNow())
+                takeScreenWitnesses(renderer, camera, stages->ambient(), o.screenWitnesses,
+                                    rec.index, rec.timeOfDay_h, *meter);
         }
         if (o.noFrames) {
             drawLookupStandIn(camera, standInX, standInZ);
@@ -543,6 +581,9 @@ void addRunCommand(CLI::App& app) {
                     "reference face size N (default 64)");
     cmd->add_option("--reference-trees", o->referenceSettings.objectTrees,
                     "trees per reference frame with a base and a crown witness (default 2)");
+    cmd->add_option("--screen-witnesses", o->screenWitnesses,
+                    "on each reference frame, compare the ambient irradiance the draw applies at "
+                    "N random pixels of the main view with the reference there (slow; default 0)");
     cmd->add_flag("--no-ideal-volume", o->noIdealVolume,
                   "error budget without the ideal volume (no extra captures; spacing and "
                   "schedule reported as one term)");

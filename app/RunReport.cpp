@@ -459,6 +459,9 @@ std::string measurementJson(const ErrorMeter& meter) {
                         {"selfError", summaryJson(summarize(selfs))}};
         };
         const ReferenceSettings& rs = meter.referenceSettings();
+        json screenJson = {{"error", summaryJson(summarize(meter.screenErrors()))}};
+        for (int k = 1; k <= kSurfaceKinds; ++k)
+            screenJson[toString(SurfaceKind(k))] = summaryJson(summarize(meter.screenErrors(k)));
         json rings = json::array();
         for (int r = 0; r < ms.rings(); ++r) rings.push_back(budgetJson(meter.terrainBudget(r)));
         json objects = json::object();
@@ -471,6 +474,7 @@ std::string measurementJson(const ErrorMeter& meter) {
                           {"budget", budgetJson(meter.terrainBudget())},
                           {"budgetByRing", rings},
                           {"objects", objects},
+                          {"screen", screenJson},
                           {"reference_s", meter.referenceSeconds()},
                           {"referenceCaptures", meter.referenceCaptures()},
                           {"referenceCacheHits", meter.referenceCacheHits()}};

@@ -11,12 +11,14 @@
 #include <limits>
 #include <sstream>
 
+#include <glm/geometric.hpp>
 #include <nlohmann/json.hpp>
 
 #include "lighting/AmbienceMethod.h"
 #include "lighting/CubeCapture.h"
 #include "lighting/CubeMapProjector.h"
 #include "lighting/ProbeEnvironment.h"
+#include "lighting/ReferenceIrradiance.h"
 #include "world/Error.h"
 #include "world/TextFile.h"
 
@@ -276,6 +278,63 @@ void ErrorMeter::referenceFrame(int index, double timeOfDay_h, const glm::dvec3&
     }
 }
 
+const char* toString(SurfaceKind kind) {
+    switch (kind) {
+        case SurfaceKind::Terrain:
+            return "terrain";
+        case SurfaceKind::Road:
+            return "road";
+        case SurfaceKind::Object:
+            return "object";
+    }
+    return "?";
+}
+
+void ErrorMeter::screenFrame(int frameIndex, double timeOfDay_h,
+                             const std::vector<ScreenWitness>& pixels) {
+    if (!reference_) throw InputError("--screen-witnesses", "needs the reference oracle");
+    for (const ScreenWitness& p : pixels) {
+        const glm::dvec3 n = glm::normalize(p.normal);
+        const glm::dvec3 probe = p.position_m + kScreenProbeOffset_m * n;
+        const Key key{frameIndex, probe.x, probe.z, probe.y};
+        auto it = screenCache_.find(key);
+        if (it == screenCache_.end()) {
+            const auto t0 = std::chrono::steady_clock::now();
+            std::vector<float> cube = reference_->captureAll(probe, timeOfDay_h);
+            // The sun's texels are left out, as for every reference (ReferenceOracle.h).
+            for (std::size_t t = 0; t < cube.size(); t += 3) {
+                const double l = kLuminanceWeights[0] * cube[t] + kLuminanceWeights[1] * cube[t + 1] +
+                                 kLuminanceWeights[2] * cube[t + 2];
+                const bool bad = !(std::isfinite(cube[t]) && std::isfinite(cube[t + 1]) &&
+                                   std::isfinite(cube[t + 2])) ||
+                                 cube[t] < 0.0f || cube[t + 1] < 0.0f || cube[t + 2] < 0.0f;
+                if (bad || l > settings_.sunThreshold) cube[t] = cube[t + 1] = cube[t + 2] = 0.0f;
+            }
+            const CubeIrradiance irradiance(reference_->faceSize(), cube);
+            it = screenCache_.emplace(key, ScreenEntry{glm::vec3(n), glm::vec3(irradiance.at(n))})
+                     .first;
+            reference_s_ += secondsSince(t0);
+            ++referenceCaptures_;
+        } else {
+            ++referenceHits_;
+        }
+        const glm::dvec3 ref(it->second.irradiance), d = p.applied - ref;
+        const auto weighted = [](const glm::dvec3& v) {
+            return kLuminanceWeights[0] * v.x * v.x + kLuminanceWeights[1] * v.y * v.y +
+                   kLuminanceWeights[2] * v.z * v.z;
+        };
+        screenResults_.push_back(
+            {frameIndex, p.kind, std::sqrt(weighted(d) / std::max(weighted(ref), 1e-18))});
+    }
+}
+
+std::vector<double> ErrorMeter::screenErrors(int kind) const {
+    std::vector<double> out;
+    for (const ScreenResult& r : screenResults_)
+        if (kind == 0 || int(r.kind) == kind) out.push_back(r.error);
+    return out;
+}
+
 std::vector<BudgetTerms> ErrorMeter::terrainBudget(int ring) const {
     std::vector<BudgetTerms> out;
     for (const ReferenceWitness& r : referenceWitnesses_)
@@ -310,6 +369,7 @@ void ErrorMeter::frame(int index, double time_s, double timeOfDay_h, const glm::
         ++framesSinceMeasure_;
     }
     const bool measure = frameCounter_++ % settings_.every == 0;
+    referenceNow_ = false;
     if (!measure) return;
 
     // Close the pops since the last measured frame against the oracle's change there.
@@ -339,7 +399,8 @@ void ErrorMeter::frame(int index, double time_s, double timeOfDay_h, const glm::
         oracles.push_back(o);
         mf.errors.push_back(relativeIrradianceError(appliedAt(method, w), o));
     }
-    if (reference_ && measuredIndex % referenceSettings_.every == 0)
+    referenceNow_ = reference_ && measuredIndex % referenceSettings_.every == 0;
+    if (referenceNow_)
         referenceFrame(index, timeOfDay_h, camera_m, mf.witnesses, oracles, method, measuredIndex);
     // New pop points: the camera's ground point and the first ring-1 witnesses.
     popPoints_.clear();
@@ -571,6 +632,16 @@ void ErrorMeter::saveReference(const std::string& path, const std::string& signa
                            {"e", e}});
     }
     j["entries"] = std::move(entries);
+    nlohmann::json screen = nlohmann::json::array();
+    for (const auto& [key, entry] : screenCache_) {
+        screen.push_back({{"frame", key.frame},
+                          {"x", key.x},
+                          {"y", key.y},
+                          {"z", key.z},
+                          {"n", {entry.normal.x, entry.normal.y, entry.normal.z}},
+                          {"e", {entry.irradiance.x, entry.irradiance.y, entry.irradiance.z}}});
+    }
+    j["screen"] = std::move(screen);
     const std::string tmp = path + ".part";
     {
         std::ofstream out(tmp);
@@ -633,7 +704,35 @@ void ErrorMeter::loadReferenceText(const std::string& text, const std::string& w
         if (!loaded.emplace(key, std::move(sample)).second)
             throw InputError(at, "repeats an earlier entry's frame, x, y and z");
     }
+    // Screen witnesses' references (optional): {"frame", "x", "y", "z", "n": [3], "e": [3]}.
+    std::map<Key, ScreenEntry> screen;
+    if (j.contains("screen")) {
+        const nlohmann::json& list = j["screen"];
+        if (!list.is_array()) throw InputError(where, "'screen' must be an array");
+        for (std::size_t n = 0; n < list.size(); ++n) {
+            const std::string at = where + ": screen[" + std::to_string(n) + "]";
+            const auto [frame, xz] = oracleKey(list[n], at);
+            const Key key{frame, xz[0], xz[1],
+                          oracleNumber(requireField(list[n], "y", at), at, "y")};
+            ScreenEntry entry{};
+            for (const char* field : {"n", "e"}) {
+                const nlohmann::json& v = requireField(list[n], field, at);
+                if (!v.is_array() || v.size() != 3)
+                    throw InputError(at, std::string(field) + ": expected 3 numbers");
+                glm::vec3& out = field[0] == 'n' ? entry.normal : entry.irradiance;
+                for (int c = 0; c < 3; ++c) {
+                    const double x = oracleNumber(v[std::size_t(c)], at, field);
+                    if (!(std::fabs(x) <= kMaxOracleCoefficient))
+                        throw InputError(at, std::string(field) + ": out of range");
+                    out[c] = float(x);
+                }
+            }
+            if (!screen.emplace(key, entry).second)
+                throw InputError(at, "repeats an earlier entry's frame, x, y and z");
+        }
+    }
     referenceCache_ = std::move(loaded);
+    screenCache_ = std::move(screen);
 }
 
 }  // namespace amb

@@ -134,6 +134,25 @@ struct ReferenceWitness {
     BudgetTerms terms;
 };
 
+// A screen witness (opt-in, on reference frames): a random pixel of the rendered main view, its
+// surface point and normal, and the ambient irradiance the draw applied there. Its error is
+// |E_applied(n) - E_ref(n)| / |E_ref(n)| (luminance-weighted channels), E_ref from a reference
+// capture probeOffset_m along the normal from the surface.
+enum class SurfaceKind { Terrain = 1, Road = 2, Object = 3 };
+inline constexpr int kSurfaceKinds = 3;
+const char* toString(SurfaceKind kind);
+struct ScreenWitness {
+    SurfaceKind kind = SurfaceKind::Terrain;
+    glm::dvec3 position_m{0.0};
+    glm::dvec3 normal{0.0, 1.0, 0.0};
+    glm::dvec3 applied{0.0};  // irradiance as drawn
+};
+struct ScreenResult {
+    int frame = 0;
+    SurfaceKind kind = SurfaceKind::Terrain;
+    double error = 0.0;
+};
+
 // ---- Error meter -----------------------------------------------------------------------------
 // Drives the measurement along a run: call frame() once per frame after the method's store
 // stage. Oracle values come from the cache when present (loadOracle) and are captured otherwise.
@@ -173,6 +192,12 @@ class ErrorMeter {
     // Budget terms of the terrain witnesses (ring >= 0, or one ring), or of one object kind.
     std::vector<BudgetTerms> terrainBudget(int ring = -1) const;
     std::vector<BudgetTerms> objectBudget(ObjectKind kind) const;
+    // True when the latest frame() was a reference frame (screen witnesses are taken then).
+    bool referenceFrameNow() const { return referenceNow_; }
+    void screenFrame(int frameIndex, double timeOfDay_h, const std::vector<ScreenWitness>& pixels);
+    const std::vector<ScreenResult>& screenResults() const { return screenResults_; }
+    std::vector<double> screenErrors(int kind = 0) const;  // kind 0: every surface
+    static constexpr double kScreenProbeOffset_m = 0.25;
     double referenceSeconds() const { return reference_s_; }
     std::int64_t referenceCaptures() const { return referenceCaptures_; }
     std::int64_t referenceCacheHits() const { return referenceHits_; }
@@ -251,6 +276,12 @@ class ErrorMeter {
     SphereRule rule_;
     OracleKind headline_ = OracleKind::Self;
     std::map<Key, ReferenceSample> referenceCache_;
+    struct ScreenEntry {
+        glm::vec3 normal, irradiance;
+    };
+    std::map<Key, ScreenEntry> screenCache_;
+    std::vector<ScreenResult> screenResults_;
+    bool referenceNow_ = false;
     std::vector<ReferenceWitness> referenceWitnesses_;
     double reference_s_ = 0.0;
     std::int64_t referenceCaptures_ = 0, referenceHits_ = 0;

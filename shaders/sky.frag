@@ -10,6 +10,10 @@ in vec2 vNdc;
 layout(location = 0) out vec4 oColor;
 
 void main() {
+    if (uFog.z > 0.5) {  // screen witness outputs: alpha 0 marks the sky
+        oColor = vec4(0.0);
+        return;
+    }
     // Two points on the pixel's ray (reversed Z: depth 1 = near plane; depth 0 is at infinity).
     vec4 mid = uInvViewProj * vec4(vNdc, 0.5, 1.0);
     vec4 near = uInvViewProj * vec4(vNdc, 1.0, 1.0);
