@@ -13,6 +13,7 @@
 
 #include "GlTestContext.h"
 #include "app/RendererScene.h"
+#include "lighting/SH.h"
 #include "world/Conventions.h"
 #include "world/Error.h"
 #include "world/World.h"
@@ -260,6 +261,51 @@ TEST(Renderer, RoadsAreLitAtTheirOwnVerticesAndNormals) {
     EXPECT_GE(targetChunks, 1);
     // Positions read back relative to the eye in float: a few micrometres.
     EXPECT_LT(worst, 1e-4);
+}
+
+// The screen witnesses' outputs: with the constant ambient (E(n) = pi x mean radiance for every
+// normal) the ambient-irradiance output is that constant at every surface pixel, for terrain and
+// plants alike; the normal output is unit length and faces the camera; the positions read back
+// from depth lie on the terrain under terrain pixels (within 0.5 m), and the sky is alpha 0.
+TEST(Renderer, ScreenWitnessOutputsAreWhatTheDrawApplies) {
+    AMB_REQUIRE_PLATFORM(platform, Backend::Auto, kW, kH);
+    const World world(WorldSettings{});
+    RenderSettings rs;
+    rs.width = kW;
+    rs.height = kH;
+    Renderer renderer(world, rs);
+    const SkyLighting sky = renderer.setTimeOfDay(10.0);
+    const FixedAmbient ambient(AmbientMode::Constant, sky);
+    const glm::vec3 expected = shIrradiance(ambient.sh(), glm::vec3(0.0f, 1.0f, 0.0f));
+    const CameraSample cam = viewAt(world, -0.05);
+    renderer.render(cam, ambient, RenderOutput::AmbientIrradiance);
+    const SurfaceImage applied = renderer.readSurface(cam);
+    renderer.render(cam, ambient, RenderOutput::Normal);
+    const SurfaceImage normals = renderer.readSurface(cam);
+    ASSERT_EQ(applied.rgba.size(), std::size_t(kW) * kH * 4);
+    int surface = 0, sky0 = 0, onTerrain = 0, terrain = 0;
+    for (std::size_t p = 0; p < std::size_t(kW) * kH; ++p) {
+        const float kind = applied.rgba[4 * p + 3];
+        if (kind == 0.0f) {
+            ++sky0;
+            continue;
+        }
+        ++surface;
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(applied.rgba[4 * p + c], expected[c], 1e-3 * expected[c] + 1e-6);
+        const glm::vec3 n(normals.rgba[4 * p], normals.rgba[4 * p + 1], normals.rgba[4 * p + 2]);
+        EXPECT_NEAR(glm::length(n), 1.0f, 1e-3f);
+        EXPECT_EQ(normals.rgba[4 * p + 3], kind);
+        if (kind == 1.0f) {
+            ++terrain;
+            const glm::dvec3 w = cam.position_m + glm::dvec3(applied.position[p]);
+            onTerrain += std::abs(w.y - world.height(w.x, w.z)) < 0.5;
+        }
+    }
+    EXPECT_GT(surface, kW * kH / 4);
+    EXPECT_GT(sky0, 0);
+    ASSERT_GT(terrain, 100);
+    EXPECT_GT(onTerrain, terrain * 9 / 10);
 }
 
 }  // namespace
