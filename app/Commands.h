@@ -17,6 +17,7 @@ void addViewCommand(CLI::App& app);    // interactive window
 void addProbeCommand(CLI::App& app);   // capture one cube map
 void addShCommand(CLI::App& app);      // SH tools: project
 void addBenchCommand(CLI::App& app);   // replays x methods x parameter points: speed vs error
+void addCompareCommand(CLI::App& app);  // one frame: method, reference and ambient error
 
 // The folder of the shipped replays (beside the executable's tree, or ./replays); "" if none.
 std::string shippedReplayDir();

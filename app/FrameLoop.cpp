@@ -6,6 +6,9 @@
 #include <cmath>
 #include <limits>
 
+#include <glm/geometric.hpp>
+#include <glm/vec2.hpp>
+
 #include "app/Gl.h"
 
 namespace amb {
@@ -98,5 +101,26 @@ FrameRecord FrameLoop::step() {
     rec.frameMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     return rec;
 }
+
+void drawLookupStandIn(const CameraSample& camera, std::vector<double>& x, std::vector<double>& z) {
+    x.clear(), z.clear();
+    constexpr double kSpacing = 8.0, kNear = 48.0, kFar = 240.0, kCosCone = 0.5;
+    glm::dvec2 ahead(camera.forward.x, camera.forward.z);
+    const double len = glm::length(ahead);
+    ahead = len > 1e-6 ? ahead / len : glm::dvec2(0.0);
+    const double i0 = std::floor(camera.position_m.x / kSpacing);
+    const double k0 = std::floor(camera.position_m.z / kSpacing);
+    const int reach = int(kFar / kSpacing) + 1;
+    for (int di = -reach; di <= reach; ++di)
+        for (int dk = -reach; dk <= reach; ++dk) {
+            const double px = (i0 + di) * kSpacing, pz = (k0 + dk) * kSpacing;
+            const glm::dvec2 d(px - camera.position_m.x, pz - camera.position_m.z);
+            const double r = glm::length(d);
+            const bool near = r <= kNear;
+            const bool inCone = r <= kFar && len > 1e-6 && glm::dot(d, ahead) >= kCosCone * r;
+            if (near || inCone) x.push_back(px), z.push_back(pz);
+        }
+}
+
 
 }  // namespace amb

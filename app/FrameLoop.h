@@ -117,4 +117,11 @@ class FrameLoop {
     bool drawMainView_ = true;
 };
 
+// Where the draw would look up ambience, for a run without the main view: points of an 8 m
+// lattice (about the density of near terrain corners and plants) within 48 m all around the
+// camera and within 240 m in a 60-degree half-angle cone ahead, on the ground plane: about a
+// thousand a frame. They are looked up (and timed as the draw's lookups), and the reactive
+// baseline creates its probes from them.
+void drawLookupStandIn(const CameraSample& camera, std::vector<double>& x, std::vector<double>& z);
+
 }  // namespace amb

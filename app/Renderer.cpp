@@ -176,6 +176,26 @@ std::vector<float> Renderer::readHdr() {
     return out;
 }
 
+std::vector<unsigned char> Renderer::tonemap(const std::vector<float>& hdrRgb) {
+    const int w = settings_.width, h = settings_.height;
+    if (hdrRgb.size() != std::size_t(w) * h * 3)
+        throw std::invalid_argument("Renderer::tonemap: image size differs from the view's");
+    std::vector<float> rgba(std::size_t(w) * h * 4, 0.0f);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const std::size_t src = (std::size_t(y) * w + x) * 3;
+            const std::size_t dst = (std::size_t(h - 1 - y) * w + x) * 4;  // GL rows from the bottom
+            for (int c = 0; c < 3; ++c) rgba[dst + c] = hdrRgb[src + c];
+        }
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+    glTextureSubImage2D(hdr_.id(), 0, 0, 0, w, h, GL_RGBA, GL_FLOAT, rgba.data());
+    glBindFramebuffer(GL_FRAMEBUFFER, ldrFbo_.id());
+    glViewport(0, 0, w, h);
+    drawer_->drawTonemap(hdr_.id(), exposureFor(sky_, noon_));
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    return readRgb8();
+}
+
 SurfaceImage Renderer::readSurface(const CameraSample& camera) {
     const int w = settings_.width, h = settings_.height;
     SurfaceImage out;

@@ -59,10 +59,10 @@ struct RenderSettings {
 
 // What render() writes into the HDR target: the shaded view, or an output of the screen
 // witnesses (lighting/Metrics.h): per pixel the ambient irradiance exactly as the draw applies it
-// (corner colours for terrain, per-vertex for roads, per-pixel SH for objects), or the world
-// normal; alpha names the surface (1 terrain, 2 road, 3 object; 0 sky). Outputs other than
+// (corner colours for terrain, per-vertex for roads, per-pixel SH for objects), the world
+// normal or the albedo; alpha names the surface (1 terrain, 2 road, 3 object; 0 sky). Outputs other than
 // Shaded skip tone mapping.
-enum class RenderOutput { Shaded = 0, AmbientIrradiance = 1, Normal = 2 };
+enum class RenderOutput { Shaded = 0, AmbientIrradiance = 1, Normal = 2, Albedo = 3 };
 
 // One output read back: RGBA per pixel and the camera-relative position of its surface (from
 // the depth buffer), top row first.
@@ -96,6 +96,9 @@ class Renderer {
                        RenderOutput output = RenderOutput::Shaded);
     // The HDR target of the last render() with its surface positions (after a non-shaded output).
     SurfaceImage readSurface(const CameraSample& camera);
+    // Tone maps a linear HDR image of the view's size (top row first, RGB float, e.g. readHdr()
+    // changed on the CPU) with the current exposure and returns it as readRgb8 does.
+    std::vector<unsigned char> tonemap(const std::vector<float>& hdrRgb);
     // The tone-mapped image, top row first, RGB 8-bit (waits for the GPU).
     std::vector<unsigned char> readRgb8();
     // The linear HDR image, top row first, RGB float.

@@ -83,31 +83,6 @@ std::string readSettingsFile(const std::string& path, const char* what) {
     return readTextFile(path, what, kMaxSettingsFileBytes);
 }
 
-// Where the draw would look up ambience, for a run without the main view: points of an 8 m
-// lattice (about the density of near terrain corners and plants) within 48 m all around the
-// camera and within 240 m in a 60-degree half-angle cone ahead, on the ground plane: about a
-// thousand a frame. They are looked up (and timed as the draw's lookups), and the reactive
-// baseline creates its probes from them.
-void drawLookupStandIn(const CameraSample& camera, std::vector<double>& x, std::vector<double>& z) {
-    x.clear(), z.clear();
-    constexpr double kSpacing = 8.0, kNear = 48.0, kFar = 240.0, kCosCone = 0.5;
-    glm::dvec2 ahead(camera.forward.x, camera.forward.z);
-    const double len = glm::length(ahead);
-    ahead = len > 1e-6 ? ahead / len : glm::dvec2(0.0);
-    const double i0 = std::floor(camera.position_m.x / kSpacing);
-    const double k0 = std::floor(camera.position_m.z / kSpacing);
-    const int reach = int(kFar / kSpacing) + 1;
-    for (int di = -reach; di <= reach; ++di)
-        for (int dk = -reach; dk <= reach; ++dk) {
-            const double px = (i0 + di) * kSpacing, pz = (k0 + dk) * kSpacing;
-            const glm::dvec2 d(px - camera.position_m.x, pz - camera.position_m.z);
-            const double r = glm::length(d);
-            const bool near = r <= kNear;
-            const bool inCone = r <= kFar && len > 1e-6 && glm::dot(d, ahead) >= kCosCone * r;
-            if (near || inCone) x.push_back(px), z.push_back(pz);
-        }
-}
-
 // Screen witnesses (lighting/Metrics.h): the main view rendered twice more, as the ambient
 // irradiance the draw applies and as the world normal, and `count` random surface pixels of it
 // (the same pixels for every method: the generator is seeded by the frame) handed to the meter.

@@ -300,31 +300,18 @@ void ErrorMeter::screenFrame(int frameIndex, double timeOfDay_h,
         auto it = screenCache_.find(key);
         if (it == screenCache_.end()) {
             const auto t0 = std::chrono::steady_clock::now();
-            std::vector<float> cube = reference_->captureAll(probe, timeOfDay_h);
-            // The sun's texels are left out, as for every reference (ReferenceOracle.h).
-            for (std::size_t t = 0; t < cube.size(); t += 3) {
-                const double l = kLuminanceWeights[0] * cube[t] + kLuminanceWeights[1] * cube[t + 1] +
-                                 kLuminanceWeights[2] * cube[t + 2];
-                const bool bad = !(std::isfinite(cube[t]) && std::isfinite(cube[t + 1]) &&
-                                   std::isfinite(cube[t + 2])) ||
-                                 cube[t] < 0.0f || cube[t + 1] < 0.0f || cube[t + 2] < 0.0f;
-                if (bad || l > settings_.sunThreshold) cube[t] = cube[t + 1] = cube[t + 2] = 0.0f;
-            }
-            const CubeIrradiance irradiance(reference_->faceSize(), cube);
-            it = screenCache_.emplace(key, ScreenEntry{glm::vec3(n), glm::vec3(irradiance.at(n))})
-                     .first;
+            const glm::dvec3 e = referenceIrradianceAt(
+                reference_->faceSize(), reference_->captureAll(probe, timeOfDay_h),
+                settings_.sunThreshold, n);
+            it = screenCache_.emplace(key, ScreenEntry{glm::vec3(n), glm::vec3(e)}).first;
             reference_s_ += secondsSince(t0);
             ++referenceCaptures_;
         } else {
             ++referenceHits_;
         }
-        const glm::dvec3 ref(it->second.irradiance), d = p.applied - ref;
-        const auto weighted = [](const glm::dvec3& v) {
-            return kLuminanceWeights[0] * v.x * v.x + kLuminanceWeights[1] * v.y * v.y +
-                   kLuminanceWeights[2] * v.z * v.z;
-        };
         screenResults_.push_back(
-            {frameIndex, p.kind, std::sqrt(weighted(d) / std::max(weighted(ref), 1e-18))});
+            {frameIndex, p.kind,
+             irradianceRelativeError(p.applied, glm::dvec3(it->second.irradiance))});
     }
 }
 

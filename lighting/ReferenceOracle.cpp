@@ -20,18 +20,28 @@ ReferenceSample referenceSample(int faceSize, const std::vector<float>& cube,
     out.sh = toFloat(projectCubeMap(faceSize, cube, options).sh);
     // The texels the projection leaves out (the sun's, bad ones) are left out here too.
     std::vector<float> kept(cube);
-    for (std::size_t t = 0; t < kept.size(); t += 3) {
-        const float r = kept[t], g = kept[t + 1], b = kept[t + 2];
-        const bool bad = !(std::isfinite(r) && std::isfinite(g) && std::isfinite(b)) || r < 0.0f ||
-                         g < 0.0f || b < 0.0f;
-        const double luminance =
-            kLuminanceWeights[0] * r + kLuminanceWeights[1] * g + kLuminanceWeights[2] * b;
-        if (bad || luminance > sunThreshold) kept[t] = kept[t + 1] = kept[t + 2] = 0.0f;
-    }
+    dropSunTexels(kept, sunThreshold);
     const CubeIrradiance irradiance(faceSize, kept);
     out.irradiance.reserve(rule.directions.size());
     for (const glm::dvec3& d : rule.directions) out.irradiance.emplace_back(irradiance.at(d));
     return out;
+}
+
+void dropSunTexels(std::vector<float>& cube, double sunThreshold) {
+    for (std::size_t t = 0; t + 2 < cube.size(); t += 3) {
+        const float r = cube[t], g = cube[t + 1], b = cube[t + 2];
+        const bool bad = !(std::isfinite(r) && std::isfinite(g) && std::isfinite(b)) || r < 0.0f ||
+                         g < 0.0f || b < 0.0f;
+        const double luminance =
+            kLuminanceWeights[0] * r + kLuminanceWeights[1] * g + kLuminanceWeights[2] * b;
+        if (bad || luminance > sunThreshold) cube[t] = cube[t + 1] = cube[t + 2] = 0.0f;
+    }
+}
+
+glm::dvec3 referenceIrradianceAt(int faceSize, std::vector<float> cube, double sunThreshold,
+                                 const glm::dvec3& normal) {
+    dropSunTexels(cube, sunThreshold);
+    return CubeIrradiance(faceSize, cube).at(normal);
 }
 
 namespace {
@@ -42,6 +52,10 @@ double weightedSquare(const glm::dvec3& d) {
 }
 
 }  // namespace
+
+double irradianceRelativeError(const glm::dvec3& applied, const glm::dvec3& ref) {
+    return std::sqrt(weightedSquare(applied - ref) / std::max(weightedSquare(ref), 1e-18));
+}
 
 double referenceDistance(const ReferenceSample& ref, const ShRgb& sh, const SphereRule& rule) {
     AMB_CHECK(ref.irradiance.size() == rule.directions.size());

@@ -63,6 +63,15 @@ struct ReferenceSample {
 ReferenceSample referenceSample(int faceSize, const std::vector<float>& cube,
                                 double sunThreshold, const SphereRule& rule);
 
+// Zeroes the texels the methods' projection leaves out of the SH (luminance above
+// `sunThreshold`, and bad ones: NaN, infinite or negative), in place.
+void dropSunTexels(std::vector<float>& cube, double sunThreshold);
+// E_ref(n) at one normal: a reference cube captured at `probe`, sun texels dropped.
+glm::dvec3 referenceIrradianceAt(int faceSize, std::vector<float> cube, double sunThreshold,
+                                 const glm::dvec3& normal);
+// |a - ref| / |ref| with luminance-weighted channels (one normal: a screen witness).
+double irradianceRelativeError(const glm::dvec3& applied, const glm::dvec3& ref);
+
 // ||E_sh - E_ref|| and ||E_ref|| by the rule.
 double referenceDistance(const ReferenceSample& ref, const ShRgb& sh, const SphereRule& rule);
 double referenceNorm(const ReferenceSample& ref, const SphereRule& rule);

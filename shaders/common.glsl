@@ -13,8 +13,8 @@ layout(std140, binding = 0) uniform FrameConstants {
     vec4 uLightIrradiance;   // rgb: irradiance on a surface facing the light
     vec4 uSunDisc;           // rgb: radiance of the sun disc; w: cos(angular radius), > 1 = off
     vec4 uFog;               // x: extinction per metre; y: 1 when capturing (alpha marks sky);
-                             // z: output (0 shaded; 1 ambient irradiance, 2 world normal: the
-                             // screen witnesses' AOVs, alpha = surface kind, 0 = sky)
+                             // z: output (0 shaded; 1 ambient irradiance, 2 world normal, 3 albedo:
+                             // the screen witnesses' AOVs, alpha = surface kind, 0 = sky)
     vec4 uSunAzimuth;        // xz: unit horizontal direction of the sun's azimuth
     vec4 uFogToward;         // rgb: horizon sky radiance towards the sun's azimuth
     vec4 uFogAway;           // rgb: horizon sky radiance away from it
@@ -54,11 +54,11 @@ vec3 shadeLambert(vec3 albedo, vec3 n, vec3 ambientIrradiance) {
 }
 
 // The screen witnesses' outputs (app/Renderer.h, RenderOutput): instead of the shaded colour,
-// the ambient irradiance as the draw applies it, or the world normal; alpha names the surface
-// (1 terrain, 2 road, 3 object). Returns false for the shaded colour.
-bool writeAov(vec3 ambientIrradiance, vec3 n, float kind, out vec4 color) {
+// the ambient irradiance as the draw applies it, the world normal or the albedo; alpha names
+// the surface (1 terrain, 2 road, 3 object). Returns false for the shaded colour.
+bool writeAov(vec3 ambientIrradiance, vec3 n, vec3 albedo, float kind, out vec4 color) {
     if (uFog.z < 0.5) return false;
-    color = vec4(uFog.z < 1.5 ? ambientIrradiance : n, kind);
+    color = vec4(uFog.z < 1.5 ? ambientIrradiance : (uFog.z < 2.5 ? n : albedo), kind);
     return true;
 }
 

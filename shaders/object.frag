@@ -15,6 +15,6 @@ void main() {
     vec3 n = normalize(vNormal);
     if (!gl_FrontFacing) n = -n;  // thin crowns and leaves are seen from both sides
     vec3 ambient = ambientIrradiance(vAmbientSet, n);
-    if (writeAov(ambient, n, 3.0, oColor)) return;
+    if (writeAov(ambient, n, vAlbedo, 3.0, oColor)) return;
     oColor = vec4(applyFog(shadeLambert(vAlbedo, n, ambient), vFog), 0.0);
 }

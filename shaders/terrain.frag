@@ -22,6 +22,6 @@ void main() {
     vec3 e1 = mix(uCornerIrradiance[2].rgb, uCornerIrradiance[3].rgb, vPatchUv.x);
     vec3 ambient = uVertexIrradiance != 0 ? vIrradiance : mix(e0, e1, vPatchUv.y);
     vec3 n = normalize(vNormal);
-    if (writeAov(ambient, n, uVertexIrradiance != 0 ? 2.0 : 1.0, oColor)) return;
+    if (writeAov(ambient, n, vAlbedo, uVertexIrradiance != 0 ? 2.0 : 1.0, oColor)) return;
     oColor = vec4(applyFog(shadeLambert(vAlbedo, n, ambient), vFog), 0.0);
 }

@@ -1,13 +1,16 @@
 // Cli_test.cpp — the command line as a user meets it: help works, and bad input (unknown
 // options, missing or malformed files, absurd values) gives exactly one line on stderr naming
 // what and where, exit code 2, and no crash.
+#include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "RunAmbience.h"
 
@@ -130,6 +133,28 @@ TEST(Cli, ReferenceOracleBadOptions) {
     expectInputError("probe --at 0,0 --scene detailed --out " + testing::TempDir() + "p.exr",
                      {"--scene", "detailed"});
     expectInputError("bench --oracle perfect --out " + testing::TempDir() + "b", {"--oracle"});
+}
+
+// `ambience compare`: a small frame with a coarse sample grid writes the three pictures side by
+// side and a summary whose error is finite and positive; bad options are one clear error.
+TEST(Cli, CompareWritesTheFrameTheReferenceAndTheHeatMap) {
+    const std::string out = testing::TempDir() + "compare-test";
+    const test::CommandResult r = runAmbience(
+        "compare --replay " + sourcePath("replays/highway-drive.json") +
+        " --frame 20 --size 96x54 --grid 12 --reference-size 16 --out " + out);
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    for (const char* f : {"method.png", "reference.png", "error.png", "compare.png"})
+        EXPECT_TRUE(std::filesystem::exists(out + "/" + f)) << f;
+    std::ifstream in(out + "/compare.json");
+    const nlohmann::json j = nlohmann::json::parse(in);
+    EXPECT_GT(j["samples"].get<int>(), 5);
+    const double e = j["screenMeanError"].get<double>();
+    EXPECT_TRUE(std::isfinite(e));
+    EXPECT_GT(e, 0.0);
+    EXPECT_LT(e, 2.0);
+    expectInputError("compare --grid 1 --out " + out, {"--grid"});
+    expectInputError("compare --frame 999999 --out " + out, {"--frame"});
+    expectInputError("compare --ambient magic --out " + out, {"--ambient"});
 }
 
 }  // namespace
