@@ -7,6 +7,7 @@
 #   fuzz_baseline_settings
 #   fuzz_sweep              the README's sweep example and a two-point sweep
 #   fuzz_oracle             the oracle of a 30-frame run measured every 10th frame
+#   fuzz_reference          the reference of a 30-frame run (two entries, two screen witnesses)
 #   fuzz_anchor_store       the anchor store after one frame (every grid, no anchor yet),
 #                           behind the byte that selects the checksum handling in the target
 #   fuzz_cubemap            4 x 4 cube maps from `ambience probe` as .png, .exr and .hdr, each
@@ -20,7 +21,7 @@ corpus=tests/fuzz/corpus
 tmp="$(mktemp -d "${TMPDIR:-/tmp}/ambience-corpus.XXXXXX")"
 trap 'rm -rf "$tmp"' EXIT
 
-mkdir -p "$corpus"/{fuzz_replay,fuzz_volume_settings,fuzz_baseline_settings,fuzz_sweep,fuzz_oracle,fuzz_anchor_store,fuzz_cubemap}
+mkdir -p "$corpus"/{fuzz_replay,fuzz_volume_settings,fuzz_baseline_settings,fuzz_sweep,fuzz_oracle,fuzz_reference,fuzz_anchor_store,fuzz_cubemap}
 
 # Replays: the header lines as written and a window of sample lines (the writer puts one sample
 # per line), so numbers keep their exact text.
@@ -87,6 +88,9 @@ if [[ ! -x "$ambience" ]]; then
 fi
 "$ambience" run --replay replays/highway-drive.json --max-frames 30 --no-frames --no-video \
   --measure-every 10 --oracle "$tmp/oracle.json" --out "$tmp/run" >/dev/null
+"$ambience" run --replay replays/highway-drive.json --max-frames 30 --no-frames --no-video \
+  --measure-every 10 --oracle-kind reference --reference "$tmp/reference.json" \
+  --reference-every 1 --screen-witnesses 2 --out "$tmp/runr" >/dev/null
 # A store with one anchor is over 300 kB (a leaf node of every payload grid); the store after
 # one frame has no anchor yet but every grid, the metadata and the checksum, in 19 kB.
 "$ambience" run --replay replays/highway-drive.json --max-frames 1 --no-frames --no-video \
@@ -97,6 +101,14 @@ import json, sys
 d = json.load(open(sys.argv[1]))
 d['signature'] = 'fuzz'
 d['entries'] = d['entries'][:6]
+json.dump(d, open(sys.argv[2], 'w'))
+PY
+python3 - "$tmp/reference.json" "$corpus/fuzz_reference/highway-30.json" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+d['signature'] = 'fuzz'
+d['entries'] = d['entries'][:2]
+d['screen'] = d['screen'][:2]
 json.dump(d, open(sys.argv[2], 'w'))
 PY
 # The first byte of an anchor-store input selects its checksum handling (fuzz_anchor_store.cpp).
