@@ -168,12 +168,13 @@ void runCompare(const CompareOptions& o) {
         for (int gx = 0; gx < gw; ++gx) {
             const int x = std::min(w - 1, gx * g + g / 2), y = std::min(h - 1, gy * g + g / 2);
             const std::size_t p = std::size_t(y) * w + x;
-            const float kind = applied.rgba[4 * p + 3];
-            if (!(kind > 0.5f)) continue;
+            const int kind = int(std::lround(applied.rgba[4 * p + 3]));
+            if (kind < 1 || kind > kSurfaceKinds) continue;  // sky, or a simplified plant mesh
             glm::dvec3 n(normals.rgba[4 * p], normals.rgba[4 * p + 1], normals.rgba[4 * p + 2]);
             if (!(glm::length(n) > 0.5)) continue;
             n = glm::normalize(n);
-            const glm::dvec3 at = camera.position_m + glm::dvec3(applied.position[p]);
+            glm::dvec3 at = camera.position_m + glm::dvec3(applied.position[p]);
+            if (kind == int(SurfaceKind::Terrain)) at.y = world.height(at.x, at.z);
             const glm::dvec3 probe = at + ErrorMeter::kScreenProbeOffset_m * n;
             const glm::dvec3 ref = referenceIrradianceAt(
                 o.referenceSize, reference.captureAll(probe, rec.timeOfDay_h),
@@ -186,9 +187,8 @@ void runCompare(const CompareOptions& o) {
             for (int c = 0; c < 3; ++c) s.ratio[c] = ref[c] / std::max(a[c], 1e-6);
             sum += s.error;
             ++count;
-            const int k = std::clamp(int(std::lround(kind)), 1, kSurfaceKinds);
-            kindSum[std::size_t(k)] += s.error;
-            kindCount[std::size_t(k)] += 1.0;
+            kindSum[std::size_t(kind)] += s.error;
+            kindCount[std::size_t(kind)] += 1.0;
         }
 
     // (4) + (5) per pixel

@@ -60,7 +60,8 @@ struct RenderSettings {
 // What render() writes into the HDR target: the shaded view, or an output of the screen
 // witnesses (lighting/Metrics.h): per pixel the ambient irradiance exactly as the draw applies it
 // (corner colours for terrain, per-vertex for roads, per-pixel SH for objects), the world
-// normal or the albedo; alpha names the surface (1 terrain, 2 road, 3 object; 0 sky). Outputs other than
+// normal or the albedo; alpha names the surface (1 terrain, 2 road, 3 object, 4 object drawn
+// with a simplified mesh; 0 sky). Outputs other than
 // Shaded skip tone mapping.
 enum class RenderOutput { Shaded = 0, AmbientIrradiance = 1, Normal = 2, Albedo = 3 };
 

@@ -141,6 +141,7 @@ SceneDrawer::SceneDrawer()
     terrainRect_ = terrain_.uniform("uPatchRect");
     terrainCorners_ = terrain_.uniform("uCornerIrradiance");
     terrainPerVertex_ = terrain_.uniform("uVertexIrradiance");
+    objectSimplified_ = object_.uniform("uSimplified");
 }
 
 void SceneDrawer::setSky(const SkyLighting& sky) {
@@ -201,6 +202,7 @@ std::size_t SceneDrawer::draw(const DrawList& list, const FrameConstants& consta
                                       sizeof(ObjectInstance));
             glEnableVertexArrayAttrib(vao, 3);
             glEnableVertexArrayAttrib(vao, 4);
+            glUniform1i(objectSimplified_, b.simplified ? 1 : 0);
             glBindVertexArray(vao);
             glDrawElementsInstanced(GL_TRIANGLES, b.mesh->indexCount, GL_UNSIGNED_INT, nullptr,
                                     GLsizei(b.instances.size()));

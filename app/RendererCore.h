@@ -77,6 +77,9 @@ static_assert(sizeof(ObjectInstance) == 24, "ObjectInstance is read as two attri
 struct ObjectBatch {
     const GlMesh* mesh = nullptr;
     std::vector<ObjectInstance> instances;
+    // A proxy or far mesh standing in for the full one: the screen witnesses' outputs mark its
+    // pixels as surface kind 4 (not a witness: the reference sees the real plant).
+    bool simplified = false;
 };
 
 // R&H irradiance matrices of the red, green and blue channels (shaders/sh_irradiance.glsl).
@@ -149,6 +152,7 @@ class SceneDrawer {
     GlTexture skyTexture_;
     GlVertexArray emptyVao_;
     GLint terrainOrigin_ = -1, terrainRect_ = -1, terrainCorners_ = -1, terrainPerVertex_ = -1;
+    GLint objectSimplified_ = -1;
 };
 
 }  // namespace amb

@@ -287,8 +287,8 @@ void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewP
     // Batches: full meshes per kind, then proxies per kind.
     const size_t base = out.objects.size();
     for (int k = 0; k < kPlantKinds; ++k) out.objects.push_back({&plantMeshes_[k], {}});
-    for (int k = 0; k < kPlantKinds; ++k) out.objects.push_back({&plantProxies_[k], {}});
-    for (int k = 0; k < kPlantKinds; ++k) out.objects.push_back({&plantFar_[k], {}});
+    for (int k = 0; k < kPlantKinds; ++k) out.objects.push_back({&plantProxies_[k], {}, true});
+    for (int k = 0; k < kPlantKinds; ++k) out.objects.push_back({&plantFar_[k], {}, true});
     const std::int64_t i0 = Vegetation::tileIndex(centre_m.x - range);
     const std::int64_t i1 = Vegetation::tileIndex(centre_m.x + range);
     const std::int64_t k0 = Vegetation::tileIndex(centre_m.z - range);

@@ -98,11 +98,17 @@ void takeScreenWitnesses(Renderer& renderer, const CameraSample& camera,
     std::vector<ScreenWitness> pixels;
     for (int tries = 0; tries < 100 * count && int(pixels.size()) < count; ++tries) {
         const std::size_t p = pick(rng);
-        const float kind = applied.rgba[4 * p + 3];
-        if (!(kind > 0.5f) || !(normals.rgba[4 * p + 3] > 0.5f)) continue;  // sky
+        const int kind = int(std::lround(applied.rgba[4 * p + 3]));
+        // Sky, and plants drawn with a proxy or far mesh (the reference sees the real plant,
+        // somewhere inside that stand-in) are no witnesses.
+        if (kind < 1 || kind > kSurfaceKinds || !(normals.rgba[4 * p + 3] > 0.5f)) continue;
         ScreenWitness w;
-        w.kind = SurfaceKind(std::clamp(int(std::lround(kind)), 1, kSurfaceKinds));
+        w.kind = SurfaceKind(kind);
         w.position_m = camera.position_m + glm::dvec3(applied.position[p]);
+        // Terrain far away is drawn with coarse patches; the reference stands on the terrain
+        // itself (its own mesh is finest at the probe).
+        if (w.kind == SurfaceKind::Terrain)
+            w.position_m.y = renderer.world().height(w.position_m.x, w.position_m.z);
         w.normal = glm::dvec3(normals.rgba[4 * p], normals.rgba[4 * p + 1], normals.rgba[4 * p + 2]);
         if (!(glm::length(w.normal) > 0.5)) continue;
         w.applied = glm::dvec3(applied.rgba[4 * p], applied.rgba[4 * p + 1], applied.rgba[4 * p + 2]);

@@ -55,7 +55,8 @@ vec3 shadeLambert(vec3 albedo, vec3 n, vec3 ambientIrradiance) {
 
 // The screen witnesses' outputs (app/Renderer.h, RenderOutput): instead of the shaded colour,
 // the ambient irradiance as the draw applies it, the world normal or the albedo; alpha names
-// the surface (1 terrain, 2 road, 3 object). Returns false for the shaded colour.
+// the surface (1 terrain, 2 road, 3 object, 4 object drawn with a simplified mesh). Returns false
+// for the shaded colour.
 bool writeAov(vec3 ambientIrradiance, vec3 n, vec3 albedo, float kind, out vec4 color) {
     if (uFog.z < 0.5) return false;
     color = vec4(uFog.z < 1.5 ? ambientIrradiance : (uFog.z < 2.5 ? n : albedo), kind);

@@ -8,6 +8,7 @@ in vec3 vNormal;
 in vec3 vAlbedo;
 in vec4 vFog;
 flat in uint vAmbientSet;
+uniform int uSimplified;  // 1: a proxy or far mesh (surface kind 4 in the witnesses' outputs)
 
 layout(location = 0) out vec4 oColor;
 
@@ -15,6 +16,6 @@ void main() {
     vec3 n = normalize(vNormal);
     if (!gl_FrontFacing) n = -n;  // thin crowns and leaves are seen from both sides
     vec3 ambient = ambientIrradiance(vAmbientSet, n);
-    if (writeAov(ambient, n, vAlbedo, 3.0, oColor)) return;
+    if (writeAov(ambient, n, vAlbedo, uSimplified != 0 ? 4.0 : 3.0, oColor)) return;
     oColor = vec4(applyFog(shadeLambert(vAlbedo, n, ambient), vFog), 0.0);
 }
