@@ -62,6 +62,7 @@ struct BenchOptions {
     bool frames = false;  // render the main view too (slow on a software rasteriser)
     bool noFrames = false;
     bool tune = false;
+    bool fromRuns = false;
     std::string tuneReplays = "highway-drive,mountain-drive,low-flight,stress-flight";
     int tuneRounds = 1;
     int tuneBudget = 1;  // faces per frame: the cost the tuning holds fixed
@@ -557,8 +558,33 @@ std::string fmt(double v, const char* format) {
 // With --budgets: per replay, each method's mean error and ambience ms at each budget (the
 // default point's family), ours against the best other method at that budget, and the Pareto
 // front over every run of the replay (no other run both cheaper and more accurate).
+// The headline error of a run over its measured frames up to `lastFrame`, from the run's CSV:
+// the terrain witnesses of reference.csv with the reference oracle, else measure.csv's
+// per-frame means (every measured frame has the same witnesses). NaN without data.
+double errorUpTo(const std::string& dir, const Job& j, int lastFrame) {
+    const bool reference =
+        j.report.value("measurement", json::object()).value("oracle", std::string()) == "reference";
+    std::ifstream in((fs::path(dir) / j.runDir / (reference ? "reference.csv" : "measure.csv")).string());
+    std::string line;
+    if (!std::getline(in, line)) return std::nan("");
+    double sum = 0.0;
+    std::size_t count = 0;
+    while (std::getline(in, line)) {
+        std::vector<std::string> f;
+        std::stringstream ss(line);
+        for (std::string cell; std::getline(ss, cell, ',');) f.push_back(cell);
+        if (f.size() < 6) continue;
+        if (std::atoi(f[0].c_str()) > lastFrame) continue;
+        if (reference && f[1].rfind("ring_", 0) != 0) continue;  // objects are not headline
+        const double e = std::atof(f[reference ? 5 : 4].c_str());
+        if (std::isfinite(e)) sum += e, ++count;
+    }
+    return count ? sum / double(count) : std::nan("");
+}
+
 void writeBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
-                        const std::vector<std::string>& replays, int fullLengthBudget) {
+                        const std::vector<std::string>& replays, int fullLengthBudget,
+                        const std::string& dir) {
     std::vector<int> budgets;
     std::vector<std::string> methods;
     for (const Job& j : jobs) {
@@ -606,27 +632,46 @@ void writeBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
             }
             out << " **" << fmt(ours / best, "%.3g") << "** |\n";
         }
-        // Pareto front over every run of the replay.
+        // Runs above the full-length budget play a share of the replay: every run is also
+        // measured over the frames all of them play, and the Pareto front is taken on that.
+        int common = std::numeric_limits<int>::max();
         std::vector<const Job*> runs;
         for (const Job& j : jobs)
-            if (j.replay.name == replay && j.ok && std::isfinite(errorOf(j)) && std::isfinite(msOf(j)))
+            if (j.replay.name == replay && j.ok && std::isfinite(msOf(j))) {
                 runs.push_back(&j);
+                common = std::min(common, int(number(j.report, {"frameCount"})) - 1);
+            }
+        std::map<const Job*, double> prefix;
+        for (const Job* j : runs) prefix[j] = errorUpTo(dir, *j, common);
+        out << "\nOver the frames every budget plays (0 to " << common
+            << "), mean error: ";
+        for (int b : budgets) {
+            out << (b == budgets.front() ? "" : "; ") << b << " faces:";
+            for (const auto& m : methods)
+                for (const Job* j : runs)
+                    if (j->method == m && j->point.family == "default" &&
+                        j->point.facesPerFrame == b)
+                        out << " " << (m == "volume" ? "**ours**" : m) << " "
+                            << fmt(prefix[j], "%.3f");
+        }
         std::vector<const Job*> front;
         for (const Job* a : runs) {
+            if (!std::isfinite(prefix[a])) continue;
             bool dominated = false;
             for (const Job* b : runs) {
-                const bool noWorse = msOf(*b) <= msOf(*a) && errorOf(*b) <= errorOf(*a);
-                const bool better = msOf(*b) < msOf(*a) || errorOf(*b) < errorOf(*a);
+                if (!std::isfinite(prefix[b])) continue;
+                const bool noWorse = msOf(*b) <= msOf(*a) && prefix[b] <= prefix[a];
+                const bool better = msOf(*b) < msOf(*a) || prefix[b] < prefix[a];
                 if (b != a && noWorse && better) dominated = true;
             }
             if (!dominated) front.push_back(a);
         }
         std::sort(front.begin(), front.end(),
                   [&](const Job* a, const Job* b) { return msOf(*a) < msOf(*b); });
-        out << "\nPareto front (cheapest first): ";
+        out << "\n\nPareto front over those frames (cheapest first): ";
         for (std::size_t i = 0; i < front.size(); ++i)
             out << (i ? ", " : "") << front[i]->method << " " << front[i]->point.label << " ("
-                << fmt(errorOf(*front[i]), "%.3f") << " at " << fmt(msOf(*front[i]), "%.2f")
+                << fmt(prefix[front[i]], "%.3f") << " at " << fmt(msOf(*front[i]), "%.2f")
                 << " ms)";
         out << "\n\n";
     }
@@ -782,7 +827,7 @@ void writeSummary(const std::vector<Job>& jobs, const std::string& path,
             << " |\n";
     }
     out << "\n";
-    writeBudgetSection(out, jobs, replays, fullLengthBudget);
+    writeBudgetSection(out, jobs, replays, fullLengthBudget, fs::path(path).parent_path().string());
     writeErrorBudgetSection(out, jobs, replays, idealBudget);
     out << "## Plots\n\n";
     for (const std::string& replay : replays)
@@ -1039,7 +1084,22 @@ void runBench(const BenchOptions& o, const std::string& commandLine) {
     }
     // Put every replay's oracle job at the front, so the replays' oracles are made in parallel.
     std::stable_partition(jobs.begin(), jobs.end(), [](const Job& j) { return j.makesOracle; });
-    runJobs(jobs, runner, workers, "bench");
+    if (o.fromRuns) {
+        // Nothing runs: each job's report is read back from its folder.
+        for (Job& j : jobs) {
+            const fs::path report = fs::path(o.out) / j.runDir / "report.json";
+            std::ifstream in(report);
+            try {
+                j.report = json::parse(in);
+                j.ok = in.good() || in.eof();
+            } catch (const json::exception&) {
+                j.ok = false;
+                j.error = "no readable report in " + report.string();
+            }
+        }
+    } else {
+        runJobs(jobs, runner, workers, "bench");
+    }
     const double wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
@@ -1112,6 +1172,9 @@ void addBenchCommand(CLI::App& app) {
                   "render the main view too (slow; the error does not depend on it)");
     cmd->add_flag("--no-frames", o->noFrames,
                   "do not render the main view (the default; captures still render)");
+    cmd->add_flag("--from-runs", o->fromRuns,
+                  "run nothing: rewrite results.csv, summary.md and the plots from the runs "
+                  "already in --out (same --replays, --methods, --sweep and --budgets)");
     cmd->add_flag("--tune", o->tune,
                   "coordinate descent over the volume's scheduler and store parameters at the "
                   "default budget; writes tune.csv and tuned-volume.json");
