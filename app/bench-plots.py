@@ -721,6 +721,21 @@ def plot_error_budget(directory, ok_rows, written):
             labelled.add("total")
             axis.text(x, 0.0, method_label(method), rotation=90, fontsize=6, ha="center",
                       va="bottom", color="white")
+    # A method that blows up (a stale daylight probe against a night oracle reads as thousands)
+    # would flatten the rest: the axis ends above the largest total of 1.2 or less, and bars
+    # beyond it are marked with their total.
+    totals = [row["budget_total_rms"] for row in chosen.values()]
+    sane = [t * t for t in totals if t <= 1.2]
+    top = 1.15 * max(sane) if sane else None
+    if top is not None:
+        axis.set_ylim(0.0, top)
+        for r_index, replay in enumerate(replays):
+            for m_index, method in enumerate(methods):
+                row = chosen.get((replay, method))
+                if row is not None and row["budget_total_rms"] ** 2 > top:
+                    x = r_index - 0.4 + width * (m_index + 0.5)
+                    axis.text(x, top * 0.98, f"{row['budget_total_rms']:.3g}", rotation=90,
+                              fontsize=6, ha="center", va="top")
     axis.set_xticks(range(len(replays)))
     axis.set_xticklabels(replays, fontsize=8)
     axis.set_ylabel("squared relative error (RMS over witnesses)²")
