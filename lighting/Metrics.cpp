@@ -8,6 +8,7 @@
 #include <climits>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <sstream>
 
@@ -126,17 +127,13 @@ std::vector<Witness> witnessPoints(const MeasureSettings& settings, double camer
 
 ShRgb oracleSh(CubeCapture& capture, const ProbeEnvironment& environment,
                const MeasureSettings& settings, double x_m, double z_m, double timeOfDay_h) {
-    const glm::dvec3 probe = environment.placeProbe(x_m, z_m, settings.maxAside_m);
-    const std::vector<float> cube = capture.captureAll(probe, timeOfDay_h);
-    CubeMapProjector::Options options;
-    options.sunThreshold = settings.sunThreshold;
-    const CubeMapProjection p = projectCubeMap(capture.faceSize(), cube, options);
-    // Bad texels are zeroed and counted by the projection; the coefficients stay finite.
-    return toFloat(p.sh);
+    return oracleShAt(capture, settings, environment.placeProbe(x_m, z_m, settings.maxAside_m),
+                      timeOfDay_h);
 }
 
 ShRgb oracleShAt(CubeCapture& capture, const MeasureSettings& settings,
                  const glm::dvec3& position_m, double timeOfDay_h) {
+    // Bad texels are zeroed and counted by the projection; the coefficients stay finite.
     const std::vector<float> cube = capture.captureAll(position_m, timeOfDay_h);
     CubeMapProjector::Options options;
     options.sunThreshold = settings.sunThreshold;
@@ -172,29 +169,25 @@ ErrorMeter::ErrorMeter(CubeCapture& capture, const ProbeEnvironment& environment
 }
 
 ShRgb ErrorMeter::oracle(int frameIndex, double x_m, double z_m, double timeOfDay_h) {
-    const Key key{frameIndex, x_m, z_m};
-    const auto it = oracleCache_.find(key);
-    if (it != oracleCache_.end()) {
-        ++oracleHits_;
-        return it->second;
-    }
-    const auto t0 = std::chrono::steady_clock::now();
-    const ShRgb sh = oracleSh(capture_, environment_, settings_, x_m, z_m, timeOfDay_h);
-    oracle_s_ += secondsSince(t0);
-    ++oracleCaptures_;
-    oracleCache_.emplace(key, sh);
-    return sh;
+    return cachedOracle({frameIndex, x_m, z_m}, timeOfDay_h, [&] {
+        return environment_.placeProbe(x_m, z_m, settings_.maxAside_m);
+    });
 }
 
 ShRgb ErrorMeter::oracleAt(int frameIndex, const glm::dvec3& position_m, double timeOfDay_h) {
-    const Key key{frameIndex, position_m.x, position_m.z, position_m.y};
+    return cachedOracle({frameIndex, position_m.x, position_m.z, position_m.y}, timeOfDay_h,
+                        [&] { return position_m; });
+}
+
+ShRgb ErrorMeter::cachedOracle(const Key& key, double timeOfDay_h,
+                               const std::function<glm::dvec3()>& position) {
     const auto it = oracleCache_.find(key);
     if (it != oracleCache_.end()) {
         ++oracleHits_;
         return it->second;
     }
     const auto t0 = std::chrono::steady_clock::now();
-    const ShRgb sh = oracleShAt(capture_, settings_, position_m, timeOfDay_h);
+    const ShRgb sh = oracleShAt(capture_, settings_, position(), timeOfDay_h);
     oracle_s_ += secondsSince(t0);
     ++oracleCaptures_;
     oracleCache_.emplace(key, sh);
@@ -466,6 +459,23 @@ std::vector<double> ErrorMeter::ringErrors(int ring) const {
 
 // ---- Oracle cache ----------------------------------------------------------------------------
 
+namespace {
+
+// Writes `j` to `path` through a temporary beside it, so a reader never sees half a file.
+void writeJsonFile(const std::string& path, const nlohmann::json& j, const std::string& what) {
+    const std::string tmp = path + ".part";
+    {
+        std::ofstream out(tmp);
+        if (!out) throw InputError(path, "cannot write the " + what);
+        out << j.dump() << "\n";
+        if (!out) throw InputError(path, "cannot write the " + what);
+    }
+    if (std::rename(tmp.c_str(), path.c_str()) != 0)
+        throw InputError(path, "cannot write the " + what);
+}
+
+}  // namespace
+
 void ErrorMeter::saveOracle(const std::string& path, const std::string& signature) const {
     nlohmann::json j;
     j["format"] = "ambience-oracle";
@@ -481,15 +491,7 @@ void ErrorMeter::saveOracle(const std::string& path, const std::string& signatur
         entries.push_back(std::move(entry));
     }
     j["entries"] = std::move(entries);
-    const std::string tmp = path + ".part";
-    {
-        std::ofstream out(tmp);
-        if (!out) throw InputError(path, "cannot write the oracle file");
-        out << j.dump() << "\n";
-        if (!out) throw InputError(path, "cannot write the oracle file");
-    }
-    if (std::rename(tmp.c_str(), path.c_str()) != 0)
-        throw InputError(path, "cannot write the oracle file");
+    writeJsonFile(path, j, "oracle file");
 }
 
 void ErrorMeter::loadOracle(const std::string& path, const std::string& signature) {
@@ -629,15 +631,7 @@ void ErrorMeter::saveReference(const std::string& path, const std::string& signa
                           {"e", {entry.irradiance.x, entry.irradiance.y, entry.irradiance.z}}});
     }
     j["screen"] = std::move(screen);
-    const std::string tmp = path + ".part";
-    {
-        std::ofstream out(tmp);
-        if (!out) throw InputError(path, "cannot write the reference file");
-        out << j.dump() << "\n";
-        if (!out) throw InputError(path, "cannot write the reference file");
-    }
-    if (std::rename(tmp.c_str(), path.c_str()) != 0)
-        throw InputError(path, "cannot write the reference file");
+    writeJsonFile(path, j, "reference file");
 }
 
 void ErrorMeter::loadReference(const std::string& path, const std::string& signature) {

@@ -44,6 +44,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <map>
 #include <string>
@@ -270,6 +271,9 @@ class ErrorMeter {
         bool operator<(const Key& o) const;
     };
     std::map<Key, ShRgb> oracleCache_;
+    // The cache entry of `key`, captured at position() when missing.
+    ShRgb cachedOracle(const Key& key, double timeOfDay_h,
+                       const std::function<glm::dvec3()>& position);
     // The reference.
     CubeCapture* reference_ = nullptr;
     ReferenceSettings referenceSettings_;
