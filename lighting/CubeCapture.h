@@ -46,6 +46,9 @@ class CubeCapture {
     virtual CubeCaptureStats capture(const glm::dvec3& position_m, double timeOfDay_h,
                                      CubeFaceMask faces, std::vector<float>& cube) = 0;
 
+    // Triangles per face of the latest capture (the capture scene's size; 0 if not known).
+    virtual std::size_t lastTriangles() const { return 0; }
+
     // All six faces, returned.
     std::vector<float> captureAll(const glm::dvec3& position_m, double timeOfDay_h,
                                   CubeCaptureStats* stats = nullptr) {

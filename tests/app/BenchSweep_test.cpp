@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "app/BenchSweep.h"
+#include "app/bench/BenchSweep.h"
 #include "world/Error.h"
 
 namespace amb {

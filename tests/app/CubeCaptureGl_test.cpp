@@ -2,7 +2,7 @@
 // world/Conventions.h says (sky texels match the sky model in their direction), +Y is bright sky
 // and -Y ground over open ground at noon, the sun's energy lands in the texel holding the sun
 // direction, and adjacent faces tile.
-#include "app/CubeCaptureGl.h"
+#include "app/render/CubeCaptureGl.h"
 
 #include <algorithm>
 #include <cmath>

@@ -6,7 +6,7 @@
 #include <memory>
 #include <string>
 
-#include "app/Platform.h"
+#include "app/platform/Platform.h"
 #include "world/Vegetation.h"
 #include "world/World.h"
 

@@ -1,10 +1,10 @@
 // Platform_test.cpp — each offscreen platform gives a GL 4.5 core context that renders into a
 // framebuffer object; each test skips with the reason when its platform is absent.
-#include "app/Platform.h"
+#include "app/platform/Platform.h"
 
 #include <gtest/gtest.h>
 
-#include "app/Gl.h"
+#include "app/render/Gl.h"
 #include "world/Error.h"
 
 namespace amb {

@@ -1,7 +1,7 @@
 // Renderer_test.cpp — the main view on EGL and OSMesa: sky above the horizon and terrain below by
 // pixel statistics against the sky model, and the two platforms agree (PSNR >= 40 dB); road
 // vertices are lit at their own positions and normals.
-#include "app/Renderer.h"
+#include "app/render/Renderer.h"
 
 #include <algorithm>
 #include <cmath>
@@ -12,7 +12,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "GlTestContext.h"
-#include "app/RendererScene.h"
+#include "app/render/RendererScene.h"
 #include "lighting/SH.h"
 #include "world/Conventions.h"
 #include "world/Error.h"

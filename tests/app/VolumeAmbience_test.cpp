@@ -12,7 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "RunAmbience.h"
-#include "app/VolumeAmbience.h"
+#include "app/frame/MethodStages.h"
 
 namespace amb {
 namespace {

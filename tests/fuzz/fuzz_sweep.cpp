@@ -4,7 +4,7 @@
 #include <set>
 
 #include "FuzzSupport.h"
-#include "app/BenchSweep.h"
+#include "app/bench/BenchSweep.h"
 #include "lighting/AmbienceMethod.h"
 #include "world/Error.h"
 

@@ -1,0 +1,296 @@
+// CompareCommand.cpp — `ambience compare`: one frame of a replay as the method draws it, the same
+// frame with the reference's ambient, and a per-pixel heat map of the ambient error, side by side
+// (docs/DESIGN.md "Measuring speed against error": a picture users can read).
+//
+// Steps: (1) play the replay with the method up to --frame, without the main view (the draw's
+// lookups stood in, as `ambience run --no-frames` does); (2) render that frame shaded, and as the
+// ambient irradiance the draw applies, the world normal and the albedo (app/Renderer.h,
+// RenderOutput); (3) on a grid of pixels every --grid pixels, a reference capture of the full
+// scene (lighting/ReferenceOracle.h) 0.25 m along the surface normal gives E_ref(n) there, and
+// the relative error of the applied irradiance against it; (4) between grid pixels the ratio
+// E_ref / E_applied and the error are interpolated bilinearly from the surface samples around;
+// (5) the reference frame is the shaded frame with its ambient term replaced, per pixel:
+// L + albedo / pi x (E_ref - E_applied) (fog left out: it only fades the far field), tone mapped
+// as the frame is. Outputs in --out: method.png, reference.png, error.png (0 black .. 0.5 and
+// above white-yellow, sky grey), compare.png (the three side by side) and compare.json (the mean
+// error over the samples: screen-weighted, and by surface).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "app/cli/CliChecks.h"
+#include "app/cli/Commands.h"
+#include "app/render/CubeCaptureGl.h"
+#include "app/frame/FrameLoop.h"
+#include "app/cli/OutputPaths.h"
+#include "app/platform/Platform.h"
+#include "app/render/Renderer.h"
+#include "app/cli/RunReport.h"
+#include "app/frame/MethodStages.h"
+#include "lighting/Baselines.h"
+#include "lighting/Metrics.h"
+#include "lighting/ReferenceOracle.h"
+#include "world/Error.h"
+#include "world/TextFile.h"
+#include "world/World.h"
+
+namespace amb {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CompareOptions {
+    std::string replay, ambient = "volume", config, out, size = "640x360", backend = "auto";
+    std::string shaders;
+    int frame = -1;  // default: the middle of the replay
+    int grid = 16;
+    int referenceSize = CubeCaptureGl::kReferenceFaceSize;
+    int facesPerFrame = 1;
+    int stride = 2;
+};
+
+// A heat colour for an error in [0, 0.5]: black, red, orange, yellow, white.
+glm::vec3 heat(double error) {
+    static const glm::vec3 stops[] = {
+        {0.0f, 0.0f, 0.0f}, {0.6f, 0.0f, 0.0f}, {1.0f, 0.45f, 0.0f}, {1.0f, 0.9f, 0.2f},
+        {1.0f, 1.0f, 1.0f}};
+    const double t = std::clamp(error / 0.5, 0.0, 1.0) * 4.0;
+    const int i = std::min(3, int(t));
+    return glm::mix(stops[i], stops[i + 1], float(t - i));
+}
+
+unsigned char byte(float v) {
+    return (unsigned char)std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f);
+}
+
+void runCompare(const CompareOptions& o) {
+    // (1) inputs
+    const std::string replayPath =
+        o.replay.empty() ? (shippedReplayDir().empty() ? std::string("replays")
+                                                       : shippedReplayDir()) +
+                               "/highway-drive.json"
+                         : o.replay;
+    const Replay replay = readReplay(replayPath);
+    checkAmbienceMethod(o.ambient, "--ambient");
+    AmbienceVolumeSettings volumeSettings;
+    if (!o.config.empty())
+        volumeSettings = ambienceSettingsFromJson(
+            readTextFile(o.config, "ambience settings file", kMaxSettingsFileBytes), o.config);
+    BaselineSettings baselines;
+    if (o.facesPerFrame < 1 || o.facesPerFrame > kMaxFacesPerFrame)
+        throw InputError("--faces-per-frame", "expected 1 to " + std::to_string(kMaxFacesPerFrame));
+    volumeSettings.facesPerFrame = baselines.facesPerFrame = o.facesPerFrame;
+    if (o.grid < 2 || o.grid > 256) throw InputError("--grid", "expected 2 to 256 pixels");
+    if (o.referenceSize < 4 || o.referenceSize > 256)
+        throw InputError("--reference-size", "expected 4 to 256");
+    if (o.stride < 1) throw InputError("--stride", "must be at least 1");
+    const Size size = parseSize(o.size, "--size");
+    const int passFrames = FrameLoop::framesPerPass(replay, o.stride);
+    const int target = o.frame < 0 ? passFrames / 2 : o.frame;
+    if (target >= passFrames)
+        throw InputError("--frame", "the replay has " + std::to_string(passFrames) +
+                                        " frames at stride " + std::to_string(o.stride));
+    const std::string stem =
+        safeFileStem(replay.name.empty() ? fs::path(replayPath).stem().string() : replay.name);
+    const std::string out = o.out.empty() ? "out/compare-" + stem : o.out;
+    std::error_code ec;
+    fs::create_directories(out, ec);
+    if (ec || !fs::is_directory(out)) throw InputError("--out", "cannot create '" + out + "'");
+    {
+        FilePlan files;
+        files.input("--replay", replayPath);
+        files.input("--config", o.config);
+        for (const char* name : {"method.png", "reference.png", "error.png", "compare.png",
+                                 "compare.json"})
+            files.output("--out", (fs::path(out) / name).string());
+        files.check();
+    }
+
+    auto platform = createOffscreenPlatform(parseBackend(o.backend, "--backend"), size.width,
+                                            size.height);
+    const World world(replay.world);
+    RenderSettings rs;
+    rs.width = size.width;
+    rs.height = size.height;
+    rs.drawVehicle = replay.mode == ReplayMode::Drive;
+    Renderer renderer(world, rs);
+    const auto stagesOwner = makeMethodStages(renderer, o.ambient, volumeSettings, baselines);
+    MethodAmbienceStages& stages = *stagesOwner;
+    FrameLoop loop(replay, renderer, stages, o.stride, 1);
+    loop.setDrawMainView(false);
+    stages.setLookupStandIn(true);
+    FrameRecord rec;
+    CameraSample camera;
+    std::fprintf(stderr, "compare: playing %d frames of %s with %s\n", target + 1, stem.c_str(),
+                 o.ambient.c_str());
+    // The frames before the target as a run without the main view plays them; the target's
+    // own stand-in lookups only feed a next frame that never comes.
+    for (int i = 0; i <= target; ++i) {
+        rec = loop.step();
+        camera = replay.sampleAt(rec.replayTime_s);
+    }
+
+    // (2) the frame and its outputs
+    const AmbientSource& ambient = stages.ambient();
+    renderer.render(camera, ambient);
+    std::vector<float> hdr = renderer.readHdr();
+    const std::vector<unsigned char> methodLdr = renderer.readRgb8();
+    renderer.render(camera, ambient, RenderOutput::AmbientIrradiance);
+    const SurfaceImage applied = renderer.readSurface(camera);
+    renderer.render(camera, ambient, RenderOutput::Normal);
+    const SurfaceImage normals = renderer.readSurface(camera);
+    renderer.render(camera, ambient, RenderOutput::Albedo);
+    const SurfaceImage albedo = renderer.readSurface(camera);
+
+    // (3) reference samples on the grid
+    const int w = size.width, h = size.height, g = o.grid;
+    const int gw = (w + g - 1) / g, gh = (h + g - 1) / g;
+    struct Sample {
+        bool surface = false;
+        glm::dvec3 ratio{1.0};
+        double error = 0.0;
+    };
+    std::vector<Sample> samples(std::size_t(gw) * gh);
+    CubeCaptureGl reference(world, o.referenceSize, CaptureScene::Full);
+    double sum = 0.0;
+    std::array<double, kSurfaceKinds + 1> kindSum{}, kindCount{};
+    int count = 0;
+    for (int gy = 0; gy < gh; ++gy)
+        for (int gx = 0; gx < gw; ++gx) {
+            const int x = std::min(w - 1, gx * g + g / 2), y = std::min(h - 1, gy * g + g / 2);
+            const std::size_t p = std::size_t(y) * w + x;
+            const int kind = int(std::lround(applied.rgba[4 * p + 3]));
+            if (kind < 1 || kind > kSurfaceKinds) continue;  // sky, or a simplified plant mesh
+            glm::dvec3 n(normals.rgba[4 * p], normals.rgba[4 * p + 1], normals.rgba[4 * p + 2]);
+            if (!(glm::length(n) > 0.5)) continue;
+            n = glm::normalize(n);
+            glm::dvec3 at = camera.position_m + glm::dvec3(applied.position[p]);
+            if (kind == int(SurfaceKind::Terrain)) at.y = world.height(at.x, at.z);
+            const glm::dvec3 probe = at + ErrorMeter::kScreenProbeOffset_m * n;
+            const glm::dvec3 ref = referenceIrradianceAt(
+                o.referenceSize, reference.captureAll(probe, rec.timeOfDay_h),
+                kSunThreshold_Wpsrm2, n);
+            const glm::dvec3 a(applied.rgba[4 * p], applied.rgba[4 * p + 1],
+                               applied.rgba[4 * p + 2]);
+            Sample& s = samples[std::size_t(gy) * gw + gx];
+            s.surface = true;
+            s.error = irradianceRelativeError(a, ref);
+            for (int c = 0; c < 3; ++c) s.ratio[c] = ref[c] / std::max(a[c], 1e-6);
+            sum += s.error;
+            ++count;
+            kindSum[std::size_t(kind)] += s.error;
+            kindCount[std::size_t(kind)] += 1.0;
+        }
+
+    // (4) + (5) per pixel
+    std::vector<float> refHdr = hdr;
+    std::vector<unsigned char> errorRgb(std::size_t(w) * h * 3);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const std::size_t p = std::size_t(y) * w + x;
+            if (!(applied.rgba[4 * p + 3] > 0.5f)) {
+                for (int c = 0; c < 3; ++c) errorRgb[3 * p + c] = 60;  // sky
+                continue;
+            }
+            const double u = std::clamp((x - g / 2 + 0.5) / g, 0.0, gw - 1.0);
+            const double v = std::clamp((y - g / 2 + 0.5) / g, 0.0, gh - 1.0);
+            const int x0 = int(u), y0 = int(v);
+            glm::dvec3 ratio(0.0);
+            double error = 0.0, weight = 0.0;
+            for (int dy = 0; dy < 2; ++dy)
+                for (int dx = 0; dx < 2; ++dx) {
+                    const int sx = std::min(gw - 1, x0 + dx), sy = std::min(gh - 1, y0 + dy);
+                    const Sample& s = samples[std::size_t(sy) * gw + sx];
+                    if (!s.surface) continue;
+                    const double wgt = (dx ? u - x0 : 1.0 - (u - x0)) * (dy ? v - y0 : 1.0 - (v - y0)) + 1e-6;
+                    ratio += wgt * s.ratio;
+                    error += wgt * s.error;
+                    weight += wgt;
+                }
+            if (weight <= 0.0) {
+                for (int c = 0; c < 3; ++c) errorRgb[3 * p + c] = 30;  // no sample near
+                continue;
+            }
+            ratio /= weight;
+            error /= weight;
+            const glm::vec3 colour = heat(error);
+            for (int c = 0; c < 3; ++c) {
+                errorRgb[3 * p + c] = byte(colour[c]);
+                const double a = applied.rgba[4 * p + c];
+                refHdr[3 * p + c] += float(albedo.rgba[4 * p + c] / kPi * (ratio[c] - 1.0) * a);
+                refHdr[3 * p + c] = std::max(refHdr[3 * p + c], 0.0f);
+            }
+        }
+    const std::vector<unsigned char> refLdr = renderer.tonemap(refHdr);
+
+    // Outputs.
+    writeImageRgb8((fs::path(out) / "method.png").string(), w, h, methodLdr);
+    writeImageRgb8((fs::path(out) / "reference.png").string(), w, h, refLdr);
+    writeImageRgb8((fs::path(out) / "error.png").string(), w, h, errorRgb);
+    std::vector<unsigned char> side(std::size_t(3) * w * h * 3);
+    for (int y = 0; y < h; ++y)
+        for (int i = 0; i < 3; ++i) {
+            const std::vector<unsigned char>& src = i == 0 ? methodLdr : i == 1 ? refLdr : errorRgb;
+            std::copy_n(&src[std::size_t(y) * w * 3], std::size_t(w) * 3,
+                        &side[(std::size_t(y) * 3 * w + std::size_t(i) * w) * 3]);
+        }
+    writeImageRgb8((fs::path(out) / "compare.png").string(), 3 * w, h, side);
+    nlohmann::json j{{"replay", stem},
+                     {"method", o.ambient},
+                     {"frame", target},
+                     {"timeOfDay_h", rec.timeOfDay_h},
+                     {"gridPixels", g},
+                     {"referenceFaceSize", o.referenceSize},
+                     {"samples", count},
+                     {"screenMeanError", count ? sum / count : 0.0}};
+    for (int k = 1; k <= kSurfaceKinds; ++k)
+        j[std::string(toString(SurfaceKind(k))) + "MeanError"] =
+            kindCount[std::size_t(k)] > 0 ? kindSum[std::size_t(k)] / kindCount[std::size_t(k)]
+                                          : 0.0;
+    std::ofstream((fs::path(out) / "compare.json").string()) << j.dump(1) << "\n";
+    std::printf("compare: %s, frame %d (%.2f h), %s: screen-weighted mean ambient error %.4f over "
+                "%d reference samples (terrain %.3f, road %.3f, objects %.3f)\n",
+                stem.c_str(), target, rec.timeOfDay_h, o.ambient.c_str(),
+                count ? sum / count : 0.0, count,
+                j["terrainMeanError"].get<double>(), j["roadMeanError"].get<double>(),
+                j["objectMeanError"].get<double>());
+    std::printf("  %s (method | reference | error 0 to 0.5)\n",
+                (fs::path(out) / "compare.png").string().c_str());
+}
+
+}  // namespace
+
+void addCompareCommand(CLI::App& app) {
+    auto* cmd = app.add_subcommand(
+        "compare",
+        "one frame as the method draws it, with the reference's ambient, and the ambient error "
+        "per pixel, side by side");
+    auto o = std::make_shared<CompareOptions>();
+    cmd->add_option("--replay", o->replay, "replay file (default replays/highway-drive.json)");
+    cmd->add_option("--ambient", o->ambient, ambienceMethodHelp());
+    cmd->add_option("--config", o->config, "JSON file of ambience volume settings");
+    cmd->add_option("--frame", o->frame, "frame to compare (default: the middle of the replay)");
+    cmd->add_option("--grid", o->grid,
+                    "a reference sample every N pixels (default 16; each costs a 64 x 64 capture "
+                    "of the full scene)");
+    cmd->add_option("--reference-size", o->referenceSize, "reference face size (default 64)");
+    cmd->add_option("--faces-per-frame", o->facesPerFrame, "capture budget (default 1)");
+    cmd->add_option("--stride", o->stride, "replay steps per frame (default 2)");
+    cmd->add_option("--size", o->size, "image size WxH (default 640x360)");
+    cmd->add_option("--out", o->out, "output folder (default out/compare-<replay name>)");
+    cmd->add_option("--backend", o->backend, "auto, egl or osmesa (default auto)");
+    cmd->add_option("--shaders", o->shaders,
+                    "GLSL folder (default <exe>/../shaders or $AMBIENCE_SHADER_DIR)");
+    cmd->callback([o] {
+        if (!o->shaders.empty()) setShaderDirectory(o->shaders);
+        runCompare(*o);
+    });
+}
+
+}  // namespace amb

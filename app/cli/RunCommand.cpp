@@ -1,0 +1,554 @@
+// RunCommand.cpp — `ambience run`: render a replay headless to frames, a video and a report.
+//
+// Steps: (1) read the replay, check the options; (2) an offscreen platform (auto: EGL, then
+// OSMesa) and the renderer; (3) the frame loop, writing every K-th frame as PNG and every frame
+// to ffmpeg through a pipe; (4) the report: JSON with per-stage timing statistics and per-frame
+// rows, and a CSV of the rows beside it.
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <random>
+#include <sstream>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "app/cli/Commands.h"
+#include "app/render/CubeCaptureGl.h"
+#include "app/render/DebugOverlay.h"
+#include "app/frame/FrameLoop.h"
+#include "app/render/Gl.h"
+#include "app/platform/Platform.h"
+#include "app/cli/OutputPaths.h"
+#include "app/render/Renderer.h"
+#include "app/cli/RunReport.h"
+#include "app/frame/MethodStages.h"
+#include "lighting/Baselines.h"
+#include "lighting/Metrics.h"
+#include "world/Error.h"
+#include "world/TextFile.h"
+#include "world/World.h"
+
+namespace amb {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct RunOptions {
+    std::string replay;
+    std::string backend = "auto";
+    std::string shaders;
+    std::string size = "640x360";
+    std::string frames;
+    int every = 10;
+    std::string video;
+    std::string report;
+    int maxFrames = 0;
+    double share = 1.0;  // play the first share of the frames (not part of the oracle's signature)
+    int stride = 2;
+    std::string ambient = "volume";
+    std::string ambienceConfig, saveAnchors, loadAnchors;
+    int facesPerFrame = 1;
+    bool debugOverlay = false;
+    bool noVehicle = false;
+    int faceSize = 16;
+    std::string out;
+    bool noVideo = false;
+    std::string baselineConfig;
+    bool noFrames = false;
+    int measureEvery = 0;
+    std::string oracle;
+    std::string oracleKind = "self";
+    std::string reference;
+    ReferenceSettings referenceSettings;
+    bool referenceOn = false;
+    bool noIdealVolume = false;
+    int screenWitnesses = 0;
+    int loops = 1;
+};
+
+// Passes over the replay for --loop, and a bound on the run's length: the report keeps a row
+// per frame (a few hundred bytes), so 10^7 frames (92 h at 30 frames/s) is as far as it goes.
+constexpr int kMaxLoops = 10000;
+constexpr long kMaxRunFrames = 10'000'000;
+
+std::string readSettingsFile(const std::string& path, const char* what) {
+    return readTextFile(path, what, kMaxSettingsFileBytes);
+}
+
+// Screen witnesses (lighting/Metrics.h): the main view rendered twice more, as the ambient
+// irradiance the draw applies and as the world normal, and `count` random surface pixels of it
+// (the same pixels for every method: the generator is seeded by the frame) handed to the meter.
+void takeScreenWitnesses(Renderer& renderer, const CameraSample& camera,
+                         const AmbientSource& ambient, int count, int frameIndex,
+                         double timeOfDay_h, ErrorMeter& meter) {
+    renderer.render(camera, ambient, RenderOutput::AmbientIrradiance);
+    const SurfaceImage applied = renderer.readSurface(camera);
+    renderer.render(camera, ambient, RenderOutput::Normal);
+    const SurfaceImage normals = renderer.readSurface(camera);
+    std::mt19937_64 rng(0x5C4EE7ull ^ std::uint64_t(frameIndex));
+    std::uniform_int_distribution<std::size_t> pick(0, applied.position.size() - 1);
+    std::vector<ScreenWitness> pixels;
+    for (int tries = 0; tries < 100 * count && int(pixels.size()) < count; ++tries) {
+        const std::size_t p = pick(rng);
+        const int kind = int(std::lround(applied.rgba[4 * p + 3]));
+        // Sky, and plants drawn with a proxy or far mesh (the reference sees the real plant,
+        // somewhere inside that stand-in) are no witnesses.
+        if (kind < 1 || kind > kSurfaceKinds || !(normals.rgba[4 * p + 3] > 0.5f)) continue;
+        ScreenWitness w;
+        w.kind = SurfaceKind(kind);
+        w.position_m = camera.position_m + glm::dvec3(applied.position[p]);
+        // Terrain far away is drawn with coarse patches; the reference stands on the terrain
+        // itself (its own mesh is finest at the probe).
+        if (w.kind == SurfaceKind::Terrain)
+            w.position_m.y = renderer.world().height(w.position_m.x, w.position_m.z);
+        w.normal = glm::dvec3(normals.rgba[4 * p], normals.rgba[4 * p + 1], normals.rgba[4 * p + 2]);
+        if (!(glm::length(w.normal) > 0.5)) continue;
+        w.applied = glm::dvec3(applied.rgba[4 * p], applied.rgba[4 * p + 1], applied.rgba[4 * p + 2]);
+        pixels.push_back(w);
+    }
+    meter.screenFrame(frameIndex, timeOfDay_h, pixels);
+}
+
+// Anchors holding a NaN or an infinity anywhere in what interpolation and blending read. The
+// store refuses such captures on insert; this checks that none got in another way.
+std::size_t nonFiniteAnchors(const AnchorStore& store) {
+    std::size_t bad = 0;
+    auto finite = [](const glm::dvec3& v) {
+        return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+    };
+    store.forEach([&](const Anchor& a) {
+        bool ok = std::isfinite(a.presence) && std::isfinite(a.relight) &&
+                  std::isfinite(a.blendProgress) && finite(a.capturedPosition_m);
+        for (const ShRgb* sh : {&a.current, &a.target, &a.blendFrom})
+            for (const glm::vec3& c : sh->c) ok = ok && finite(glm::dvec3(c));
+        bad += ok ? 0 : 1;
+    });
+    return bad;
+}
+
+void checkLoops(const Replay& replay, const RunOptions& o) {
+    if (o.loops < 1 || o.loops > kMaxLoops)
+        throw InputError("--loop", "expected 1 to " + std::to_string(kMaxLoops) + " passes");
+    long runFrames = long(FrameLoop::framesPerPass(replay, o.stride)) * o.loops;
+    if (o.maxFrames > 0) runFrames = std::min(runFrames, long(o.maxFrames));
+    if (runFrames > kMaxRunFrames) {
+        throw InputError("--loop", std::to_string(o.loops) + " passes would be " +
+                                       std::to_string(runFrames) + " frames (at most " +
+                                       std::to_string(kMaxRunFrames) +
+                                       "): fewer passes, a larger --stride or --max-frames");
+    }
+}
+
+// The store's finiteness and the process's resident memory over the run.
+void printSoakSummary(const RunReport& report, bool scanned) {
+    if (scanned) {
+        const auto& t = report.ambienceTotals;
+        std::printf("  store finite: %s (%lld scans, at most %zu non-finite anchors)\n",
+                    t.nonFiniteAnchorsMax == 0 ? "yes" : "NO", (long long)t.storeScans,
+                    t.nonFiniteAnchorsMax);
+    }
+    if (report.frames.empty()) return;
+    std::size_t rssMax = 0;
+    for (const FrameRecord& f : report.frames) rssMax = std::max(rssMax, f.rss_kB);
+    std::printf("memory: resident %.1f MB at the first frame, %.1f MB at the last, %.1f MB max "
+                "(peak %.1f MB); %d pass(es) over the replay\n",
+                report.frames.front().rss_kB / 1024.0, report.frames.back().rss_kB / 1024.0,
+                rssMax / 1024.0, report.rssPeak_kB / 1024.0, report.loops);
+}
+
+std::string defaultReplayPath() {
+    const std::string dir = shippedReplayDir();
+    return (dir.empty() ? std::string("replays") : dir) + "/highway-drive.json";
+}
+
+void ensureDirectory(const std::string& dir, const std::string& option) {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec || !fs::is_directory(dir) || access(dir.c_str(), W_OK) != 0) {
+        throw InputError(option, "cannot create or write the folder '" + dir + "'");
+    }
+}
+
+void runReplay(RunOptions o) {
+    // (1) inputs
+    if (o.replay.empty()) o.replay = defaultReplayPath();
+    const Replay replay = readReplay(o.replay);
+    const Backend backend = parseBackend(o.backend, "--backend");
+    if (backend == Backend::Glfw)
+        throw InputError("--backend", "run is headless: auto, egl or osmesa");
+    // "volume" is the dynamic ambience volume; the others are the baselines (VolumeAmbience.h).
+    checkAmbienceMethod(o.ambient, "--ambient");
+    const bool useVolume = o.ambient == "volume";
+    AmbienceVolumeSettings volumeSettings;
+    if (!o.ambienceConfig.empty()) {
+        volumeSettings = ambienceSettingsFromJson(
+            readSettingsFile(o.ambienceConfig, "ambience settings file"), o.ambienceConfig);
+    }
+    BaselineSettings baselines;
+    if (!o.baselineConfig.empty()) {
+        baselines = baselineSettingsFromJson(
+            readSettingsFile(o.baselineConfig, "baseline settings file"), o.baselineConfig);
+    }
+    if (o.facesPerFrame < 1 || o.facesPerFrame > kMaxFacesPerFrame)
+        throw InputError("--faces-per-frame",
+                         "expected 1 to " + std::to_string(kMaxFacesPerFrame));
+    // One capture budget for every method.
+    volumeSettings.facesPerFrame = baselines.facesPerFrame = o.facesPerFrame;
+    checkLoops(replay, o);
+    if (o.measureEvery < 0) throw InputError("--measure-every", "must be >= 0");
+    if (!o.oracle.empty() && o.measureEvery == 0)
+        throw InputError("--oracle", "needs --measure-every K");
+    const OracleKind oracleKind = parseOracleKind(o.oracleKind, "--oracle-kind");
+    o.referenceOn = oracleKind == OracleKind::Reference || !o.reference.empty();
+    if (o.referenceOn && o.measureEvery == 0)
+        throw InputError(o.reference.empty() ? "--oracle-kind" : "--reference",
+                         "needs --measure-every K");
+    o.referenceSettings.idealVolume = !o.noIdealVolume;
+    if (o.referenceSettings.every < 1 || o.referenceSettings.every > 1000000)
+        throw InputError("--reference-every", "expected 1 to 1000000");
+    if (o.referenceSettings.faceSize < 1 || o.referenceSettings.faceSize > 256)
+        throw InputError("--reference-size", "expected 1 to 256");
+    if (o.screenWitnesses < 0 || o.screenWitnesses > 4096)
+        throw InputError("--screen-witnesses", "expected 0 to 4096");
+    if (o.screenWitnesses > 0 && !o.referenceOn)
+        throw InputError("--screen-witnesses", "needs the reference (--oracle-kind reference)");
+    if (o.referenceSettings.objectTrees < 0 || o.referenceSettings.objectTrees > 64)
+        throw InputError("--reference-trees", "expected 0 to 64");
+    if (o.noFrames) {
+        if (!o.video.empty()) throw InputError("--video", "--no-frames draws no main view");
+        o.frames = "none";
+        o.noVideo = true;
+    }
+    if (o.faceSize < 1 || o.faceSize > 256) throw InputError("--face-size", "expected 1 to 256");
+    if (!useVolume && o.debugOverlay) throw InputError("--debug-overlay", "needs --ambient volume");
+    if (!useVolume && (!o.saveAnchors.empty() || !o.loadAnchors.empty()))
+        throw InputError("--save-anchors/--load-anchors", "need --ambient volume");
+    const Size size = parseSize(o.size, "--size");
+    if (o.every < 1) throw InputError("--every", "must be at least 1");
+    if (o.stride < 1) throw InputError("--stride", "must be at least 1");
+    if (o.maxFrames < 0) throw InputError("--max-frames", "must be >= 0");
+    if (!(o.share > 0.0 && o.share <= 1.0)) throw InputError("--share", "expected (0, 1]");
+    // The replay's name is only a label: as a file name it is reduced to a safe stem, so a
+    // replay cannot make a run write outside its output folder.
+    const std::string name = replay.name.empty() ? fs::path(o.replay).stem().string() : replay.name;
+    const std::string stem = safeFileStem(name);
+    if (o.out.empty()) o.out = "out/run-" + stem;
+    ensureDirectory(o.out, "--out");
+    if (o.frames.empty()) o.frames = o.out + "/frames";
+    if (o.frames != "none") ensureDirectory(o.frames, "--frames");
+    if (o.video.empty() && !o.noVideo) o.video = o.out + "/" + stem + ".mp4";
+    if (o.report.empty()) o.report = o.out + "/report.json";
+    {
+        // Before any work: no output may overwrite an input or another output, and every
+        // output must be writable.
+        FilePlan files;
+        files.input("--replay", o.replay);
+        files.input("--config", o.ambienceConfig);
+        files.input("--baseline-config", o.baselineConfig);
+        files.input("--load-anchors", o.loadAnchors);
+        files.output("--report", o.report);
+        files.output("--report (CSV)", fs::path(o.report).replace_extension(".csv").string());
+        if (o.measureEvery > 0)
+            files.output("--report (measure.csv)",
+                         (fs::path(o.report).parent_path() / "measure.csv").string());
+        files.output("--video", o.video);
+        files.output("--save-anchors", o.saveAnchors);
+        files.output("--oracle", o.oracle);
+        files.output("--reference", o.reference);
+        if (o.referenceOn)
+            files.output("--report (reference.csv)",
+                         (fs::path(o.report).parent_path() / "reference.csv").string());
+        files.check();
+    }
+
+    // (2) platform and renderer
+    auto platform = createOffscreenPlatform(backend, size.width, size.height);
+    const World world(replay.world);
+    RenderSettings rs;
+    rs.width = size.width;
+    rs.height = size.height;
+    rs.drawVehicle = replay.mode == ReplayMode::Drive && !o.noVehicle;
+    Renderer renderer(world, rs);
+    auto stages = makeMethodStages(renderer, o.ambient, volumeSettings, baselines, o.faceSize);
+    AmbienceVolume* volume = stages->volume();
+    if (volume && !o.loadAnchors.empty()) volume->loadAnchors(o.loadAnchors);
+    FrameLoop loop(replay, renderer, *stages, o.stride, o.loops);
+    loop.setDrawMainView(!o.noFrames);
+    stages->setLookupStandIn(o.noFrames);
+
+    // The error measurement: the oracle's captures use the same capture as the method.
+    std::unique_ptr<ErrorMeter> meter;
+    MeasureSettings measureSettings;
+    measureSettings.every = o.measureEvery;
+    measureSettings.sunThreshold = volumeSettings.sunThreshold;
+    // The oracle depends on the replay, the frames measured and the capture settings only.
+    const std::string oracleSignature =
+        fs::path(o.replay).filename().string() + " stride=" + std::to_string(o.stride) +
+        " every=" + std::to_string(o.measureEvery) + " face=" + std::to_string(o.faceSize) +
+        " sunThreshold=" + std::to_string(measureSettings.sunThreshold) +
+        " frames=" + std::to_string(o.maxFrames) +
+        (o.loops > 1 ? " loops=" + std::to_string(o.loops) : std::string());
+    if (o.measureEvery > 0) {
+        meter = std::make_unique<ErrorMeter>(stages->cubeCapture(), stages->environment(),
+                                             measureSettings);
+        if (!o.oracle.empty() && fs::exists(o.oracle)) meter->loadOracle(o.oracle, oracleSignature);
+    }
+    // The reference oracle: the full scene at 64 x 64 (lighting/ReferenceOracle.h).
+    std::unique_ptr<CubeCaptureGl> referenceCapture;
+    const ReferenceSettings& ref = o.referenceSettings;
+    const std::string referenceSignature =
+        oracleSignature + " reference: face=" + std::to_string(ref.faceSize) +
+        " scene=full rule=" + std::to_string(ref.legendreNodes) +
+        " every=" + std::to_string(ref.every) + " trees=" + std::to_string(ref.objectTrees);
+    if (meter && o.referenceOn) {
+        referenceCapture = std::make_unique<CubeCaptureGl>(world, ref.faceSize, CaptureScene::Full);
+        meter->attachReference(*referenceCapture, ref, oracleKind == OracleKind::Reference);
+        if (!o.reference.empty() && fs::exists(o.reference))
+            meter->loadReference(o.reference, referenceSignature);
+    }
+    if (meter) stages->attachMeter(meter.get());
+    // A shorter run (--share) measures a prefix of the full run's witnesses: the same frames,
+    // so it reads the same oracle caches.
+    const int frames = std::max(
+        1, int(std::ceil(o.share * double(o.maxFrames > 0 ? std::min(o.maxFrames, loop.frameCount())
+                                                          : loop.frameCount()))));
+
+    RunReport report;
+    report.replay = o.replay;
+    report.backend = toString(platform->backend());
+    report.glVersion = platform->glVersion();
+    report.glRenderer = platform->glRenderer();
+    report.width = size.width;
+    report.height = size.height;
+    report.ambient = o.ambient;
+    report.frameStep_s = loop.frameStep_s();
+    report.loops = o.loops;
+    // Rows in one block from the start: no copy of them all when a long run outgrows it.
+    report.frames.reserve(std::size_t(frames));
+
+    std::unique_ptr<VideoPipe> video;
+    if (!o.video.empty()) {
+        video =
+            std::make_unique<VideoPipe>(o.video, size.width, size.height, 1.0 / loop.frameStep_s());
+    }
+    std::fprintf(stderr, "run: %s, %d frames at %dx%d on %s (%s)\n", name.c_str(), frames,
+                 size.width, size.height, report.backend.c_str(), report.glRenderer.c_str());
+
+    // (3) frames
+    ProgressBar progress(frames);
+    const auto start = std::chrono::steady_clock::now();
+    for (int i = 0; i < frames; ++i) {
+        FrameRecord rec = loop.step();
+        if (volume) {
+            auto& t = report.ambienceTotals;
+            t.nonFiniteAnchorsMax =
+                std::max(t.nonFiniteAnchorsMax, nonFiniteAnchors(volume->store()));
+            ++t.storeScans;
+        }
+        const CameraSample camera = replay.sampleAt(rec.replayTime_s);
+        if (meter && o.screenWitnesses > 0 && meter->referenceFrameNow())
+            takeScreenWitnesses(renderer, camera, stages->ambient(), o.screenWitnesses, rec.index,
+                                rec.timeOfDay_h, *meter);
+        const bool writeFrame = o.frames != "none" && rec.index % o.every == 0;
+        if (writeFrame || video) {
+            auto pixels = renderer.readRgb8();
+            if (o.debugOverlay && volume) {
+                drawAnchorOverlay(pixels, size.width, size.height, renderer.viewProjection(camera),
+                                  camera.position_m, *volume);
+            }
+            if (writeFrame) {
+                char file[64];
+                std::snprintf(file, sizeof(file), "/frame-%05d.png", rec.index);
+                writeImageRgb8(o.frames + file, size.width, size.height, pixels);
+            }
+            if (video) video->write(pixels);
+        }
+        // After everything this frame allocated (captures, lookups, frames written).
+        rec.rss_kB = residentMemory_kB();
+        rec.heap_kB = heapInUse_kB();
+        report.frames.push_back(rec);
+        progress.update(i + 1, rec.frameMs);
+    }
+    progress.finish();
+    report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    report.rssPeak_kB = peakResidentMemory_kB();
+    if (video) video->close();
+    {
+        const MethodStatistics st = stages->method().methodStatistics();
+        auto& t = report.ambienceTotals;
+        t.facesCaptured = st.facesCaptured;
+        t.rejectedProbes = st.rejectedProbes;
+        t.teleports = st.teleports;
+        t.captureTriangles = stages->cubeCapture().lastTriangles();
+    }
+    if (volume) {
+        const AmbienceStatistics& st = volume->statistics();
+        auto& t = report.ambienceTotals;
+        t.facesCaptured = st.facesCaptured;
+        t.probesCompleted = st.probesCompleted;
+        t.rejectedProbes = st.rejectedProbes;
+        t.teleports = st.teleports;
+        t.inserted = st.store.inserted;
+        t.refreshed = st.store.refreshed;
+        t.expired = st.store.expired;
+        if (!o.saveAnchors.empty()) volume->saveAnchors(o.saveAnchors);
+    }
+    if (meter) {
+        report.measurementJson = measurementJson(*meter);
+        writeMeasureCsv(*meter, (fs::path(o.report).parent_path() / "measure.csv").string());
+        if (!o.oracle.empty() && meter->oracleCaptures() > 0)
+            meter->saveOracle(o.oracle, oracleSignature);
+        if (meter->hasReference()) {
+            writeReferenceCsv(*meter, (fs::path(o.report).parent_path() / "reference.csv").string());
+            if (!o.reference.empty() && meter->referenceCaptures() > 0)
+                meter->saveReference(o.reference, referenceSignature);
+        }
+    }
+
+    // (4) report
+    report.write(o.report);
+    const auto summary = report.summary();
+    std::printf("rendered %d frames of %s at %dx%d on %s (%s)\n", frames, name.c_str(), size.width,
+                size.height, report.backend.c_str(), report.glRenderer.c_str());
+    std::printf("frame time median %.1f ms (%.1f fps), p95 %.1f ms; triangles median %.0f\n",
+                summary.frameMedianMs, 1000.0 / summary.frameMedianMs, summary.frameP95Ms,
+                summary.trianglesMedian);
+    if (meter) {
+        const Summary e = summarize(meter->errors()), p = summarize(meter->pops());
+        std::printf(
+            "error vs %s oracle: mean %.4f, p95 %.4f, max %.4f over %zu witnesses; "
+            "pop p99 %.5f, max %.5f (oracle %.1f s, %lld captures, %lld from cache)\n",
+            toString(meter->oracleKind()), e.mean, e.p95, e.max, e.count, p.p99, p.max,
+            meter->oracleSeconds(), (long long)meter->oracleCaptures(),
+            (long long)meter->oracleCacheHits());
+        if (meter->hasReference()) {
+            const BudgetSummary b = summarizeBudget(meter->terrainBudget());
+            std::printf(
+                "error budget (RMS over %zu terrain witnesses against the reference): total "
+                "%.4f = truncation %.4f, capture %.4f, spacing %.4f, schedule %.4f (squares add "
+                "to %.2f of the total's; reference %.1f s, %lld captures, %lld from cache)\n",
+                b.count, b.total, b.truncation, b.capture, b.spacing, b.schedule, b.closure(),
+                meter->referenceSeconds(), (long long)meter->referenceCaptures(),
+                (long long)meter->referenceCacheHits());
+        }
+    }
+    if (volume) {
+        const AmbienceStatistics& st = volume->statistics();
+        std::printf(
+            "ambience: %zu anchors, %.1f kB (%.0f B/anchor), %lld faces captured, "
+            "%lld probes (%lld rejected)\n",
+            st.store.anchors, st.store.bytes() / 1024.0,
+            st.store.anchors ? double(st.store.bytes()) / double(st.store.anchors) : 0.0,
+            (long long)st.facesCaptured, (long long)st.probesCompleted,
+            (long long)st.rejectedProbes);
+        if (!o.saveAnchors.empty()) std::printf("  anchors saved: %s\n", o.saveAnchors.c_str());
+    }
+    printSoakSummary(report, volume != nullptr);
+    std::printf("output: %s\n", fs::weakly_canonical(o.out).string().c_str());
+    if (o.frames != "none") std::printf("  frames: %s (every %d)\n", o.frames.c_str(), o.every);
+    if (video) std::printf("  video:  %s\n", o.video.c_str());
+    std::printf("  report: %s (+ .csv)\n", o.report.c_str());
+    if (meter)
+        std::printf("  measurement: %s\n",
+                    (fs::path(o.report).parent_path() / "measure.csv").string().c_str());
+}
+
+}  // namespace
+
+std::string shippedReplayDir() {
+    // Beside the executable's tree (<exe>/../../replays) or the current directory.
+    char exe[4096] = {};
+    const ssize_t n = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
+    if (n > 0) {
+        const fs::path p = fs::path(std::string(exe, size_t(n))).parent_path();
+        for (const fs::path& c : {p / "../../replays", p / "../replays"}) {
+            if (fs::exists(c / "highway-drive.json")) return fs::weakly_canonical(c).string();
+        }
+    }
+    if (fs::exists("replays/highway-drive.json")) return fs::weakly_canonical("replays").string();
+    return "";
+}
+
+void addRunCommand(CLI::App& app) {
+    auto* cmd =
+        app.add_subcommand("run", "render a replay headless to frames, a video and a report");
+    auto o = std::make_shared<RunOptions>();
+    cmd->add_option("--replay", o->replay, "replay file (default replays/highway-drive.json)");
+    cmd->add_option("--backend", o->backend,
+                    "auto, egl or osmesa (default auto: EGL, then OSMesa)");
+    cmd->add_option("--size", o->size, "image size WxH (default 640x360)");
+    cmd->add_option("--out", o->out, "output folder (default out/run-<replay name>)");
+    cmd->add_option("--frames", o->frames,
+                    "folder for PNG frames, or 'none' (default <out>/frames)");
+    cmd->add_option("--every", o->every, "write every K-th frame as PNG (default 10)");
+    cmd->add_option("--video", o->video, "video file, through ffmpeg (default <out>/<name>.mp4)");
+    cmd->add_flag("--no-video", o->noVideo, "do not write a video");
+    cmd->add_option("--report", o->report, "report JSON (default <out>/report.json)");
+    cmd->add_option("--max-frames", o->maxFrames, "stop after N frames (default: whole replay)");
+    cmd->add_option("--share", o->share,
+                    "play the first share (0 to 1] of those frames; oracle caches of the whole "
+                    "run still match (default 1)");
+    cmd->add_option("--loop", o->loops,
+                    "play the replay N times back to back (1 to 10000, default 1); the clock and "
+                    "the time of day keep going, each jump back to the start is a camera cut");
+    cmd->add_option("--stride", o->stride,
+                    "replay steps per frame (default 2: 30 frames/s of a 60 Hz replay)");
+    cmd->add_option("--ambient", o->ambient, ambienceMethodHelp());
+    cmd->add_option("--baseline-config", o->baselineConfig,
+                    "JSON file of baseline settings (BaselineSettings fields, "
+                    "lighting/Baselines.h)");
+    cmd->add_flag("--no-frames", o->noFrames,
+                  "do not render the main view (captures still render): no frames, no video");
+    cmd->add_option("--measure-every", o->measureEvery,
+                    "measure the error against the oracle every K-th frame (default 0: off)");
+    cmd->add_option("--oracle", o->oracle,
+                    "oracle cache (JSON): read if it exists and matches, else written");
+    cmd->add_option("--oracle-kind", o->oracleKind,
+                    "what the headline error is measured against: self (the methods' own 16 x 16 "
+                    "coarse capture at the point, fast) or reference (the full scene at 64 x 64, "
+                    "irradiance straight from the cube map; lighting/ReferenceOracle.h) "
+                    "(default self)");
+    cmd->add_option("--reference", o->reference,
+                    "reference cache (JSON): read if it exists and matches, else written; also "
+                    "turns on the reference and the error budget with --oracle-kind self");
+    cmd->add_option("--reference-every", o->referenceSettings.every,
+                    "take the reference on every K-th measured frame (default 3)");
+    cmd->add_option("--reference-size", o->referenceSettings.faceSize,
+                    "reference face size N (default 64)");
+    cmd->add_option("--reference-trees", o->referenceSettings.objectTrees,
+                    "trees per reference frame with a base and a crown witness (default 2)");
+    cmd->add_option("--screen-witnesses", o->screenWitnesses,
+                    "on each reference frame, compare the ambient irradiance the draw applies at "
+                    "N random pixels of the main view with the reference there (slow; default 0)");
+    cmd->add_flag("--no-ideal-volume", o->noIdealVolume,
+                  "error budget without the ideal volume (no extra captures; spacing and "
+                  "schedule reported as one term)");
+    cmd->add_option("--config,--ambience-config", o->ambienceConfig,
+                    "JSON file of ambience volume settings (AmbienceVolumeSettings fields, "
+                    "lighting/AmbienceVolume.h)");
+    cmd->add_option("--faces-per-frame", o->facesPerFrame,
+                    "capture budget: cube faces per frame, 1 to 64 (default 1, as in the thesis)");
+    cmd->add_option("--face-size", o->faceSize, "capture face size N (default 16)");
+    cmd->add_option("--save-anchors", o->saveAnchors, "write the anchor store at the end (.vdb)");
+    cmd->add_option("--load-anchors", o->loadAnchors, "warm-start from an anchor store (.vdb)");
+    cmd->add_flag("--no-vehicle", o->noVehicle, "do not draw the car on drive replays");
+    cmd->add_flag("--debug-overlay", o->debugOverlay,
+                  "draw anchors (colour = level, darker = older) and the probe being captured "
+                  "over frames and video");
+    cmd->add_option("--shaders", o->shaders,
+                    "GLSL folder (default <exe>/../shaders or $AMBIENCE_SHADER_DIR)");
+    cmd->callback([o] {
+        if (!o->shaders.empty()) setShaderDirectory(o->shaders);
+        runReplay(*o);
+    });
+}
+
+}  // namespace amb

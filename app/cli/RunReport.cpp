@@ -1,0 +1,522 @@
+// RunReport.cpp — size parsing, ffmpeg pipe, progress bar, report.
+#include "app/cli/RunReport.h"
+
+#include "lighting/Metrics.h"
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <malloc.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <OpenImageIO/imageio.h>
+#include <nlohmann/json.hpp>
+
+#include "world/Error.h"
+
+extern char** environ;
+
+namespace amb {
+
+Size parseSize(const std::string& text, const std::string& where) {
+    Size s;
+    char x = 0;
+    std::istringstream in(text);
+    if (!(in >> s.width >> x >> s.height) || (x != 'x' && x != 'X') || !(in >> std::ws).eof()) {
+        throw InputError(where, "expected WxH (e.g. 640x360), got '" + text + "'");
+    }
+    if (s.width < 1 || s.height < 1 || s.width > 16384 || s.height > 16384) {
+        throw InputError(where, "size " + text + " out of range (1x1 to 16384x16384)");
+    }
+    return s;
+}
+
+void writeImageRgb8(const std::string& path, int w, int h, const std::vector<unsigned char>& rgb) {
+    auto out = OIIO::ImageOutput::create(path);
+    if (!out || !out->open(path, OIIO::ImageSpec(w, h, 3, OIIO::TypeDesc::UINT8)) ||
+        !out->write_image(OIIO::TypeDesc::UINT8, rgb.data()) || !out->close()) {
+        throw InputError(path, "cannot write image");
+    }
+}
+
+// ---- VideoPipe -------------------------------------------------------------------------------
+
+// ffmpeg is started with an argument vector (posix_spawnp), never through a shell, so no
+// character of the output path (which may come from a replay's name) is interpreted. The path
+// is passed as "file:<path>" so that ffmpeg reads it as a file name, not an option or protocol.
+VideoPipe::VideoPipe(const std::string& path, int width, int height, double fps)
+    : path_(path), frameBytes_(size_t(width) * height * 3) {
+    std::signal(SIGPIPE, SIG_IGN);
+    char rate[32];
+    std::snprintf(rate, sizeof(rate), "%.6f", fps);
+    // One encoder thread and a fast preset: the renderer shares the CPU with the encoder.
+    const std::vector<std::string> args = {
+        "ffmpeg", "-nostdin", "-loglevel", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24",
+        "-s", std::to_string(width) + "x" + std::to_string(height), "-r", rate, "-i", "pipe:0",
+        "-c:v", "libx264", "-preset", "ultrafast", "-crf", "20", "-threads", "1", "-pix_fmt",
+        "yuv420p", "file:" + path};
+    std::vector<char*> argv;
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+
+    int fds[2];
+    if (pipe2(fds, O_CLOEXEC) != 0) throw InputError(path, "cannot create a pipe for ffmpeg");
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, fds[0], 0);  // dup2 clears O_CLOEXEC on fd 0
+    pid_t pid = 0;
+    const int rc = posix_spawnp(&pid, "ffmpeg", &actions, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    ::close(fds[0]);
+    if (rc != 0) {
+        ::close(fds[1]);
+        if (rc == ENOENT) {
+            throw InputError("--video",
+                             "ffmpeg not found on PATH (install the 'ffmpeg' package, or pass "
+                             "--no-video)");
+        }
+        throw InputError(path, std::string("cannot start ffmpeg: ") + std::strerror(rc));
+    }
+    pid_ = pid;
+    fd_ = fds[1];
+}
+
+VideoPipe::~VideoPipe() {
+    try {
+        finish();
+    } catch (...) {
+    }
+}
+
+int VideoPipe::finish() {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = -1;
+    if (pid_ <= 0) return 0;
+    int status = 0;
+    while (waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
+    }
+    pid_ = -1;
+    return status;
+}
+
+void VideoPipe::write(const std::vector<unsigned char>& rgb) {
+    if (fd_ < 0 || rgb.size() != frameBytes_) return;
+    const unsigned char* p = rgb.data();
+    std::size_t left = rgb.size();
+    while (left > 0) {
+        const ssize_t n = ::write(fd_, p, left);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) {
+            finish();
+            throw InputError(path_, "ffmpeg stopped accepting frames (see its message above)");
+        }
+        p += n;
+        left -= std::size_t(n);
+    }
+}
+
+void VideoPipe::close() {
+    const int status = finish();
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+        throw InputError(path_, "ffmpeg failed to write the video");
+}
+
+// ---- ProgressBar -----------------------------------------------------------------------------
+
+static double nowSeconds() {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+}
+
+ProgressBar::ProgressBar(int total)
+    : total_(total), enabled_(isatty(STDERR_FILENO) != 0), started_s_(nowSeconds()) {}
+
+void ProgressBar::update(int done, double) {
+    if (!enabled_ || total_ <= 0) return;
+    const double elapsed = nowSeconds() - started_s_;
+    const double fps = done / std::max(elapsed, 1e-9);
+    const double eta = (total_ - done) / std::max(fps, 1e-9);
+    const int width = 30, filled = int(width * double(done) / total_);
+    std::fprintf(stderr, "\r[%s%s] %d/%d  %.1f fps  ETA %.0f s   ",
+                 std::string(size_t(filled), '#').c_str(),
+                 std::string(size_t(width - filled), '.').c_str(), done, total_, fps, eta);
+    std::fflush(stderr);
+}
+
+void ProgressBar::finish() {
+    if (enabled_) std::fprintf(stderr, "\n");
+}
+
+// ---- Memory ----------------------------------------------------------------------------------
+
+std::size_t residentMemory_kB() {
+    // statm: total and resident size in pages; one short read, cheap enough for every frame.
+    std::FILE* f = std::fopen("/proc/self/statm", "r");
+    if (!f) return 0;
+    unsigned long total = 0, resident = 0;
+    const int n = std::fscanf(f, "%lu %lu", &total, &resident);
+    std::fclose(f);
+    const long page = sysconf(_SC_PAGESIZE);
+    return n == 2 && page > 0 ? std::size_t(resident) * std::size_t(page) / 1024 : 0;
+}
+
+std::size_t heapInUse_kB() {
+#if defined(__GLIBC__) && (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 33))
+    const struct mallinfo2 m = mallinfo2();
+    return (m.uordblks + m.hblkhd) / 1024;  // in use in the arenas, plus mmapped blocks
+#else
+    return 0;
+#endif
+}
+
+std::size_t peakResidentMemory_kB() {
+    std::ifstream in("/proc/self/status");
+    std::string line;
+    while (std::getline(in, line))
+        if (line.rfind("VmHWM:", 0) == 0) return std::strtoull(line.c_str() + 6, nullptr, 10);
+    return 0;
+}
+
+// ---- Report ----------------------------------------------------------------------------------
+
+TimingStats timingStats(std::vector<double> v) {
+    TimingStats s;
+    if (v.empty()) return s;
+    std::sort(v.begin(), v.end());
+    auto quantile = [&](double q) {
+        const double pos = q * double(v.size() - 1);
+        const size_t i = size_t(pos);
+        const double t = pos - double(i);
+        return i + 1 < v.size() ? v[i] * (1.0 - t) + v[i + 1] * t : v[i];
+    };
+    s.median = quantile(0.5);
+    s.p95 = quantile(0.95);
+    s.max = v.back();
+    double sum = 0.0;
+    for (double x : v) sum += x;
+    s.mean = sum / double(v.size());
+    return s;
+}
+
+RunReport::Summary RunReport::summary() const {
+    std::vector<double> ms, tris;
+    for (const FrameRecord& f : frames) {
+        ms.push_back(f.frameMs);
+        tris.push_back(double(f.render.triangles));
+    }
+    return {timingStats(ms).median, timingStats(ms).p95, timingStats(tris).median};
+}
+
+void RunReport::write(const std::string& path) const {
+    using nlohmann::json;
+    auto statsJson = [](const std::vector<double>& v) {
+        const TimingStats s = timingStats(v);
+        return json{{"median", s.median}, {"p95", s.p95}, {"max", s.max}, {"mean", s.mean}};
+    };
+    json j;
+    j["replay"] = replay;
+    j["backend"] = backend;
+    j["GL_VERSION"] = glVersion;
+    j["GL_RENDERER"] = glRenderer;
+    j["size"] = {{"width", width}, {"height", height}};
+    j["ambient"] = ambient;
+    j["frameStep_s"] = frameStep_s;
+    j["frameCount"] = frames.size();
+    j["loops"] = loops;
+    j["wall_s"] = wall_s;
+    j["shadows"] = "none";
+    j["toneMapping"] = "exposure (white Lambertian at 0.6), ACES filmic fit (Narkowicz 2015), sRGB";
+    json stages = json::object();
+    for (int s = 0; s < kFrameStages; ++s) {
+        std::vector<double> v;
+        for (const FrameRecord& f : frames) v.push_back(f.stageMs[s]);
+        stages[toString(FrameStage(s))] = statsJson(v);
+    }
+    std::vector<double> frameMs, sceneMs, tris;
+    for (const FrameRecord& f : frames) {
+        frameMs.push_back(f.frameMs);
+        sceneMs.push_back(f.render.sceneMs);
+        tris.push_back(double(f.render.triangles));
+    }
+    j["stages_ms"] = stages;
+    j["frame_ms"] = statsJson(frameMs);
+    j["drawListBuild_ms"] = statsJson(sceneMs);
+    j["triangles"] = statsJson(tris);
+    const double median = timingStats(frameMs).median;
+    j["fps_median"] = median > 0 ? 1000.0 / median : 0.0;
+    {
+        // Resident memory after each frame, for soak runs: bounded if nothing leaks. The rows
+        // of this report (kept until the end) are part of it.
+        std::vector<double> rss;
+        std::size_t cuts = 0;
+        for (const FrameRecord& f : frames) rss.push_back(double(f.rss_kB)), cuts += f.cut;
+        j["cameraCuts"] = cuts;
+        // What one row of this report holds in memory (rows allocate nothing of their own).
+        const std::size_t rowBytes = sizeof(FrameRecord);
+        j["memory"] = {{"rssStart_kB", frames.empty() ? 0 : frames.front().rss_kB},
+                       {"rssEnd_kB", frames.empty() ? 0 : frames.back().rss_kB},
+                       {"rss_kB", statsJson(rss)},
+                       {"rssPeak_kB", rssPeak_kB},
+                       {"heapStart_kB", frames.empty() ? 0 : frames.front().heap_kB},
+                       {"heapEnd_kB", frames.empty() ? 0 : frames.back().heap_kB},
+                       {"reportRowBytes", rowBytes}};
+    }
+    const bool volume = !frames.empty() && frames.front().ambience.active;
+    if (volume) {
+        // The ambience's share of frame time: stages 2-5 plus the lookups the draw makes
+        // (terrain corners and objects ask the volume while the draw list is built).
+        double ambienceMs = 0.0, captureMs = 0.0, totalMs = 0.0;
+        std::vector<double> anchors, bytes, lookupMs, perFrameAmbienceMs;
+        std::int64_t faces = 0;
+        std::size_t maxAnchors = 0, maxBytes = 0;
+        for (const FrameRecord& f : frames) {
+            ambienceMs += f.stageMs[int(FrameStage::Predict)] +
+                          f.stageMs[int(FrameStage::Capture)] + f.stageMs[int(FrameStage::Store)] +
+                          f.stageMs[int(FrameStage::Interpolate)] + f.ambience.lookupMs;
+            perFrameAmbienceMs.push_back(
+                f.stageMs[int(FrameStage::Predict)] + f.stageMs[int(FrameStage::Capture)] +
+                f.stageMs[int(FrameStage::Store)] + f.stageMs[int(FrameStage::Interpolate)] +
+                f.ambience.lookupMs);
+            faces += f.ambience.faces;
+            captureMs += f.stageMs[int(FrameStage::Capture)];
+            totalMs += f.frameMs;
+            anchors.push_back(double(f.ambience.anchors));
+            bytes.push_back(double(f.ambience.bytes));
+            lookupMs.push_back(f.ambience.lookupMs);
+            maxAnchors = std::max(maxAnchors, f.ambience.anchors);
+            maxBytes = std::max(maxBytes, f.ambience.bytes);
+        }
+        const FrameRecord& last = frames.back();
+        const auto& t = ambienceTotals;
+        j["ambience"] = {
+            {"anchorsEnd", last.ambience.anchors},
+            {"anchorsMax", maxAnchors},
+            {"anchors", statsJson(anchors)},
+            {"bytesEnd", last.ambience.bytes},
+            {"bytesMax", maxBytes},
+            {"bytesPerAnchorEnd", last.ambience.anchors
+                                      ? double(last.ambience.bytes) / double(last.ambience.anchors)
+                                      : 0.0},
+            {"facesCaptured", t.facesCaptured},
+            {"probesCompleted", t.probesCompleted},
+            {"rejectedProbes", t.rejectedProbes},
+            {"teleports", t.teleports},
+            {"anchorsInserted", t.inserted},
+            {"anchorsRefreshed", t.refreshed},
+            {"anchorsExpired", t.expired},
+            {"captureTrianglesPerFace", t.captureTriangles},
+            {"storeScans", t.storeScans},
+            {"nonFiniteAnchorsMax", t.nonFiniteAnchorsMax},
+            {"lookup_ms", statsJson(lookupMs)},
+            // Stages 2-5 and the draw's lookups, per frame.
+            {"ambience_ms", statsJson(perFrameAmbienceMs)},
+            {"facesPerSecond", frames.size() > 1 && frameStep_s > 0
+                                   ? double(faces) / (double(frames.size()) * frameStep_s)
+                                   : 0.0},
+            {"shareOfFrameTime", totalMs > 0 ? ambienceMs / totalMs : 0.0},
+            {"captureShareOfFrameTime", totalMs > 0 ? captureMs / totalMs : 0.0},
+        };
+        // Only a method with an anchor store is scanned.
+        if (t.storeScans > 0) j["ambience"]["storeFinite"] = t.nonFiniteAnchorsMax == 0;
+    }
+    if (!measurementJson.empty()) j["measurement"] = json::parse(measurementJson);
+    std::ofstream out(path);
+    if (!out) throw InputError(path, "cannot write the report");
+    // The rows are written one at a time, each on one line: a JSON tree of an hour's rows would
+    // take hundreds of MB.
+    std::string head = j.dump(1);  // "{\n ... \n}": drop the "\n}" and go on with the rows
+    head.resize(head.size() - 2);
+    out << head << ",\n \"frames\": [";
+    bool firstRow = true;
+    for (const FrameRecord& f : frames) {
+        json r{{"frame", f.index},
+               {"loop", f.loop},
+               {"time_s", f.time_s},
+               {"replayTime_s", f.replayTime_s},
+               {"cut", f.cut},
+               {"rss_kB", f.rss_kB},
+               {"heap_kB", f.heap_kB},
+               {"timeOfDay_h", f.timeOfDay_h},
+               {"frame_ms", f.frameMs},
+               {"triangles", f.render.triangles},
+               {"terrainPatches", f.render.terrainPatches},
+               {"terrainPatchesDrawn", f.render.terrainPatchesDrawn},
+               {"objectsDrawn", f.render.objectsDrawn},
+               {"terrainRebuilt", f.render.terrainRebuilt}};
+        for (int s = 0; s < kFrameStages; ++s)
+            r[std::string(toString(FrameStage(s))) + "_ms"] = f.stageMs[s];
+        if (volume) {
+            r["anchors"] = f.ambience.anchors;
+            r["anchorBytes"] = f.ambience.bytes;
+            r["facesCaptured"] = f.ambience.faces;
+            r["finestLevel"] = f.ambience.finestLevel;
+            r["ambientLookups"] = f.ambience.lookups;
+            r["ambientLookup_ms"] = f.ambience.lookupMs;
+            r["volumePredict_ms"] = f.ambience.predictMs;
+            r["volumeCapture_ms"] = f.ambience.captureMs;
+            r["volumeProject_ms"] = f.ambience.projectMs;
+            r["volumeStore_ms"] = f.ambience.storeMs;
+            r["anchorsPerLevel"] =
+                std::vector<std::size_t>(f.ambience.anchorsPerLevel.begin(),
+                                         f.ambience.anchorsPerLevel.begin() + f.ambience.levels);
+        }
+        out << (firstRow ? "\n  " : ",\n  ") << r.dump();
+        firstRow = false;
+    }
+    out << "\n ]\n}\n";
+    if (!out) throw InputError(path, "cannot write the report");
+
+    const std::string csvPath = std::filesystem::path(path).replace_extension(".csv").string();
+    std::ofstream csv(csvPath);
+    if (!csv) throw InputError(csvPath, "cannot write the report CSV");
+    csv << "frame,time_s,timeOfDay_h,frame_ms";
+    for (int s = 0; s < kFrameStages; ++s) csv << "," << toString(FrameStage(s)) << "_ms";
+    csv << ",triangles,terrainPatches,terrainPatchesDrawn,objectsDrawn,terrainRebuilt";
+    const std::size_t csvLevels = volume ? std::size_t(frames.front().ambience.levels) : 0;
+    if (volume) {
+        csv << ",anchors,anchorBytes,facesCaptured,finestLevel,ambientLookups,ambientLookup_ms"
+               ",volumePredict_ms,volumeCapture_ms,volumeProject_ms,volumeStore_ms";
+        for (std::size_t l = 0; l < csvLevels; ++l) csv << ",anchorsLevel" << l;
+    }
+    csv << ",rss_kB,heap_kB,cut,loop,popMove\n";
+    for (const FrameRecord& f : frames) {
+        csv << f.index << "," << f.time_s << "," << f.timeOfDay_h << "," << f.frameMs;
+        for (int s = 0; s < kFrameStages; ++s) csv << "," << f.stageMs[s];
+        csv << "," << f.render.triangles << "," << f.render.terrainPatches << ","
+            << f.render.terrainPatchesDrawn << "," << f.render.objectsDrawn << ","
+            << (f.render.terrainRebuilt ? 1 : 0);
+        if (volume) {
+            csv << "," << f.ambience.anchors << "," << f.ambience.bytes << "," << f.ambience.faces
+                << "," << f.ambience.finestLevel << "," << f.ambience.lookups << ","
+                << f.ambience.lookupMs << "," << f.ambience.predictMs << "," << f.ambience.captureMs
+                << "," << f.ambience.projectMs << "," << f.ambience.storeMs;
+            for (std::size_t l = 0; l < csvLevels; ++l) {
+                const bool held = l < std::size_t(f.ambience.levels);
+                csv << "," << (held ? f.ambience.anchorsPerLevel[l] : 0);
+            }
+        }
+        csv << "," << f.rss_kB << "," << f.heap_kB << "," << (f.cut ? 1 : 0) << "," << f.loop
+            << ",";
+        if (std::isfinite(f.popMove)) csv << f.popMove;  // empty: no pop measured this frame
+        csv << "\n";
+    }
+    if (!csv) throw InputError(csvPath, "cannot write the report CSV");
+}
+
+// ---- Measurement ---------------------------------------------------------------------------
+
+std::string measurementJson(const ErrorMeter& meter) {
+    using nlohmann::json;
+    auto summaryJson = [](const Summary& s) {
+        return json{{"count", s.count}, {"mean", s.mean}, {"p50", s.p50},
+                    {"p95", s.p95},     {"p99", s.p99},   {"max", s.max}};
+    };
+    const MeasureSettings& ms = meter.settings();
+    json rings = json::array();
+    for (int r = 0; r < ms.rings(); ++r)
+        rings.push_back(summaryJson(summarize(meter.ringErrors(r))));
+    double speed = 0.0;
+    for (const auto& m : meter.measured()) speed += m.speed_mps;
+    const std::size_t n = meter.measured().size();
+    json j{{"every", ms.every},
+           {"measuredFrames", n},
+           {"ringRadii_m", ms.ringRadii},
+           {"witnessesPerRing", ms.perRing},
+           {"error", summaryJson(summarize(meter.errors()))},
+           {"errorByRing", rings},
+           {"pop", summaryJson(summarize(meter.pops()))},
+           {"pop_move", summaryJson(summarize(meter.movingPops()))},
+           {"meanSpeed_mps", n ? speed / double(n) : 0.0},
+           {"oracle_s", meter.oracleSeconds()},
+           {"oracleCaptures", meter.oracleCaptures()},
+           {"oracleCacheHits", meter.oracleCacheHits()},
+           {"oracle", toString(meter.oracleKind())},
+           {"metric",
+            "relative L2 distance of irradiance over the sphere of normals, luminance-weighted "
+            "channels (lighting/Metrics.h)"}};
+    if (meter.hasReference()) {
+        const auto budgetJson = [&summaryJson](const std::vector<BudgetTerms>& terms) {
+            const BudgetSummary b = summarizeBudget(terms);
+            const auto num = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
+            std::vector<double> totals, selfs;
+            for (const BudgetTerms& t : terms) totals.push_back(t.total), selfs.push_back(t.self);
+            return json{{"count", b.count},           {"rmsTotal", num(b.total)},
+                        {"truncation", num(b.truncation)}, {"capture", num(b.capture)},
+                        {"spacing", num(b.spacing)},    {"schedule", num(b.schedule)},
+                        {"closure", num(b.closure())},  {"error", summaryJson(summarize(totals))},
+                        {"selfError", summaryJson(summarize(selfs))}};
+        };
+        const ReferenceSettings& rs = meter.referenceSettings();
+        json screenJson = {{"error", summaryJson(summarize(meter.screenErrors()))}};
+        for (int k = 1; k <= kSurfaceKinds; ++k)
+            screenJson[toString(SurfaceKind(k))] = summaryJson(summarize(meter.screenErrors(k)));
+        json rings = json::array();
+        for (int r = 0; r < ms.rings(); ++r) rings.push_back(budgetJson(meter.terrainBudget(r)));
+        json objects = json::object();
+        for (int k = 0; k < kObjectKinds; ++k)
+            objects[toString(ObjectKind(k))] = budgetJson(meter.objectBudget(ObjectKind(k)));
+        j["reference"] = {{"faceSize", rs.faceSize},
+                          {"scene", "full"},
+                          {"every", rs.every},
+                          {"ruleDirections", json(sphereProductRule(rs.legendreNodes).directions.size())},
+                          {"budget", budgetJson(meter.terrainBudget())},
+                          {"budgetByRing", rings},
+                          {"objects", objects},
+                          {"screen", screenJson},
+                          {"reference_s", meter.referenceSeconds()},
+                          {"referenceCaptures", meter.referenceCaptures()},
+                          {"referenceCacheHits", meter.referenceCacheHits()}};
+    }
+    return j.dump();
+}
+
+void writeMeasureCsv(const ErrorMeter& meter, const std::string& path) {
+    std::ofstream out(path);
+    if (!out) throw InputError(path, "cannot write the measurement CSV");
+    const int rings = meter.settings().rings();
+    out << "frame,time_s,time_of_day_h,speed_mps,error_mean,error_max";
+    for (int r = 0; r < rings; ++r) out << ",error_ring" << r;
+    out << "\n";
+    out.precision(9);
+    for (const auto& m : meter.measured()) {
+        out << m.index << ',' << m.time_s << ',' << m.timeOfDay_h << ',' << m.speed_mps << ','
+            << m.mean() << ',' << m.max();
+        for (int r = 0; r < rings; ++r) {
+            const double v = m.ringMean(r);
+            out << ',';
+            if (std::isfinite(v)) out << v;
+        }
+        out << "\n";
+    }
+    if (!out) throw InputError(path, "cannot write the measurement CSV");
+}
+
+void writeReferenceCsv(const ErrorMeter& meter, const std::string& path) {
+    std::ofstream out(path);
+    if (!out) throw InputError(path, "cannot write the reference CSV");
+    out << "frame,witness,x,y,z,total,truncation,capture,spacing,schedule,self\n";
+    out.precision(9);
+    for (const ReferenceWitness& r : meter.referenceWitnesses()) {
+        out << r.frame << ','
+            << (r.ring >= 0 ? "ring_" + std::to_string(r.ring) : std::string(toString(r.object)))
+            << ',' << r.position_m.x << ',' << r.position_m.y << ',' << r.position_m.z << ','
+            << r.terms.total << ',' << r.terms.truncation << ',' << r.terms.capture << ',';
+        if (std::isfinite(r.terms.spacing)) out << r.terms.spacing;
+        out << ',' << r.terms.schedule << ',' << r.terms.self << "\n";
+    }
+    if (!out) throw InputError(path, "cannot write the reference CSV");
+}
+
+}  // namespace amb

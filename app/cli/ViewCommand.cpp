@@ -1,0 +1,270 @@
+// ViewCommand.cpp — `ambience view`: the world in a window (GLFW).
+//
+// Keys: F toggles follow-replay / free-fly; free-fly: W A S D move, Q E down / up, Shift faster,
+// right mouse button + drag looks around; follow: Space pauses, Left / Right scrub 5 s;
+// [ and ] change the time of day by half an hour; R starts / stops recording the camera to a new
+// replay file; P saves a screenshot; Esc quits. `--frames N --screenshot FILE` renders N frames,
+// saves the last and exits (used by the tests under Xvfb).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include <CLI/CLI.hpp>
+#include <glm/geometric.hpp>
+
+#include "app/cli/CliChecks.h"
+#include "app/cli/Commands.h"
+#include "app/cli/OutputPaths.h"
+#include "app/render/DebugOverlay.h"
+#include "app/frame/FrameLoop.h"
+#include "app/render/CubeCaptureGl.h"
+#include "app/render/Gl.h"
+#include "app/render/Renderer.h"
+#include "app/platform/Platform.h"
+#include "app/cli/RunReport.h"
+#include "app/frame/MethodStages.h"
+#include "lighting/Baselines.h"
+#include "world/Error.h"
+#include "world/World.h"
+// GLFW after glad (app/Gl.h).
+#include <GLFW/glfw3.h>
+
+namespace amb {
+
+namespace {
+
+struct ViewOptions {
+    std::string replay;
+    std::string size = "960x540";
+    int frames = 0;
+    std::string screenshot;
+    std::string record = "recorded.json";
+    std::string ambient = "volume";
+    bool debugOverlay = false;
+    std::string shaders;
+    double time_h = -1.0;
+};
+
+constexpr double kStep_s = 1.0 / 30.0;  // the viewer's fixed simulation step
+
+struct FreeCamera {
+    glm::dvec3 position{0.0};
+    double yaw_rad = 0.0, pitch_rad = 0.0;  // yaw 0 looks north (-Z)
+
+    CameraSample sample() const {
+        CameraSample s;
+        s.position_m = position;
+        s.forward = glm::dvec3(std::sin(yaw_rad) * std::cos(pitch_rad), std::sin(pitch_rad),
+                               -std::cos(yaw_rad) * std::cos(pitch_rad));
+        const glm::dvec3 right = glm::normalize(glm::cross(s.forward, glm::dvec3(0, 1, 0)));
+        s.up = glm::normalize(glm::cross(right, s.forward));
+        return s;
+    }
+    void lookAlong(const CameraSample& s) {
+        position = s.position_m;
+        yaw_rad = std::atan2(s.forward.x, -s.forward.z);
+        pitch_rad = std::asin(std::clamp(s.forward.y, -1.0, 1.0));
+    }
+};
+
+bool keyDown(GLFWwindow* w, int key) {
+    return glfwGetKey(w, key) == GLFW_PRESS;
+}
+
+void runView(const ViewOptions& o) {
+    Replay replay;
+    const bool haveReplay = !o.replay.empty();
+    if (haveReplay) replay = readReplay(o.replay);
+    const Size size = parseSize(o.size, "--size");
+    checkAmbienceMethod(o.ambient, "--ambient");
+    if (o.debugOverlay && o.ambient != "volume")
+        throw InputError("--debug-overlay", "needs --ambient volume");
+    if (o.frames < 0) throw InputError("--frames", "must be >= 0");
+    if (!o.screenshot.empty() && o.frames == 0) {
+        throw InputError("--screenshot", "needs --frames N (the frame to save)");
+    }
+
+    {
+        FilePlan files;
+        files.input("--replay", o.replay);
+        files.output("--screenshot", o.screenshot);
+        files.check();
+        if (!o.replay.empty() && resolvedPath(o.record) == resolvedPath(o.replay))
+            throw InputError("--record", "'" + o.record + "' is also the input --replay");
+    }
+
+    std::unique_ptr<Platform> platform;
+    try {
+        platform = createGlfwPlatform(size.width, size.height, "ambience", true);
+    } catch (const PlatformUnavailable& e) {
+        // Almost always a machine without a display: say what to do instead.
+        throw InputError("view", std::string(e.what()) +
+                                     "; 'view' opens a window: run it on a display, under "
+                                     "'xvfb-run', or use 'ambience run' to render headless");
+    }
+    GLFWwindow* window = static_cast<GLFWwindow*>(platform->nativeWindow());
+    const World world(replay.world);
+    RenderSettings rs;
+    rs.width = size.width;
+    rs.height = size.height;
+    Renderer renderer(world, rs);
+    auto stages = makeMethodStages(renderer, o.ambient, AmbienceVolumeSettings{}, BaselineSettings{});
+    AmbienceVolume* volume = stages->volume();
+    // The frame of `run`, with the camera and the clocks from the keyboard and the mouse.
+    FrameLoop loop(renderer, *stages);
+    double simulation_s = 0.0;  // the volume's clock: fixed steps, stops while paused
+
+    double replayTime_s = 0.0;
+    double timeOfDay_h = o.time_h >= 0.0 ? o.time_h : replay.timeOfDayStart_h;
+    bool follow = haveReplay, paused = false;
+    FreeCamera free;
+    if (haveReplay) {
+        free.lookAlong(replay.sampleAt(0.0));
+    } else {
+        free.position = glm::dvec3(0.0, world.height(0.0, 0.0) + 20.0, 0.0);
+    }
+    Replay recording;
+    bool recordingOn = false;
+    int screenshots = 0;
+    bool prev[GLFW_KEY_LAST + 1] = {};
+    auto pressed = [&](int key) {
+        const bool now = keyDown(window, key);
+        const bool edge = now && !prev[key];
+        prev[key] = now;
+        return edge;
+    };
+    double lastX = 0.0, lastY = 0.0;
+    glfwGetCursorPos(window, &lastX, &lastY);
+    std::fprintf(stderr,
+                 "view: %s; F follow/free, WASD+QE, right mouse look, Space pause, "
+                 "arrows scrub, [ ] time, R record, P screenshot, Esc quit\n",
+                 platform->glRenderer().c_str());
+
+    for (int frame = 0; !platform->shouldClose(); ++frame) {
+        platform->pollEvents();
+        if (pressed(GLFW_KEY_ESCAPE)) break;
+        if (pressed(GLFW_KEY_F) && haveReplay) {
+            follow = !follow;
+            if (!follow) free.lookAlong(replay.sampleAt(replayTime_s));
+        }
+        if (pressed(GLFW_KEY_SPACE)) paused = !paused;
+        if (pressed(GLFW_KEY_LEFT)) replayTime_s = std::max(0.0, replayTime_s - 5.0);
+        if (pressed(GLFW_KEY_RIGHT)) replayTime_s += 5.0;
+        if (pressed(GLFW_KEY_LEFT_BRACKET)) timeOfDay_h = std::fmod(timeOfDay_h + 23.5, 24.0);
+        if (pressed(GLFW_KEY_RIGHT_BRACKET)) timeOfDay_h = std::fmod(timeOfDay_h + 0.5, 24.0);
+
+        // Camera for this frame.
+        CameraSample cam;
+        if (follow) {
+            if (!paused) replayTime_s += kStep_s;
+            if (replayTime_s > replay.duration_s()) replayTime_s = 0.0;
+            cam = replay.sampleAt(replayTime_s);
+            if (haveReplay && !paused && o.time_h < 0.0) {
+                timeOfDay_h = replay.timeOfDayAt_h(replayTime_s);
+            }
+        } else {
+            double x = 0.0, y = 0.0;
+            glfwGetCursorPos(window, &x, &y);
+            if (glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS) {
+                free.yaw_rad += (x - lastX) * 0.004;
+                free.pitch_rad = std::clamp(free.pitch_rad - (y - lastY) * 0.004, -1.5, 1.5);
+            }
+            lastX = x;
+            lastY = y;
+            const CameraSample s = free.sample();
+            const glm::dvec3 right = glm::normalize(glm::cross(s.forward, glm::dvec3(0, 1, 0)));
+            const double speed = (keyDown(window, GLFW_KEY_LEFT_SHIFT) ? 120.0 : 20.0) * kStep_s;
+            glm::dvec3 move(0.0);
+            if (keyDown(window, GLFW_KEY_W)) move += s.forward;
+            if (keyDown(window, GLFW_KEY_S)) move -= s.forward;
+            if (keyDown(window, GLFW_KEY_D)) move += right;
+            if (keyDown(window, GLFW_KEY_A)) move -= right;
+            if (keyDown(window, GLFW_KEY_E)) move.y += 1.0;
+            if (keyDown(window, GLFW_KEY_Q)) move.y -= 1.0;
+            free.position += move * speed;
+            const double ground = world.height(free.position.x, free.position.z) + 1.0;
+            free.position.y = std::max(free.position.y, ground);
+            cam = free.sample();
+        }
+
+        // Record the camera at the fixed step.
+        if (pressed(GLFW_KEY_R)) {
+            recordingOn = !recordingOn;
+            if (recordingOn) {
+                recording = Replay();
+                recording.name = "recorded";
+                recording.description = "recorded in the viewer";
+                recording.world = replay.world;
+                recording.mode = ReplayMode::Fly;
+                recording.timeOfDayStart_h = timeOfDay_h;
+                recording.timeRate = 0.0;
+                recording.step_s = kStep_s;
+                std::fprintf(stderr, "view: recording\n");
+            } else if (!recording.samples.empty()) {
+                writeReplay(recording, o.record);
+                std::fprintf(stderr, "view: recorded %zu samples to %s\n", recording.samples.size(),
+                             o.record.c_str());
+            }
+        }
+        if (recordingOn) {
+            CameraSample s = cam;
+            s.time_s = double(recording.samples.size()) * kStep_s;
+            s.cut = false;
+            recording.samples.push_back(s);
+        }
+
+        // Every stage of the frame (FrameLoop), on the window's camera and clocks.
+        FrameInput input;
+        if (!paused) simulation_s += kStep_s;
+        input.time_s = simulation_s;
+        input.replayTime_s = replayTime_s;
+        input.timeOfDay_h = timeOfDay_h;
+        input.camera = cam;
+        loop.step(input);
+        if (o.debugOverlay && volume) {
+            auto pixels = renderer.readRgb8();
+            drawAnchorOverlay(pixels, size.width, size.height, renderer.viewProjection(cam),
+                              cam.position_m, *volume);
+            renderer.replaceLdr(pixels);
+        }
+        renderer.blitToWindow(platform->width(), platform->height());
+
+        const bool last = o.frames > 0 && frame + 1 >= o.frames;
+        if (pressed(GLFW_KEY_P) || (last && !o.screenshot.empty())) {
+            char name[64];
+            std::snprintf(name, sizeof(name), "screenshot-%03d.png", screenshots++);
+            const std::string path = last && !o.screenshot.empty() ? o.screenshot : name;
+            writeImageRgb8(path, size.width, size.height, renderer.readRgb8());
+            std::fprintf(stderr, "view: screenshot %s\n", path.c_str());
+        }
+        platform->swapBuffers();
+        if (last) break;
+    }
+    if (recordingOn && !recording.samples.empty()) writeReplay(recording, o.record);
+}
+
+}  // namespace
+
+void addViewCommand(CLI::App& app) {
+    auto* cmd = app.add_subcommand("view", "show the world in a window (follow a replay or fly)");
+    auto o = std::make_shared<ViewOptions>();
+    cmd->add_option("--replay", o->replay, "replay to follow (its world is shown)");
+    cmd->add_option("--size", o->size, "window size WxH (default 960x540)");
+    cmd->add_option("--time", o->time_h, "fixed time of day [hours] (default: the replay's)")
+        ->check(FiniteRange(0.0, 24.0));
+    cmd->add_option("--ambient", o->ambient, ambienceMethodHelp());
+    cmd->add_flag("--debug-overlay", o->debugOverlay,
+                  "mark anchors and the probe being captured on screen and on screenshots");
+    cmd->add_option("--record", o->record, "file the R key records to (default recorded.json)");
+    cmd->add_option("--frames", o->frames, "render N frames, then exit (non-interactive)");
+    cmd->add_option("--screenshot", o->screenshot, "with --frames: save the last frame here");
+    cmd->add_option("--shaders", o->shaders,
+                    "GLSL folder (default <exe>/../shaders or $AMBIENCE_SHADER_DIR)");
+    cmd->callback([o] {
+        if (!o->shaders.empty()) setShaderDirectory(o->shaders);
+        runView(*o);
+    });
+}
+
+}  // namespace amb

@@ -1,0 +1,64 @@
+// Draw.h — what the frame hands its draw stage and what it gets back (docs/ARCHITECTURE.md
+// "The frame", stages 5-6), free of GL so that the frame loop and the method adapters stay
+// below the renderer: the ambient the draw applies (AmbientSource), the view that draws
+// (MainView, implemented by app/render/Renderer.h) and what a draw reports (RenderStats).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+
+#include "world/Replay.h"
+
+namespace amb {
+
+// R&H irradiance matrices of the red, green and blue channels (shaders/sh_irradiance.glsl).
+struct AmbientSet {
+    glm::mat4 r{0.0f}, g{0.0f}, b{0.0f};
+};
+
+// ---- AmbientSource ---------------------------------------------------------------------------
+// What the draw needs from the ambient term (docs/DESIGN.md "The frame", stage 5): the
+// irradiance at each terrain-patch corner and road vertex for its normal, and one set of R&H
+// matrices per object.
+// Constant and hemisphere ambient implement it now; the ambience volume implements it next.
+class AmbientSource {
+  public:
+    virtual ~AmbientSource() = default;
+    virtual glm::vec3 cornerIrradiance(const glm::dvec3& position_m,
+                                       const glm::dvec3& normal) const = 0;
+    // The same at `count` points at once (a frame's terrain corners, its road vertices): out[i]
+    // for position i and normal i. One by one by default; a source over an interpolated volume
+    // answers the batch with one cache check and no per-call overhead.
+    virtual void cornerIrradianceBatch(std::size_t count, const glm::dvec3* positions_m,
+                                       const glm::dvec3* normals, glm::vec3* out) const {
+        for (std::size_t i = 0; i < count; ++i)
+            out[i] = cornerIrradiance(positions_m[i], normals[i]);
+    }
+    // Appends the set for an object at `position_m` to `sets` if needed; returns its index.
+    virtual std::uint32_t objectSet(const glm::dvec3& position_m,
+                                    std::vector<AmbientSet>& sets) const = 0;
+};
+
+struct RenderStats {
+    std::size_t triangles = 0;
+    std::size_t terrainPatches = 0, terrainPatchesDrawn = 0, objectsDrawn = 0;
+    bool terrainRebuilt = false;
+    double sceneMs = 0.0;  // building the draw list (CPU)
+    double drawMs = 0.0;   // submitting GL commands (CPU)
+};
+
+// The main view as the frame loop sees it.
+class MainView {
+  public:
+    virtual ~MainView() = default;
+    // Stage 1: the sky for the frame's time of day.
+    virtual void setViewTimeOfDay(double timeOfDay_h) = 0;
+    // Stage 6: draws the view from `camera` with `ambient` and waits until it is drawn.
+    virtual RenderStats drawView(const CameraSample& camera, const AmbientSource& ambient) = 0;
+};
+
+}  // namespace amb

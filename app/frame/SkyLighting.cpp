@@ -1,0 +1,120 @@
+// SkyLighting.cpp — the sky for a time of day, the exposure and the fixed ambients.
+#include "app/frame/SkyLighting.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/geometric.hpp>
+
+#include "world/Conventions.h"
+#include "world/Error.h"
+#include "world/Sky.h"
+
+namespace amb {
+
+// ---- Sky -------------------------------------------------------------------------------------
+
+SkyLighting evaluateSky(const Sky& sky, double timeOfDay_h) {
+    SkyLighting s;
+    s.timeOfDay_h = timeOfDay_h;
+    const SkyState state = sky.state(timeOfDay_h);
+    const DirectionalLight light = sky.mainLight(timeOfDay_h);
+    s.lightDir = glm::vec3(light.direction);
+    s.lightIrradiance = light.irradiance;
+    s.sunDiscRadiance = sky.sunRadiance(timeOfDay_h);
+    s.sunCosRadius = float(std::cos(sky.sunAngularRadius_rad()));
+    const glm::dvec3 sunDir = sky.sunDirection(timeOfDay_h);
+    glm::dvec3 az(sunDir.x, 0.0, sunDir.z);
+    az = glm::length(az) > 1e-9 ? glm::normalize(az) : glm::dvec3(0.0, 0.0, 1.0);
+    s.sunAzimuth = glm::vec3(az);
+    const double up = std::sin(2.0 * kPi / 180.0), across = std::cos(2.0 * kPi / 180.0);
+    s.horizonToward = sky.radiance(glm::dvec3(az.x * across, up, az.z * across), state);
+    s.horizonAway = sky.radiance(glm::dvec3(-az.x * across, up, -az.z * across), state);
+
+    // Upper hemisphere: the sky model, texel by texel, with sin(theta) dtheta dphi weights.
+    const int w = SkyLighting::kWidth, h = SkyLighting::kHeight;
+    s.texture.assign(size_t(w) * h * 3, 0.0f);
+    glm::dvec3 skySum(0.0), irrUp(0.0);
+    double skyWeight = 0.0;
+    const double dTheta = kPi / h, dPhi = 2.0 * kPi / w;
+    for (int r = 0; r < h / 2; ++r) {
+        const double theta = (r + 0.5) * dTheta;
+        for (int c = 0; c < w; ++c) {
+            const double phi = ((c + 0.5) / w - 0.5) * 2.0 * kPi;
+            const glm::dvec3 d(std::sin(theta) * std::sin(phi), std::cos(theta),
+                               -std::sin(theta) * std::cos(phi));
+            const glm::vec3 L = sky.radiance(d, state);
+            std::copy(&L.x, &L.x + 3, &s.texture[(size_t(r) * w + c) * 3]);
+            const double dw = std::sin(theta) * dTheta * dPhi;
+            skySum += glm::dvec3(L) * dw;
+            skyWeight += dw;
+            irrUp += glm::dvec3(L) * d.y * dw;
+        }
+    }
+    s.skyMean = glm::vec3(skySum / skyWeight);
+    s.skyIrradianceUp = glm::vec3(irrUp);
+    // Lower hemisphere: distant ground, Lambertian, lit by the sky and the main light.
+    const glm::vec3 groundIrr =
+        s.skyIrradianceUp + s.lightIrradiance * std::max(0.0f, s.lightDir.y);
+    s.groundMean = SkyLighting::kDistantGroundAlbedo / float(kPi) * groundIrr;
+    for (int r = h / 2; r < h; ++r) {
+        for (int c = 0; c < w; ++c) {
+            std::copy(&s.groundMean.x, &s.groundMean.x + 3, &s.texture[(size_t(r) * w + c) * 3]);
+        }
+    }
+    return s;
+}
+
+float exposureFor(const SkyLighting& now, const SkyLighting& noon) {
+    auto white = [](const SkyLighting& s) {
+        const glm::vec3 e = s.skyIrradianceUp + s.lightIrradiance * std::max(0.0f, s.lightDir.y);
+        return luminance(e) / float(kPi);
+    };
+    const float reference = std::max(white(noon), 1e-6f);
+    return 0.6f / std::max(white(now), reference * 1e-3f);
+}
+
+// ---- Ambient ---------------------------------------------------------------------------------
+
+AmbientMode parseAmbientMode(const std::string& text, const std::string& where) {
+    if (text == "constant") return AmbientMode::Constant;
+    if (text == "hemisphere") return AmbientMode::Hemisphere;
+    throw InputError(where, "unknown ambient '" + text + "' (expected constant or hemisphere)");
+}
+
+const char* toString(AmbientMode mode) {
+    return mode == AmbientMode::Constant ? "constant" : "hemisphere";
+}
+
+namespace {
+
+// SH of a radiance that is `sky` over the upper hemisphere (y > 0) and `ground` below. The step
+// has bands 0 and 1 only: L00 = Y00 4 pi (s + g) / 2, L1-1 = Y1 (s - g)/2 * 2 integral_{y>0} y dw
+// = Y1 pi (s - g).
+ShRgb hemisphereSh(const glm::vec3& sky, const glm::vec3& ground) {
+    ShRgb sh;
+    sh.c[0] = glm::vec3(float(kShY00 * 2.0 * kPi)) * (sky + ground);
+    sh.c[1] = glm::vec3(float(kShY1 * kPi)) * (sky - ground);
+    return sh;
+}
+
+}  // namespace
+
+FixedAmbient::FixedAmbient(AmbientMode mode, const SkyLighting& sky) {
+    const glm::vec3 mean = 0.5f * (sky.skyMean + sky.groundMean);
+    sh_ = mode == AmbientMode::Constant ? hemisphereSh(mean, mean)
+                                        : hemisphereSh(sky.skyMean, sky.groundMean);
+    const ShIrradianceMatrices m = shIrradianceMatrices(sh_);
+    set_ = {m.r, m.g, m.b};
+}
+
+glm::vec3 FixedAmbient::cornerIrradiance(const glm::dvec3&, const glm::dvec3& normal) const {
+    return shIrradiance(sh_, glm::vec3(normal));
+}
+
+std::uint32_t FixedAmbient::objectSet(const glm::dvec3&, std::vector<AmbientSet>& sets) const {
+    if (sets.empty()) sets.push_back(set_);
+    return 0;
+}
+
+}  // namespace amb

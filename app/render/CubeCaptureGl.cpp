@@ -1,0 +1,204 @@
+// CubeCaptureGl.cpp — render cube faces of the static coarse scene and read them back.
+//
+// Steps per call: (1) the capture scene around the probe (terrain proxy, tree proxies, roads;
+// RendererScene::buildCapture) lit by the sky/ground hemisphere ambient and the main light;
+// (2) each requested face into its rows of the N x 6N target; (3) one read-back; (4) the sun
+// disc, far smaller than a 16-texel face's texels, added to the texel holding the sun direction
+// with its whole energy when that texel sees sky (alpha = 1), so the projection keeps the sun's
+// irradiance exactly instead of missing it or hitting it by chance.
+#include "app/render/CubeCaptureGl.h"
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include <glm/geometric.hpp>
+
+#include "app/frame/MethodStages.h"
+#include "app/render/Renderer.h"
+#include "lighting/CubeMapProjector.h"
+#include "world/Conventions.h"
+#include "world/Error.h"
+#include "world/World.h"
+
+namespace amb {
+
+namespace {
+
+struct FaceBasis {
+    glm::vec3 forward, u, v;
+};
+
+FaceBasis faceBasis(int face) {
+    const glm::dvec3 f = cubeFaceDirection(face, 0.0, 0.0);
+    return {glm::vec3(f), glm::vec3(cubeFaceDirection(face, 1.0, 0.0) - f),
+            glm::vec3(cubeFaceDirection(face, 0.0, 1.0) - f)};
+}
+
+constexpr float kCaptureNear_m = 0.1f;
+
+}  // namespace
+
+glm::mat4 CubeCaptureGl::faceViewProj(int face, float near_m) {
+    const FaceBasis b = faceBasis(face);
+    glm::mat4 view(1.0f);  // rows U, V, -F (glm is column-major: m[col][row])
+    for (int c = 0; c < 3; ++c) {
+        view[c][0] = b.u[c];
+        view[c][1] = b.v[c];
+        view[c][2] = -b.forward[c];
+    }
+    return reversedInfinitePerspective(0.5f * float(kPi), 1.0f, near_m) * view;
+}
+
+CubeCaptureGl::CubeCaptureGl(RendererScene& scene, int faceSize) : scene_(&scene), n_(faceSize) {
+    init();
+}
+
+CaptureScene parseCaptureScene(const std::string& text, const std::string& where) {
+    if (text == "coarse") return CaptureScene::Coarse;
+    if (text == "full") return CaptureScene::Full;
+    throw InputError(where, "expected coarse or full, got '" + text + "'");
+}
+
+const char* toString(CaptureScene scene) {
+    return scene == CaptureScene::Full ? "full" : "coarse";
+}
+
+RendererSceneSettings fullCaptureSceneSettings(int faceSize) {
+    RendererSceneSettings s;
+    s.pixelsPerRadian = double(faceSize) / (0.5 * kPi);
+    s.fullMeshMinPixels = 3.0;
+    s.proxyMinPixels = 0.0;
+    s.farMinPixels = 0.25;  // leave out plants smaller than a quarter texel
+    return s;
+}
+
+static std::unique_ptr<RendererScene> ownScene(const World& world, int faceSize,
+                                               CaptureScene kind) {
+    if (kind == CaptureScene::Full) {
+        if (faceSize < 1 || faceSize > 2048)
+            throw InputError("--size", "face size must be in [1, 2048]");
+        return std::make_unique<RendererScene>(world, fullCaptureSceneSettings(faceSize));
+    }
+    return std::make_unique<RendererScene>(world);
+}
+
+CubeCaptureGl::CubeCaptureGl(const World& world, int faceSize, CaptureScene scene)
+    : ownedScene_(ownScene(world, faceSize, scene)),
+      scene_(ownedScene_.get()),
+      n_(faceSize),
+      kind_(scene) {
+    init();
+}
+
+CubeCaptureGl::~CubeCaptureGl() = default;
+
+void CubeCaptureGl::init() {
+    if (n_ < 1 || n_ > 2048) throw InputError("--size", "face size must be in [1, 2048]");
+    drawer_ = std::make_unique<SceneDrawer>();
+    colour_ = makeTexture2D(GL_RGBA32F, n_, 6 * n_);
+    depth_ = makeTexture2D(GL_DEPTH_COMPONENT32F, n_, 6 * n_);
+    GLuint fbo = 0;
+    glCreateFramebuffers(1, &fbo);
+    fbo_ = GlFramebuffer(fbo);
+    glNamedFramebufferTexture(fbo, GL_COLOR_ATTACHMENT0, colour_.id(), 0);
+    glNamedFramebufferTexture(fbo, GL_DEPTH_ATTACHMENT, depth_.id(), 0);
+    if (glCheckNamedFramebufferStatus(fbo, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
+        throw std::runtime_error("capture: incomplete framebuffer");
+    }
+}
+
+CubeCaptureStats CubeCaptureGl::capture(const glm::dvec3& position_m, double timeOfDay_h,
+                                        CubeFaceMask faces, std::vector<float>& cube) {
+    using Clock = std::chrono::steady_clock;
+    const auto t0 = Clock::now();
+    const size_t faceFloats = size_t(n_) * n_ * 3;
+    if (cube.size() != 6 * faceFloats) cube.assign(6 * faceFloats, 0.0f);
+    CubeCaptureStats stats;
+    faces &= kAllCubeFaces;
+    if (!faces) return stats;
+
+    if (timeOfDay_h != sky_.timeOfDay_h) {
+        sky_ = evaluateSky(scene_->world().sky(), timeOfDay_h);
+        drawer_->setSky(sky_);
+    }
+    // Static coarse scene, first bounce only: surfaces lit by the main light and the
+    // sky/ground hemisphere ambient.
+    const FixedAmbient ambient(AmbientMode::Hemisphere, sky_);
+    if (kind_ == CaptureScene::Coarse) scene_->buildCapture(position_m, ambient, list_);
+
+    glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo_.id());
+    FrameConstants fc;
+    fillSkyConstants(sky_, fc);
+    fc.sunDisc = glm::vec4(0.0f, 0.0f, 0.0f, 2.0f);  // disc added on the CPU (step 4)
+    fc.fog = glm::vec4(1.0f / 4000.0f, 1.0f, 0.0f, 0.0f);
+    int lo = 6, hi = -1;
+    for (int f = 0; f < 6; ++f) {
+        if (!(faces & cubeFaceBit(f))) continue;
+        lo = std::min(lo, f);
+        hi = std::max(hi, f);
+        glViewport(0, f * n_, n_, n_);
+        glEnable(GL_SCISSOR_TEST);
+        glScissor(0, f * n_, n_, n_);
+        const float clearColour[4] = {0, 0, 0, 0};
+        const float far = 0.0f;
+        glClearBufferfv(GL_COLOR, 0, clearColour);
+        glClearBufferfv(GL_DEPTH, 0, &far);
+        glDisable(GL_SCISSOR_TEST);
+        fc.viewProj = faceViewProj(f, kCaptureNear_m);
+        fc.invViewProj = glm::inverse(fc.viewProj);
+        // The full scene is culled to each face's frustum, as the main view culls its own.
+        if (kind_ == CaptureScene::Full) scene_->buildView(position_m, fc.viewProj, ambient, list_);
+        stats.triangles = std::max(stats.triangles, drawer_->draw(list_, fc, false, false));
+        ++stats.faces;
+    }
+    // One read-back covering the rendered faces.
+    const int rows = (hi - lo + 1) * n_;
+    rgba_.resize(size_t(n_) * rows * 4);
+    glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    glReadBuffer(GL_COLOR_ATTACHMENT0);
+    glReadPixels(0, lo * n_, n_, rows, GL_RGBA, GL_FLOAT, rgba_.data());
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+
+    const glm::vec3 sunDir = glm::vec3(scene_->world().sky().sunDirection(timeOfDay_h));
+    const double sunRadius = scene_->world().sky().sunAngularRadius_rad();
+    const double sunSolidAngle = 2.0 * kPi * (1.0 - std::cos(sunRadius));
+    for (int f = lo; f <= hi; ++f) {
+        if (!(faces & cubeFaceBit(f))) continue;
+        const float* src = &rgba_[size_t(f - lo) * n_ * n_ * 4];
+        float* dst = &cube[size_t(f) * faceFloats];
+        for (size_t t = 0; t < size_t(n_) * n_; ++t) {
+            dst[3 * t + 0] = src[4 * t + 0];
+            dst[3 * t + 1] = src[4 * t + 1];
+            dst[3 * t + 2] = src[4 * t + 2];
+        }
+        // Step 4: the sun disc's energy into the texel that holds its direction.
+        const FaceBasis b = faceBasis(f);
+        const float along = glm::dot(sunDir, b.forward);
+        if (along <= 0.0f) continue;
+        const float u = glm::dot(sunDir, b.u) / along, v = glm::dot(sunDir, b.v) / along;
+        if (std::abs(u) > 1.0f || std::abs(v) > 1.0f) continue;
+        const int i = std::min(n_ - 1, int((u + 1.0f) * 0.5f * n_));
+        const int j = std::min(n_ - 1, int((v + 1.0f) * 0.5f * n_));
+        const size_t t = size_t(j) * n_ + i;
+        if (src[4 * t + 3] < 0.5f) continue;  // hidden by terrain or a tree
+        const float scale = float(sunSolidAngle / cubeTexelSolidAngle(i, j, n_));
+        for (int c = 0; c < 3; ++c) dst[3 * t + c] += sky_.sunDiscRadiance[c] * scale;
+    }
+    stats.milliseconds = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    lastStats_ = stats;
+    return stats;
+}
+
+std::unique_ptr<MethodAmbienceStages> makeMethodStages(Renderer& renderer,
+                                                       const std::string& method,
+                                                       const AmbienceVolumeSettings& settings,
+                                                       const BaselineSettings& baselines,
+                                                       int faceSize) {
+    return std::make_unique<MethodAmbienceStages>(
+        std::make_unique<CubeCaptureGl>(renderer.scene(), faceSize), renderer.world(), method,
+        settings, baselines);
+}
+
+}  // namespace amb

@@ -1,0 +1,91 @@
+// CubeCaptureGl.h — the GL implementation of lighting/CubeCapture.h.
+//
+// Faces are rendered into one N x 6N float target (face f in rows [fN, (f+1)N)) with a 90 degree
+// camera whose view rows are (U, V, -F) for the face's forward F and texel axes U, V taken from
+// world/Conventions.h, so clip-space (x, y) is exactly the face's (u, v) and GL row j is the
+// convention's row j. One read-back per call.
+//
+// Two scenes (CaptureScene):
+//   coarse — what the methods capture: the terrain proxy, tree proxies within
+//            captureTreeRange_m, the road (RendererScene::buildCapture); thousands of triangles.
+//   full   — what the main view draws, for the reference oracle (lighting/ReferenceOracle.h):
+//            the terrain LOD mesh finest at the probe, every plant kind (bushes and rocks too)
+//            with its full mesh wherever it covers at least fullMinTexels of the face, the road;
+//            built per face with the face's frustum (RendererScene::buildView), lit by the same
+//            shaders as the main view. Far more triangles, so it is for measuring, not for frames.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "app/render/RendererCore.h"
+#include "app/render/RendererScene.h"
+#include "lighting/CubeCapture.h"
+
+namespace amb {
+
+class World;
+class MethodAmbienceStages;
+class Renderer;
+struct AmbienceVolumeSettings;
+struct BaselineSettings;
+
+enum class CaptureScene { Coarse, Full };
+CaptureScene parseCaptureScene(const std::string& text, const std::string& where);
+const char* toString(CaptureScene scene);
+
+// The renderer scene settings of a full-scene capture of N x N faces: the main view's settings
+// with its pixel density (N / (pi / 2) per radian) and every drawn plant at its full mesh.
+RendererSceneSettings fullCaptureSceneSettings(int faceSize);
+
+class CubeCaptureGl final : public CubeCapture {
+  public:
+    static constexpr int kDefaultFaceSize = 16;
+    static constexpr int kReferenceFaceSize = 64;
+
+    // Shares the scene (meshes, terrain cache) of a renderer; needs a current GL context.
+    CubeCaptureGl(RendererScene& scene, int faceSize = kDefaultFaceSize);
+    // Standalone: builds its own scene of `world` (for CaptureScene::Full, with
+    // fullCaptureSceneSettings).
+    CubeCaptureGl(const World& world, int faceSize = kDefaultFaceSize,
+                  CaptureScene scene = CaptureScene::Coarse);
+    ~CubeCaptureGl() override;
+
+    int faceSize() const override { return n_; }
+    CaptureScene scene() const { return kind_; }
+    CubeCaptureStats capture(const glm::dvec3& position_m, double timeOfDay_h, CubeFaceMask faces,
+                             std::vector<float>& cube) override;
+
+    // Statistics of the last capture() call that rendered faces (triangles per face, time).
+    const CubeCaptureStats& lastStats() const { return lastStats_; }
+    std::size_t lastTriangles() const override { return lastStats_.triangles; }
+
+    // The camera-relative view-projection of face f (exposed for tests).
+    static glm::mat4 faceViewProj(int face, float near_m);
+
+  private:
+    void init();
+
+    std::unique_ptr<RendererScene> ownedScene_;
+    RendererScene* scene_;
+    int n_;
+    CaptureScene kind_ = CaptureScene::Coarse;
+    std::unique_ptr<SceneDrawer> drawer_;
+    SkyLighting sky_;
+    GlTexture colour_, depth_;
+    GlFramebuffer fbo_;
+    DrawList list_;
+    std::vector<float> rgba_;
+    CubeCaptureStats lastStats_;
+};
+
+// An ambience method's frame stages (app/frame/MethodStages.h) capturing from `renderer`'s own
+// scene (coarse proxies) with faces of `faceSize`. Needs a current GL context.
+std::unique_ptr<MethodAmbienceStages> makeMethodStages(Renderer& renderer,
+                                                       const std::string& method,
+                                                       const AmbienceVolumeSettings& settings,
+                                                       const BaselineSettings& baselines,
+                                                       int faceSize = 16);
+
+}  // namespace amb

@@ -1,0 +1,210 @@
+// Renderer.cpp — ambient sources and one frame of the main view.
+#include "app/render/Renderer.h"
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/matrix.hpp>
+
+#include "lighting/SH.h"
+#include "world/Error.h"
+#include "world/World.h"
+
+namespace amb {
+
+// ---- Renderer --------------------------------------------------------------------------------
+
+static GlFramebuffer makeFramebuffer(GLuint colour, GLuint depth) {
+    GLuint fbo = 0;
+    glCreateFramebuffers(1, &fbo);
+    glNamedFramebufferTexture(fbo, GL_COLOR_ATTACHMENT0, colour, 0);
+    if (depth) glNamedFramebufferTexture(fbo, GL_DEPTH_ATTACHMENT, depth, 0);
+    if (glCheckNamedFramebufferStatus(fbo, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
+        glDeleteFramebuffers(1, &fbo);
+        throw std::runtime_error("renderer: incomplete framebuffer");
+    }
+    return GlFramebuffer(fbo);
+}
+
+Renderer::Renderer(const World& world, const RenderSettings& settings)
+    : world_(world), settings_(settings) {
+    if (settings.width <= 0 || settings.height <= 0 || settings.width > 16384 ||
+        settings.height > 16384) {
+        throw InputError("--size", "image size must be between 1x1 and 16384x16384");
+    }
+    GLint maxSize = 0;
+    glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &maxSize);
+    if (settings.width > maxSize || settings.height > maxSize) {
+        throw InputError(
+            "--size", "image size exceeds the GL limit of " + std::to_string(maxSize) + " pixels");
+    }
+    drawer_ = std::make_unique<SceneDrawer>();
+    RendererSceneSettings scene = settings.scene;
+    scene.pixelsPerRadian = settings.height / settings.fovY_rad;
+    scene_ = std::make_unique<RendererScene>(world, scene);
+    hdr_ = makeTexture2D(GL_RGBA16F, settings.width, settings.height);
+    depth_ = makeTexture2D(GL_DEPTH_COMPONENT32F, settings.width, settings.height);
+    ldr_ = makeTexture2D(GL_RGBA8, settings.width, settings.height);
+    hdrFbo_ = makeFramebuffer(hdr_.id(), depth_.id());
+    ldrFbo_ = makeFramebuffer(ldr_.id(), 0);
+    glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+    noon_ = evaluateSky(world.sky(), 12.0);
+}
+
+Renderer::~Renderer() = default;
+
+const SkyLighting& Renderer::setTimeOfDay(double timeOfDay_h) {
+    if (timeOfDay_h != sky_.timeOfDay_h) {
+        sky_ = evaluateSky(world_.sky(), timeOfDay_h);
+        drawer_->setSky(sky_);
+    }
+    return sky_;
+}
+
+glm::mat4 Renderer::viewProjection(const CameraSample& camera) const {
+    // Camera-relative view: the eye at the origin, so only rotation in the view matrix.
+    const glm::vec3 f = glm::normalize(glm::vec3(camera.forward));
+    const glm::vec3 up = glm::normalize(glm::vec3(camera.up));
+    const glm::mat4 view = glm::lookAt(glm::vec3(0.0f), f, up);
+    const float aspect = float(settings_.width) / float(settings_.height);
+    return reversedInfinitePerspective(settings_.fovY_rad, aspect, settings_.near_m) * view;
+}
+
+RenderStats Renderer::render(const CameraSample& camera, const AmbientSource& ambient,
+                             RenderOutput output) {
+    using Clock = std::chrono::steady_clock;
+    RenderStats stats;
+    const auto t0 = Clock::now();
+    if (settings_.drawVehicle) {
+        const glm::dvec3 f = camera.forward;
+        scene_->setVehicle(VehiclePose{
+            camera.position_m - glm::dvec3(0.0, settings_.vehicleEyeHeight_m, 0.0),
+            std::atan2(f.x, f.z)});
+    } else {
+        scene_->setVehicle(std::nullopt);
+    }
+    FrameConstants fc;
+    fc.viewProj = viewProjection(camera);
+    fc.invViewProj = glm::inverse(fc.viewProj);
+    fillSkyConstants(sky_, fc);
+    fc.fog = glm::vec4(settings_.fogExtinction_perM, 0.0f, float(int(output)), 0.0f);
+
+    SceneStats ss;
+    scene_->buildView(camera.position_m, fc.viewProj, ambient, list_, &ss);
+    const auto t1 = Clock::now();
+
+    glBindFramebuffer(GL_FRAMEBUFFER, hdrFbo_.id());
+    glViewport(0, 0, settings_.width, settings_.height);
+    const float black[4] = {0, 0, 0, 0};
+    const float far = 0.0f;
+    glClearNamedFramebufferfv(hdrFbo_.id(), GL_COLOR, 0, black);
+    glClearNamedFramebufferfv(hdrFbo_.id(), GL_DEPTH, 0, &far);
+    stats.triangles = drawer_->draw(list_, fc, true, false);
+
+    if (output == RenderOutput::Shaded) {
+        glBindFramebuffer(GL_FRAMEBUFFER, ldrFbo_.id());
+        drawer_->drawTonemap(hdr_.id(), exposureFor(sky_, noon_));
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    const auto t2 = Clock::now();
+
+    stats.terrainPatches = ss.terrainPatches;
+    stats.terrainPatchesDrawn = ss.terrainPatchesDrawn;
+    stats.objectsDrawn = ss.objectsDrawn;
+    stats.terrainRebuilt = ss.terrainRebuilt;
+    stats.sceneMs = std::chrono::duration<double, std::milli>(t1 - t0).count();
+    stats.drawMs = std::chrono::duration<double, std::milli>(t2 - t1).count();
+    return stats;
+}
+
+std::vector<unsigned char> Renderer::readRgb8() {
+    return readPixelsRgb8(ldrFbo_.id(), settings_.width, settings_.height);
+}
+
+std::vector<float> Renderer::readHdr() {
+    const int w = settings_.width, h = settings_.height;
+    std::vector<float> gl = readPixelsRgb32f(hdrFbo_.id(), 0, 0, w, h);
+    std::vector<float> out(gl.size());
+    for (int y = 0; y < h; ++y) {
+        std::copy_n(&gl[size_t(h - 1 - y) * w * 3], size_t(w) * 3, &out[size_t(y) * w * 3]);
+    }
+    return out;
+}
+
+std::vector<unsigned char> Renderer::tonemap(const std::vector<float>& hdrRgb) {
+    const int w = settings_.width, h = settings_.height;
+    if (hdrRgb.size() != std::size_t(w) * h * 3)
+        throw std::invalid_argument("Renderer::tonemap: image size differs from the view's");
+    std::vector<float> rgba(std::size_t(w) * h * 4, 0.0f);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const std::size_t src = (std::size_t(y) * w + x) * 3;
+            const std::size_t dst = (std::size_t(h - 1 - y) * w + x) * 4;  // GL rows from the bottom
+            for (int c = 0; c < 3; ++c) rgba[dst + c] = hdrRgb[src + c];
+        }
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+    glTextureSubImage2D(hdr_.id(), 0, 0, 0, w, h, GL_RGBA, GL_FLOAT, rgba.data());
+    glBindFramebuffer(GL_FRAMEBUFFER, ldrFbo_.id());
+    glViewport(0, 0, w, h);
+    drawer_->drawTonemap(hdr_.id(), exposureFor(sky_, noon_));
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    return readRgb8();
+}
+
+SurfaceImage Renderer::readSurface(const CameraSample& camera) {
+    const int w = settings_.width, h = settings_.height;
+    SurfaceImage out;
+    out.width = w, out.height = h;
+    std::vector<float> rgba(std::size_t(w) * h * 4), depth(std::size_t(w) * h);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, hdrFbo_.id());
+    glReadBuffer(GL_COLOR_ATTACHMENT0);
+    glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    glReadPixels(0, 0, w, h, GL_RGBA, GL_FLOAT, rgba.data());
+    glReadPixels(0, 0, w, h, GL_DEPTH_COMPONENT, GL_FLOAT, depth.data());
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+    const glm::mat4 inv = glm::inverse(viewProjection(camera));
+    out.rgba.resize(rgba.size());
+    out.position.assign(std::size_t(w) * h, glm::vec3(0.0f));
+    for (int y = 0; y < h; ++y) {
+        const int glRow = h - 1 - y;
+        std::copy_n(&rgba[std::size_t(glRow) * w * 4], std::size_t(w) * 4,
+                    &out.rgba[std::size_t(y) * w * 4]);
+        for (int x = 0; x < w; ++x) {
+            const std::size_t src = std::size_t(glRow) * w + x;
+            if (!(rgba[4 * src + 3] > 0.0f)) continue;
+            // Pixel centre in clip space; depth in [0, 1] (glClipControl zero-to-one).
+            const glm::vec4 clip(2.0f * (float(x) + 0.5f) / float(w) - 1.0f,
+                                 2.0f * (float(glRow) + 0.5f) / float(h) - 1.0f, depth[src], 1.0f);
+            const glm::vec4 p = inv * clip;
+            out.position[std::size_t(y) * w + x] = glm::vec3(p) / p.w;
+        }
+    }
+    return out;
+}
+
+void Renderer::replaceLdr(const std::vector<unsigned char>& rgb) {
+    // rgb is top row first; GL rows start at the bottom.
+    const std::size_t row = std::size_t(settings_.width) * 3;
+    if (rgb.size() != row * std::size_t(settings_.height)) return;
+    std::vector<unsigned char> flipped(rgb.size());
+    for (int y = 0; y < settings_.height; ++y)
+        std::copy_n(&rgb[std::size_t(settings_.height - 1 - y) * row], row, &flipped[std::size_t(y) * row]);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTextureSubImage2D(ldr_.id(), 0, 0, 0, settings_.width, settings_.height, GL_RGB,
+                        GL_UNSIGNED_BYTE, flipped.data());
+}
+
+void Renderer::blitToWindow(int windowWidth, int windowHeight) {
+    glBlitNamedFramebuffer(ldrFbo_.id(), 0, 0, 0, settings_.width, settings_.height, 0, 0,
+                           windowWidth, windowHeight, GL_COLOR_BUFFER_BIT, GL_LINEAR);
+}
+
+RenderStats Renderer::drawView(const CameraSample& camera, const AmbientSource& ambient) {
+    const RenderStats stats = render(camera, ambient);
+    glFinish();
+    return stats;
+}
+
+}  // namespace amb

@@ -1,0 +1,128 @@
+// RendererCore.h — what the main view and the cube capture share: the GL programs, the sky
+// texture, meshes on the GPU, and drawing one DrawList (plain data) into the bound framebuffer.
+//
+// [SECTION] FrameConstants   the std140 block of shaders/common.glsl
+// [SECTION] GlMesh           a WorldMesh on the GPU (positions, normals, albedo, indices)
+// [SECTION] DrawList         terrain patches with corner irradiance, road pieces with irradiance
+//                            per vertex, instanced objects with ambient sets (three R&H 4x4
+//                            matrices each): the ambient slot
+// [SECTION] SceneDrawer      draws a DrawList: opaque terrain and objects, then the sky behind
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <glm/mat4x4.hpp>
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+#include "app/frame/Draw.h"
+#include "app/frame/SkyLighting.h"
+#include "app/render/Gl.h"
+#include "world/WorldMesh.h"
+
+namespace amb {
+
+// ---- FrameConstants --------------------------------------------------------------------------
+struct FrameConstants {
+    glm::mat4 viewProj{1.0f};  // camera-relative world -> clip
+    glm::mat4 invViewProj{1.0f};
+    glm::vec4 lightDir{0, 1, 0, 0};
+    glm::vec4 lightIrradiance{0.0f};
+    glm::vec4 sunDisc{0, 0, 0, 2};     // rgb radiance; w = cos(angular radius), 2 = no disc
+    glm::vec4 fog{0.0f};               // x: extinction [1/m]; y: 1 in a capture (alpha marks sky)
+    glm::vec4 sunAzimuth{0, 0, 1, 0};  // xz: unit horizontal direction of the sun's azimuth
+    glm::vec4 fogToward{0.0f};         // horizon sky radiance towards the sun's azimuth
+    glm::vec4 fogAway{0.0f};           // and away from it
+};
+static_assert(sizeof(FrameConstants) == 2 * 64 + 7 * 16, "std140 layout of FrameConstants");
+
+// Reversed-Z perspective with an infinite far plane (depth 1 at `near_m`, 0 at infinity), for
+// glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE).
+glm::mat4 reversedInfinitePerspective(float fovY_rad, float aspect, float near_m);
+
+// ---- GlMesh ----------------------------------------------------------------------------------
+struct GlMesh {
+    GlVertexArray vao;
+    GlBuffer positions, normals, albedo, indices;
+    GLsizei indexCount = 0;
+    std::size_t triangles() const { return std::size_t(indexCount) / 3; }
+};
+// Attributes 0..2 per vertex; attributes 3 and 4 read ObjectInstance from binding 1 (instanced);
+// attribute 5 (irradiance per vertex, binding 5) is enabled by the draws that use it.
+GlMesh uploadMesh(const WorldMesh& mesh);
+
+// ---- DrawList --------------------------------------------------------------------------------
+struct TerrainDraw {
+    const GlMesh* mesh = nullptr;
+    std::uint32_t firstIndex = 0, indexCount = 0;  // range in mesh; count 0 = the whole mesh
+    glm::vec3 origin{0.0f};                        // patch origin, camera-relative [m]
+    glm::vec4 rect{0, 0, 1, 1};  // (x0, z0) relative to the origin [m], 1/size [1/m]
+    std::array<glm::vec3, 4> cornerIrradiance{};  // (x0,z0), (x1,z0), (x0,z1), (x1,z1)
+    // Road pieces: the irradiance of mesh vertex v is DrawList::vertexIrradiance[this + v]
+    // (the corners and rect are then unused); -1: the corners, bilinear across the rect.
+    std::int64_t firstVertexIrradiance = -1;
+};
+
+struct ObjectInstance {
+    glm::vec4 positionScale{0.0f};  // camera-relative base [m], scale
+    glm::vec2 rotationSet{0.0f};    // rotation about +Y [rad], ambient set index
+};
+static_assert(sizeof(ObjectInstance) == 24, "ObjectInstance is read as two attributes");
+
+struct ObjectBatch {
+    const GlMesh* mesh = nullptr;
+    std::vector<ObjectInstance> instances;
+    // A proxy or far mesh standing in for the full one: the screen witnesses' outputs mark its
+    // pixels as surface kind 4 (not a witness: the reference sees the real plant).
+    bool simplified = false;
+};
+
+struct DrawList {
+    std::vector<TerrainDraw> terrain;
+    std::vector<ObjectBatch> objects;
+    std::vector<AmbientSet> ambientSets;      // indexed by ObjectInstance::rotationSet.y
+    std::vector<glm::vec3> vertexIrradiance;  // see TerrainDraw::firstVertexIrradiance
+    void clear() {
+        terrain.clear();
+        objects.clear();
+        ambientSets.clear();
+        vertexIrradiance.clear();
+    }
+};
+
+// Copies the light, sun disc and fog parts of `sky` into `fc`.
+void fillSkyConstants(const SkyLighting& sky, FrameConstants& fc);
+
+// ---- SceneDrawer -----------------------------------------------------------------------------
+class SceneDrawer {
+  public:
+    SceneDrawer();  // compiles the programs (shaderDirectory()), creates buffers and textures
+
+    void setSky(const SkyLighting& sky);  // uploads the sky texture
+    // Draws `list` into the bound framebuffer (depth cleared to 0 by the caller): terrain and
+    // objects, then the sky where nothing was drawn. Returns the triangles submitted.
+    std::size_t draw(const DrawList& list, const FrameConstants& constants, bool cullBackFaces,
+                     bool frontFaceClockwise);
+    // Tone maps `hdrTexture` into the bound framebuffer (full-screen pass, no depth).
+    void drawTonemap(GLuint hdrTexture, float exposure);
+
+  private:
+    GlProgram terrain_, object_, sky_, tonemap_;
+    GlBuffer constants_;
+    GlBuffer instances_;
+    std::size_t instanceCapacity_ = 0;
+    GlBuffer ambientSets_;
+    std::size_t ambientCapacity_ = 0;
+    GlBuffer vertexIrradiance_;
+    std::size_t vertexIrradianceCapacity_ = 0;
+    GlTexture skyTexture_;
+    GlVertexArray emptyVao_;
+    GLint terrainOrigin_ = -1, terrainRect_ = -1, terrainCorners_ = -1, terrainPerVertex_ = -1;
+    GLint objectSimplified_ = -1;
+};
+
+}  // namespace amb

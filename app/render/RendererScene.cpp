@@ -1,0 +1,400 @@
+// RendererScene.cpp — world -> draw lists for the main view and for the capture.
+//
+// [SECTION] Culling      frustum planes from the camera-relative view-projection (reversed Z)
+// [SECTION] Terrain      TerrainPatchCache leaves, rebuilt and re-uploaded only when they change
+// [SECTION] Roads        ribbons along the centrelines, in chunks for culling, lit per vertex
+// [SECTION] Plants       per-tile culling, per-plant distance LOD (full mesh, proxy, none)
+// [SECTION] Capture      terrain proxy + tree proxies + roads around the probe
+#include "app/render/RendererScene.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/geometric.hpp>
+
+#include "world/Road.h"
+#include "world/Vegetation.h"
+#include "world/Vehicle.h"
+#include "world/World.h"
+
+namespace amb {
+
+// ---- [SECTION] Culling -----------------------------------------------------------------------
+
+namespace {
+
+struct Frustum {
+    std::array<glm::vec4, 5> planes;  // left, right, bottom, top, near; inside: dot >= 0
+};
+
+Frustum frustumOf(const glm::mat4& m) {
+    const glm::vec4 r0(m[0][0], m[1][0], m[2][0], m[3][0]);
+    const glm::vec4 r1(m[0][1], m[1][1], m[2][1], m[3][1]);
+    const glm::vec4 r2(m[0][2], m[1][2], m[2][2], m[3][2]);
+    const glm::vec4 r3(m[0][3], m[1][3], m[2][3], m[3][3]);
+    // Reversed Z: depth = z / w in [0, 1]; depth <= 1 is the near plane (z <= w).
+    return {{r3 + r0, r3 - r0, r3 + r1, r3 - r1, r3 - r2}};
+}
+
+// Camera-relative box against the frustum (positive-vertex test).
+bool boxVisible(const Frustum& f, const glm::vec3& lo, const glm::vec3& hi) {
+    for (const glm::vec4& p : f.planes) {
+        const glm::vec3 v(p.x >= 0 ? hi.x : lo.x, p.y >= 0 ? hi.y : lo.y, p.z >= 0 ? hi.z : lo.z);
+        if (p.x * v.x + p.y * v.y + p.z * v.z + p.w < 0.0f) return false;
+    }
+    return true;
+}
+
+double horizontalDistance(const glm::dvec3& a, const glm::dvec3& b) {
+    return std::hypot(a.x - b.x, a.z - b.z);
+}
+
+}  // namespace
+
+// ---- [SECTION] Roads -------------------------------------------------------------------------
+
+struct RendererScene::RoadChunk {
+    glm::dvec3 origin_m;
+    glm::dvec3 min_m, max_m;
+    std::vector<glm::dvec3> vertices_m, normals;  // per mesh vertex, world position and normal
+    GlMesh mesh;
+};
+
+static constexpr int kRoadChunkSegments = 48;
+
+// The far LOD of a plant: an octahedron (6 vertices, 8 triangles) spanning the bounding box of
+// the upper part of the mesh (the crown, or the whole of a bush or rock), with its mean albedo
+// and ellipsoid normals, so it shades like a rounded crown at a few pixels' size.
+static WorldMesh farPlantMesh(const WorldMesh& full) {
+    float top = 0.0f;
+    for (size_t i = 1; i < full.positions.size(); i += 3) top = std::max(top, full.positions[i]);
+    glm::vec3 lo(1e30f), hi(-1e30f), albedo(0.0f);
+    int n = 0;
+    for (size_t v = 0; v < full.vertexCount(); ++v) {
+        const glm::vec3 p(full.positions[3 * v], full.positions[3 * v + 1],
+                          full.positions[3 * v + 2]);
+        if (p.y < 0.35f * top) continue;
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+        albedo += glm::vec3(full.albedo[3 * v], full.albedo[3 * v + 1], full.albedo[3 * v + 2]);
+        ++n;
+    }
+    albedo /= float(std::max(n, 1));
+    const glm::vec3 c = 0.5f * (lo + hi), r = glm::max(0.5f * (hi - lo), glm::vec3(0.05f));
+    // Reach down to the ground so the far tree stands on it.
+    const glm::vec3 dirs[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    WorldMesh m;
+    for (const glm::vec3& d : dirs) {
+        glm::vec3 p = c + d * r;
+        if (d.y < 0.0f) p.y = 0.0f;
+        m.positions.insert(m.positions.end(), {p.x, p.y, p.z});
+        m.normals.insert(m.normals.end(), {d.x, d.y, d.z});
+        m.albedo.insert(m.albedo.end(), {albedo.r, albedo.g, albedo.b});
+    }
+    // Counter-clockwise from outside: (+x, +y, +z) is CCW seen from (1, 1, 1).
+    const std::uint32_t tris[8][3] = {{0, 2, 4}, {4, 2, 1}, {1, 2, 5}, {5, 2, 0},
+                                      {4, 3, 0}, {1, 3, 4}, {5, 3, 1}, {0, 3, 5}};
+    for (const auto& t : tris) m.indices.insert(m.indices.end(), {t[0], t[1], t[2]});
+    return m;
+}
+
+RendererScene::RendererScene(const World& world, const RendererSceneSettings& settings)
+    : world_(world), settings_(settings), terrainCache_(world, settings.terrain) {
+    const glm::vec3 roadAlbedo = World::materialAlbedo(Material::Road);
+    for (const Road& road : world.roads().roads()) {
+        const auto& c = road.centreline;
+        for (size_t start = 0; start + 1 < c.size(); start += kRoadChunkSegments) {
+            const size_t end = std::min(c.size() - 1, start + kRoadChunkSegments);
+            const WorldMesh m = roadRibbon(road, start, end, settings.roadLift_m, roadAlbedo);
+            RoadChunk chunk;
+            chunk.origin_m = c[start];
+            chunk.min_m = glm::dvec3(1e300);
+            chunk.max_m = glm::dvec3(-1e300);
+            // World positions and normals of the vertices: where the draw looks up the ambient.
+            for (size_t v = 0; v < m.vertexCount(); ++v) {
+                const glm::dvec3 p =
+                    chunk.origin_m +
+                    glm::dvec3(m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]);
+                chunk.min_m = glm::min(chunk.min_m, p);
+                chunk.max_m = glm::max(chunk.max_m, p);
+                chunk.vertices_m.push_back(p);
+                chunk.normals.emplace_back(m.normals[3 * v], m.normals[3 * v + 1],
+                                           m.normals[3 * v + 2]);
+            }
+            chunk.mesh = uploadMesh(m);
+            roads_.push_back(std::move(chunk));
+        }
+    }
+    for (int k = 0; k < kPlantKinds; ++k) {
+        const WorldMesh& full = Vegetation::mesh(PlantKind(k));
+        plantMeshes_[k] = uploadMesh(full);
+        plantProxies_[k] = uploadMesh(Vegetation::proxyMesh(PlantKind(k)));
+        plantFar_[k] = uploadMesh(farPlantMesh(full));
+        float top = 0.0f;
+        for (size_t i = 1; i < full.positions.size(); i += 3)
+            top = std::max(top, full.positions[i]);
+        plantHeight_m_[k] = top;
+    }
+    vehicleMesh_ = uploadMesh(makeVehicleMesh());
+}
+
+RendererScene::~RendererScene() = default;
+
+// ---- [SECTION] Terrain -----------------------------------------------------------------------
+
+void RendererScene::updateTerrain(const glm::dvec3& eye_m) {
+    std::vector<PatchKey> leaves = terrainCache_.selectPatches(eye_m);
+    if (leaves == terrainLeaves_ && terrainGl_.indexCount > 0) return;
+    terrainLeaves_ = std::move(leaves);
+    // Origin on a coarse lattice near the eye: float positions stay small and exact enough.
+    const double snap = 256.0;
+    const glm::dvec3 origin(std::floor(eye_m.x / snap) * snap, 0.0,
+                            std::floor(eye_m.z / snap) * snap);
+    terrainMesh_ = terrainCache_.build(terrainLeaves_, origin);
+    terrainGl_ = uploadMesh(terrainMesh_.mesh);
+    terrainBounds_.clear();
+    const auto& pos = terrainMesh_.mesh.positions;
+    for (const TerrainPatchDraw& p : terrainMesh_.patches) {
+        PatchBounds b{glm::dvec3(1e300), glm::dvec3(-1e300)};
+        for (std::uint32_t v = p.firstVertex; v < p.firstVertex + p.vertexCount; ++v) {
+            const glm::dvec3 q(pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]);
+            b.min = glm::min(b.min, q);
+            b.max = glm::max(b.max, q);
+        }
+        terrainBounds_.push_back({b.min + terrainMesh_.origin_m, b.max + terrainMesh_.origin_m});
+    }
+}
+
+static TerrainDraw patchDraw(const GlMesh& mesh, const TerrainPatchDraw& p,
+                             const glm::dvec3& meshOrigin_m, const glm::dvec3& eye_m,
+                             const glm::vec3* cornerIrradiance) {
+    TerrainDraw d;
+    d.mesh = &mesh;
+    d.firstIndex = p.firstIndex;
+    d.indexCount = p.indexCount;
+    d.origin = glm::vec3(meshOrigin_m - eye_m);
+    const glm::dvec3 c0 = p.corners_m[0] - meshOrigin_m;
+    const double size = p.corners_m[1].x - p.corners_m[0].x;
+    d.rect = glm::vec4(float(c0.x), float(c0.z), float(1.0 / size), float(1.0 / size));
+    for (int k = 0; k < 4; ++k) d.cornerIrradiance[k] = cornerIrradiance[k];
+    return d;
+}
+
+void RendererScene::buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj,
+                              const AmbientSource& ambient, DrawList& out, SceneStats* stats) {
+    out.clear();
+    const auto before = terrainLeaves_;
+    updateTerrain(eye_m);
+    const Frustum frustum = frustumOf(viewProj);
+    // Visible patches, nearest first: the software rasteriser's early depth test then skips
+    // shading most hidden fragments.
+    std::vector<std::pair<double, size_t>> visible;
+    for (size_t i = 0; i < terrainMesh_.patches.size(); ++i) {
+        const PatchBounds& b = terrainBounds_[i];
+        if (!boxVisible(frustum, glm::vec3(b.min - eye_m), glm::vec3(b.max - eye_m))) continue;
+        const glm::dvec3 nearest = glm::clamp(eye_m, b.min, b.max);
+        visible.emplace_back(glm::length(nearest - eye_m), i);
+    }
+    std::sort(visible.begin(), visible.end());
+    // The visible patches' corners in one batch (the frame's largest set of lookups), each
+    // shared corner once; a corner inside a coarser neighbour's edge is not looked up but takes
+    // that edge's interpolation, so colours meet across LOD boundaries (world/TerrainPatch.h).
+    std::vector<std::size_t> visiblePatches;
+    for (const auto& [distance, i] : visible) visiblePatches.push_back(i);
+    const std::vector<std::uint32_t> evaluate = cornersToEvaluate(terrainMesh_, visiblePatches);
+    std::vector<glm::dvec3> cornerAt, cornerNormal;
+    for (std::uint32_t c : evaluate) {
+        cornerAt.push_back(terrainMesh_.corners[c].position_m);
+        cornerNormal.push_back(terrainMesh_.corners[c].normal);
+    }
+    std::vector<glm::vec3> irradiance(cornerAt.size());
+    ambient.cornerIrradianceBatch(cornerAt.size(), cornerAt.data(), cornerNormal.data(),
+                                  irradiance.data());
+    std::vector<glm::vec3> cornerValue(terrainMesh_.corners.size(), glm::vec3(0.0f));
+    for (std::size_t j = 0; j < evaluate.size(); ++j) cornerValue[evaluate[j]] = irradiance[j];
+    stitchCornerValues(terrainMesh_.corners, cornerValue.data());
+    for (std::size_t i : visiblePatches) {
+        const TerrainPatchDraw& p = terrainMesh_.patches[i];
+        glm::vec3 corners[4];
+        for (int k = 0; k < 4; ++k) corners[k] = cornerValue[p.cornerIndex[k]];
+        out.terrain.push_back(patchDraw(terrainGl_, p, terrainMesh_.origin_m, eye_m, corners));
+    }
+    const std::size_t drawnPatches = visible.size();
+    addRoads(eye_m, &viewProj, settings_.terrain.viewRadius_m, ambient, out);
+    std::size_t objects = 0;
+    addPlants(eye_m, &viewProj, false, ambient, out, &objects);
+    if (vehicle_) {
+        // The camera's own car (docs/DESIGN.md "Terrain and objects": vegetation and vehicle
+        // get per-pixel SH).
+        ObjectInstance inst;
+        const glm::dvec3 rel = vehicle_->position_m - eye_m;
+        inst.positionScale = glm::vec4(float(rel.x), float(rel.y), float(rel.z), 1.0f);
+        inst.rotationSet = glm::vec2(float(vehicle_->heading_rad),
+                                     float(ambient.objectSet(vehicle_->position_m, out.ambientSets)));
+        out.objects.push_back({&vehicleMesh_, {inst}});
+        ++objects;
+    }
+    if (stats) {
+        stats->terrainPatches = terrainMesh_.patches.size();
+        stats->terrainPatchesDrawn = drawnPatches;
+        stats->objectsDrawn = objects;
+        stats->terrainRebuilt = before != terrainLeaves_;
+    }
+}
+
+void RendererScene::addRoads(const glm::dvec3& eye_m, const glm::mat4* viewProj, double range_m,
+                             const AmbientSource& ambient, DrawList& out) {
+    Frustum frustum{};
+    if (viewProj) frustum = frustumOf(*viewProj);
+    // The ambient at every vertex of the visible pieces, with the vertex's own normal, in one
+    // batch (docs/DESIGN.md "Terrain and objects").
+    std::vector<const RoadChunk*> drawn;
+    std::vector<glm::dvec3> at, normal;
+    for (const RoadChunk& c : roads_) {
+        const glm::dvec3 centre = 0.5 * (c.min_m + c.max_m);
+        const double radius = 0.5 * glm::length(c.max_m - c.min_m);
+        if (horizontalDistance(centre, eye_m) - radius > range_m) continue;
+        if (viewProj &&
+            !boxVisible(frustum, glm::vec3(c.min_m - eye_m), glm::vec3(c.max_m - eye_m)))
+            continue;
+        drawn.push_back(&c);
+        at.insert(at.end(), c.vertices_m.begin(), c.vertices_m.end());
+        normal.insert(normal.end(), c.normals.begin(), c.normals.end());
+    }
+    const std::size_t first = out.vertexIrradiance.size();
+    out.vertexIrradiance.resize(first + at.size());
+    ambient.cornerIrradianceBatch(at.size(), at.data(), normal.data(),
+                                  out.vertexIrradiance.data() + first);
+    std::size_t offset = first;
+    for (const RoadChunk* c : drawn) {
+        TerrainDraw d;
+        d.mesh = &c->mesh;
+        d.origin = glm::vec3(c->origin_m - eye_m);
+        d.firstVertexIrradiance = std::int64_t(offset);
+        offset += c->vertices_m.size();
+        out.terrain.push_back(d);
+    }
+}
+
+// ---- [SECTION] Plants ------------------------------------------------------------------------
+
+void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewProj, bool capture,
+                              const AmbientSource& ambient, DrawList& out, std::size_t* drawn) {
+    const Vegetation& veg = world_.vegetation();
+    const double range = capture ? settings_.captureTreeRange_m : settings_.plantRange_m;
+    Frustum frustum{};
+    if (viewProj) frustum = frustumOf(*viewProj);
+    // Batches: full meshes per kind, then proxies per kind.
+    const size_t base = out.objects.size();
+    for (int k = 0; k < kPlantKinds; ++k) out.objects.push_back({&plantMeshes_[k], {}});
+    for (int k = 0; k < kPlantKinds; ++k) out.objects.push_back({&plantProxies_[k], {}, true});
+    for (int k = 0; k < kPlantKinds; ++k) out.objects.push_back({&plantFar_[k], {}, true});
+    const std::int64_t i0 = Vegetation::tileIndex(centre_m.x - range);
+    const std::int64_t i1 = Vegetation::tileIndex(centre_m.x + range);
+    const std::int64_t k0 = Vegetation::tileIndex(centre_m.z - range);
+    const std::int64_t k1 = Vegetation::tileIndex(centre_m.z + range);
+    const float maxHeight = *std::max_element(plantHeight_m_.begin(), plantHeight_m_.end());
+    std::size_t count = 0;
+    for (std::int64_t k = k0; k <= k1; ++k) {
+        for (std::int64_t i = i0; i <= i1; ++i) {
+            const double x0 = double(i) * Vegetation::kTile_m, z0 = double(k) * Vegetation::kTile_m;
+            const double dx =
+                std::max({x0 - centre_m.x, 0.0, centre_m.x - x0 - Vegetation::kTile_m});
+            const double dz =
+                std::max({z0 - centre_m.z, 0.0, centre_m.z - z0 - Vegetation::kTile_m});
+            if (std::hypot(dx, dz) > range) continue;
+            const auto plants = veg.tile(i, k);
+            if (plants->empty()) continue;
+            if (viewProj) {
+                double ylo = 1e300, yhi = -1e300;
+                for (const Plant& p : *plants) {
+                    ylo = std::min(ylo, p.position_m.y);
+                    yhi = std::max(yhi, p.position_m.y + p.scale * maxHeight);
+                }
+                const glm::vec3 lo(float(x0 - 4 - centre_m.x), float(ylo - centre_m.y),
+                                   float(z0 - 4 - centre_m.z));
+                const glm::vec3 hi(float(x0 + Vegetation::kTile_m + 4 - centre_m.x),
+                                   float(yhi - centre_m.y),
+                                   float(z0 + Vegetation::kTile_m + 4 - centre_m.z));
+                if (!boxVisible(frustum, lo, hi)) continue;
+            }
+            // Far plants (a few pixels tall) share one ambient set per tile, asked for at the
+            // tile's centre: ambience LOD, so distant forests cost one lookup per tile.
+            std::int64_t tileSet = -1;
+            for (const Plant& p : *plants) {
+                const int kind = int(p.kind);
+                const bool small = p.kind == PlantKind::Bush || p.kind == PlantKind::Rock;
+                if (capture && small) continue;  // the capture scene keeps only trees
+                const double d = glm::length(p.position_m - centre_m);
+                if (d > range) continue;
+                int lod = 1;  // 0 full, 1 proxy, 2 far; a capture uses proxies
+                if (!capture) {
+                    // Projected height in pixels (small-angle: size / distance radians).
+                    const double pixels = settings_.pixelsPerRadian * p.scale *
+                                          plantHeight_m_[kind] / std::max(d, 1.0);
+                    if (pixels < settings_.farMinPixels) continue;
+                    lod = pixels >= settings_.fullMeshMinPixels ? 0
+                          : pixels >= settings_.proxyMinPixels  ? 1
+                                                                : 2;
+                }
+                ObjectInstance inst;
+                const glm::dvec3 rel = p.position_m - centre_m;
+                inst.positionScale = glm::vec4(float(rel.x), float(rel.y), float(rel.z), p.scale);
+                std::uint32_t set;
+                if (lod == 2) {
+                    if (tileSet < 0) {
+                        const double h = 0.5 * Vegetation::kTile_m;
+                        tileSet = ambient.objectSet({x0 + h, p.position_m.y, z0 + h}, out.ambientSets);
+                    }
+                    set = std::uint32_t(tileSet);
+                } else {
+                    set = ambient.objectSet(p.position_m, out.ambientSets);
+                }
+                inst.rotationSet = glm::vec2(p.rotation_rad, float(set));
+                out.objects[base + lod * kPlantKinds + kind].instances.push_back(inst);
+                ++count;
+            }
+        }
+    }
+    // Nearest first within each batch, so the early depth test rejects hidden fragments.
+    if (!capture) {
+        for (size_t b = base; b < out.objects.size(); ++b) {
+            auto& v = out.objects[b].instances;
+            std::sort(v.begin(), v.end(), [](const ObjectInstance& a, const ObjectInstance& c) {
+                return glm::dot(glm::vec3(a.positionScale), glm::vec3(a.positionScale)) <
+                       glm::dot(glm::vec3(c.positionScale), glm::vec3(c.positionScale));
+            });
+        }
+    }
+    if (drawn) *drawn = count;
+}
+
+// ---- [SECTION] Capture -----------------------------------------------------------------------
+
+void RendererScene::buildCapture(const glm::dvec3& probe_m, const AmbientSource& ambient,
+                                 DrawList& out) {
+    out.clear();
+    // The proxy grid is finest at its centre, so it is rebuilt when the probe moves off it.
+    if (horizontalDistance(probe_m, captureCentre_) > 1e-3 || captureTerrain_.indexCount == 0) {
+        captureCentre_ = glm::dvec3(probe_m.x, 0.0, probe_m.z);
+        captureTerrain_ =
+            uploadMesh(makeTerrainProxy(world_, captureCentre_, settings_.captureTerrainRadius_m));
+    }
+    TerrainDraw d;
+    d.mesh = &captureTerrain_;
+    d.origin = glm::vec3(captureCentre_ - probe_m);
+    const double r = settings_.captureTerrainRadius_m;
+    d.rect = glm::vec4(float(-r), float(-r), float(0.5 / r), float(0.5 / r));
+    const auto cornerAt = [&](double x, double z) {
+        const glm::dvec3 p(captureCentre_.x + x,
+                           world_.height(captureCentre_.x + x, captureCentre_.z + z),
+                           captureCentre_.z + z);
+        return ambient.cornerIrradiance(p, world_.normal(p.x, p.z));
+    };
+    d.cornerIrradiance = {cornerAt(-r, -r), cornerAt(r, -r), cornerAt(-r, r), cornerAt(r, r)};
+    out.terrain.push_back(d);
+    addRoads(probe_m, nullptr, settings_.captureTerrainRadius_m, ambient, out);
+    addPlants(probe_m, nullptr, true, ambient, out, nullptr);
+}
+
+}  // namespace amb

@@ -1,0 +1,97 @@
+// RendererScene.h — turns the world into draw lists: the terrain LOD mesh (world/TerrainPatch.h),
+// vegetation instanced by kind with distance LOD, road ribbons, each frustum-culled; and the
+// capture scene (terrain proxy, tree proxies, road) around a probe.
+//
+// [SECTION] RendererScene   main-view and capture draw lists
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+
+#include "app/render/RendererCore.h"
+#include "world/TerrainPatch.h"
+
+namespace amb {
+
+class World;
+
+struct RendererSceneSettings {
+    TerrainLodSettings terrain{};
+    // Plant LOD by projected height on screen: the full mesh while a plant is at least
+    // fullMeshMinPixels tall, the world's proxy mesh while at least proxyMinPixels, a far mesh
+    // (an 8-triangle ellipsoid hull of the crown, 6 vertices) while at least farMinPixels, none
+    // below; and nothing beyond plantRange_m. The view sets pixelsPerRadian (image height /
+    // vertical fov).
+    double fullMeshMinPixels = 90.0;
+    double proxyMinPixels = 30.0;
+    double farMinPixels = 5.0;
+    double plantRange_m = 600.0;
+    double pixelsPerRadian = 360.0 / 1.0471976;
+    double captureTerrainRadius_m = 2000.0;
+    double captureTreeRange_m = 150.0;  // tree proxies in a capture nearer than this
+    double roadLift_m = 0.12;           // road ribbons float this far above the terrain
+};
+
+// The camera's own car (drives): where it stands this frame.
+struct VehiclePose {
+    glm::dvec3 position_m{0.0};  // ground point under the driver's eye
+    double heading_rad = 0.0;    // rotation about +Y taking the car's +Z to its forward
+};
+
+struct SceneStats {
+    std::size_t terrainPatches = 0, terrainPatchesDrawn = 0;
+    std::size_t objectsDrawn = 0;
+    bool terrainRebuilt = false;
+};
+
+class RendererScene {
+  public:
+    RendererScene(const World& world, const RendererSceneSettings& settings = {});
+    ~RendererScene();
+
+    // Main view: `viewProj` maps camera-relative positions (world - eye) to clip space.
+    void buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj, const AmbientSource& ambient,
+                   DrawList& out, SceneStats* stats = nullptr);
+    // The car drawn by the next buildView calls (lit like any object: its own SH set), or none.
+    void setVehicle(const std::optional<VehiclePose>& pose) { vehicle_ = pose; }
+    // Capture scene around a probe (no culling: all six faces share it). Positions relative to
+    // `probe_m`.
+    void buildCapture(const glm::dvec3& probe_m, const AmbientSource& ambient, DrawList& out);
+
+    const World& world() const { return world_; }
+
+  private:
+    struct RoadChunk;
+    void updateTerrain(const glm::dvec3& eye_m);
+    void addRoads(const glm::dvec3& eye_m, const glm::mat4* viewProj, double range_m,
+                  const AmbientSource& ambient, DrawList& out);
+    void addPlants(const glm::dvec3& centre_m, const glm::mat4* viewProj, bool capture,
+                   const AmbientSource& ambient, DrawList& out, std::size_t* drawn);
+
+    const World& world_;
+    RendererSceneSettings settings_;
+    TerrainPatchCache terrainCache_;
+    std::vector<PatchKey> terrainLeaves_;
+    TerrainMesh terrainMesh_;
+    GlMesh terrainGl_;  // one mesh holding every selected patch
+    struct PatchBounds {
+        glm::dvec3 min, max;
+    };
+    std::vector<PatchBounds> terrainBounds_;
+    // Proxy terrain of the last capture and where it was centred.
+    GlMesh captureTerrain_;
+    glm::dvec3 captureCentre_{1e300};
+    std::vector<RoadChunk> roads_;
+    std::array<GlMesh, 4> plantMeshes_, plantProxies_, plantFar_;
+    std::array<float, 4> plantHeight_m_{};
+    GlMesh vehicleMesh_;
+    std::optional<VehiclePose> vehicle_;
+};
+
+}  // namespace amb
