@@ -1,7 +1,7 @@
 // AmbienceVolume.cpp — the per-frame ambience pipeline (see AmbienceVolume.h).
 //
 // [SECTION] Settings from JSON
-// [SECTION] Construction, fallback
+// [SECTION] Construction, sky level
 // [SECTION] update(): time, predict, capture + project, store
 #include "lighting/AmbienceVolume.h"
 
@@ -13,10 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "lighting/CubeCapture.h"
-#include "lighting/CubeMapProjector.h"
 #include "lighting/JsonFields.h"
-#include "lighting/ProbeCapture.h"
 #include "lighting/ProbeEnvironment.h"
 #include "world/Conventions.h"
 #include "world/Error.h"
@@ -30,12 +27,11 @@ double secondsSince(Clock::time_point t0) {
     return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-// Signed difference b - a of two times of day, in (-12, 12] hours (the wrap at 24 h).
-double dayDifference_h(double a, double b) {
-    double d = std::fmod(b - a, 24.0);
-    if (d > 12.0) d -= 24.0;
-    if (d <= -12.0) d += 24.0;
-    return d;
+LatticeKey latticeKey(const ProbeKey& key) {
+    return {key.level, std::int32_t(key.i), std::int32_t(key.k)};
+}
+ProbeKey probeKey(const LatticeKey& key) {
+    return {key.level, key.i, key.k};
 }
 
 }  // namespace
@@ -71,7 +67,6 @@ AmbienceVolumeSettings ambienceSettingsFromJson(const std::string& jsonText,
             o.number("historyLength_s", t.historyLength_s, 0.0, 600.0);
             o.number("roadSnap_m", t.roadSnap_m, 0.0, 1000.0);
             o.number("roadAlignment", t.roadAlignment, 0.0, 1.0);
-            o.number("teleportDistance_m", t.teleportDistance_m, 0.0, kBig);
             o.number("corridorCells", t.corridorCells, 0.01, 100.0);
             o.integer("maxLevel", t.maxLevel, 0, kMaxAnchorLevels - 1);
             o.number("finestRingCells", t.finestRingCells, 0.0, 100.0);
@@ -81,15 +76,9 @@ AmbienceVolumeSettings ambienceSettingsFromJson(const std::string& jsonText,
             o.number("gapBonus_s", t.gapBonus_s, -1e3, 1e3);
             o.number("staleBias_s", t.staleBias_s, -1e3, 1e3);
         });
-        f.integer("facesPerFrame", s.facesPerFrame, 1, 64);
+        readCaptureSettings(f, s.capture);
         f.number("nominalFrameTime_s", s.nominalFrameTime_s, 1e-4, 10.0);
-        f.number("defaultTimeRate_hPerS", s.defaultTimeRate_hPerS, -10.0, 10.0);
-        f.number("timeJump_h", s.timeJump_h, 0.0, 12.0);
-        f.number("sunThreshold", s.sunThreshold, 0.0, std::numeric_limits<double>::infinity());
-        f.integer("fallbackFaceSize", s.fallbackFaceSize, 1, 256);
-        f.number("fallbackRefresh_h", s.fallbackRefresh_h, 0.0, 24.0);
         f.number("asideFraction", s.asideFraction, 0.0, 10.0);
-        f.number("maxAside_m", s.maxAside_m, 0.0, 1000.0);
         f.boolean("relightBySkyLevel", s.relightBySkyLevel);
     });
     if (s.store.minLifetime_s > s.store.maxLifetime_s) {
@@ -108,48 +97,30 @@ AmbienceVolumeSettings ambienceSettingsFromJson(const std::string& jsonText,
     return s;
 }
 
-// ---- Construction, fallback ---------------------------------------------------------------------
+// ---- Construction, sky level ---------------------------------------------------------------------
 
 AmbienceVolume::AmbienceVolume(CubeCapture& capture, const ProbeEnvironment& environment,
                                const AmbienceVolumeSettings& settings, const RoadNetwork* roads)
-    : capture_(capture),
-      environment_(environment),
+    : environment_(environment),
       settings_(settings),
       store_(settings.store),
-      scheduler_(settings.scheduler) {
-    AMB_CHECK(settings.facesPerFrame >= 1);
+      scheduler_(settings.scheduler),
+      core_(capture, environment, settings.capture) {
     scheduler_.setRoads(roads);
-    CubeMapProjector::Options options;
-    options.sunThreshold = settings.sunThreshold;
-    projector_ = std::make_unique<CubeMapProjector>(capture_.faceSize(), options);
-    timeRate_hPerS_ = settings.defaultTimeRate_hPerS;
     frameTime_s_ = settings.nominalFrameTime_s;
 }
 
 AmbienceVolume::~AmbienceVolume() = default;
 
 std::optional<ProbeInProgress> AmbienceVolume::probeInProgress() const {
-    if (!job_) return std::nullopt;
-    return ProbeInProgress{job_->key, job_->position_m, job_->facesDone};
+    const std::optional<ProbeJob>& job = core_.job();
+    if (!job) return std::nullopt;
+    return ProbeInProgress{latticeKey(job->key), job->position_m, job->facesDone};
 }
 
 double AmbienceVolume::currentLifetime_s() const {
     return anchorLifetime_s(settings_.store, environment_.sunAngularSpeed_radPerHour(),
-                            timeRate_hPerS_);
-}
-
-void AmbienceVolume::updateFallback(double timeOfDay_h) {
-    if (haveFallback_ && std::fabs(dayDifference_h(fallbackTimeOfDay_h_, timeOfDay_h)) <
-                             settings_.fallbackRefresh_h) {
-        return;
-    }
-    std::vector<float> cube;
-    const int n = settings_.fallbackFaceSize;
-    environment_.fallbackCubeMap(timeOfDay_h, n, cube);
-    const CubeMapProjection p = projectCubeMap(n, cube);
-    store_.setFallback(toFloat(p.sh));
-    haveFallback_ = true;
-    fallbackTimeOfDay_h_ = timeOfDay_h;
+                            core_.timeRate_hPerS());
 }
 
 double AmbienceVolume::skyLevel(double timeOfDay_h) const {
@@ -165,7 +136,8 @@ double AmbienceVolume::skyLevel(double timeOfDay_h) const {
     double sum = 0.0;
     for (std::size_t t = 0; t + 2 < cube.size(); t += 3) {
         const double lum = luminance(glm::dvec3(cube[t], cube[t + 1], cube[t + 2]));
-        sum += std::min(std::isfinite(lum) ? std::max(lum, 0.0) : 0.0, settings_.sunThreshold);
+        sum += std::min(std::isfinite(lum) ? std::max(lum, 0.0) : 0.0,
+                        settings_.capture.sunThreshold);
     }
     const double level = std::max(sum / double(cube.size() / 3), 1e-12);
     skyLevels_.emplace(minute, level);
@@ -184,102 +156,49 @@ void AmbienceVolume::update(const glm::dvec3& cameraPosition_m,
 void AmbienceVolume::predictStage(const glm::dvec3& cameraPosition_m,
                                   const glm::dvec3& cameraVelocity_mps, double timeOfDay_h,
                                   double dt_s) {
-    stats_.facesThisFrame = 0;
-    stats_.predict_s = stats_.capture_s = stats_.project_s = stats_.store_s = 0.0;
-    completed_.clear();
-    if (!std::isfinite(dt_s) || dt_s < 0.0) dt_s = 0.0;
-    if (!std::isfinite(timeOfDay_h)) timeOfDay_h = haveTime_ ? lastTimeOfDay_h_ : 12.0;
-    timeOfDay_h = std::fmod(timeOfDay_h, 24.0);
-    if (timeOfDay_h < 0.0) timeOfDay_h += 24.0;
+    // 1. Time (clock, rate of the time of day, jumps), teleports and the fallback: the rules
+    // every capturing method shares (CaptureCore.h). A jump shortens every anchor's life.
+    const FrameEvents events = core_.beginFrame(cameraPosition_m, cameraVelocity_mps, timeOfDay_h, dt_s);
+    if (events.timeJump) store_.expireAllWithin(settings_.store.blendTime_s);
+    if (core_.fallbackChanged()) store_.setFallback(core_.fallback());
+    if (std::isfinite(dt_s) && dt_s > 0.0) frameTime_s_ = std::clamp(dt_s, 1.0 / 240.0, 0.25);
+    probesPerSecond_ = double(settings_.capture.facesPerFrame) / double(kCubeFaces) / frameTime_s_;
 
-    // 1. Time: clock, rate of the time of day (wrap-safe), jumps.
-    if (haveTime_) {
-        const double d = dayDifference_h(lastTimeOfDay_h_, timeOfDay_h);
-        if (std::fabs(d) > settings_.timeJump_h) {
-            store_.expireAllWithin(settings_.store.blendTime_s);
-        } else if (dt_s > 0.0) {
-            timeRate_hPerS_ = d / dt_s;
-        }
-    }
-    haveTime_ = true;
-    lastTimeOfDay_h_ = timeOfDay_h;
-    if (dt_s > 0.0) frameTime_s_ = std::clamp(dt_s, 1.0 / 240.0, 0.25);
-    time_s_ += dt_s;
-    probesPerSecond_ = double(settings_.facesPerFrame) / double(kCubeFaces) / frameTime_s_;
-
-    // 2. Predict.
-    Clock::time_point t0 = Clock::now();
-    if (scheduler_.observe(cameraPosition_m, cameraVelocity_mps, time_s_)) {
-        stats_.teleports = scheduler_.teleports();
-        if (job_) {
-            ++stats_.abortedProbes;
-            job_.reset();
-        }
-    }
+    // 2. Predict: the motion model starts over at a teleport's new place.
+    const Clock::time_point t0 = Clock::now();
+    if (events.teleport) scheduler_.reset();
+    scheduler_.observe(cameraPosition_m, cameraVelocity_mps, core_.time_s());
     stats_.finestLevel = scheduler_.finestLevel(store_, probesPerSecond_);
-    stats_.predict_s += secondsSince(t0);
+    core_.addPredictTime(secondsSince(t0));
+    syncStatistics();
 }
 
 void AmbienceVolume::captureStage() {
-    // 3. Capture this frame's faces, projecting each as it arrives.
-    const double timeOfDay_h = lastTimeOfDay_h_;
-    Clock::time_point t0;
-    int budget = settings_.facesPerFrame;
-    while (budget > 0) {
-        if (!job_) {
-            t0 = Clock::now();
-            std::vector<LatticeKey> busy;
-            for (const Completed& c : completed_) busy.push_back(c.job.key);
-            const auto choice = scheduler_.choose(store_, probesPerSecond_, busy);
-            if (choice) {
-                const double aside =
-                    std::min(settings_.asideFraction * store_.spacing_m(choice->key.level),
-                             settings_.maxAside_m);
-                Job job;
-                job.key = choice->key;
-                job.position_m = environment_.placeProbe(store_.keyX_m(choice->key),
-                                                         store_.keyZ_m(choice->key), aside);
-                job_ = job;
-                projector_->reset();
-            }
-            stats_.predict_s += secondsSince(t0);
-            if (!job_) break;  // nothing worth capturing: the budget stays unused
-        }
-        const ProbeFacesResult r =
-            captureProbeFaces(capture_, *projector_, cube_, job_->position_m, timeOfDay_h,
-                              job_->facesDone, budget, job_->bad);
-        stats_.capture_s += r.capture_s;
-        stats_.project_s += r.project_s;
-        const int count = r.faces;
-        job_->facesDone += count;
-        budget -= count;
-        stats_.facesThisFrame += count;
-        stats_.facesCaptured += count;
-        if (job_->facesDone == kCubeFaces) {
-            completed_.push_back({*job_, projector_->coefficients()});
-            job_.reset();
-        }
-    }
+    // 3. Capture this frame's faces (CaptureCore), the scheduler naming each next probe.
+    core_.captureFaces([&](const std::vector<ProbeKey>& busyKeys) -> std::optional<ProbeRequest> {
+        std::vector<LatticeKey> busy;
+        for (const ProbeKey& k : busyKeys) busy.push_back(latticeKey(k));
+        const auto choice = scheduler_.choose(store_, probesPerSecond_, busy);
+        if (!choice) return std::nullopt;
+        const double aside = std::min(settings_.asideFraction * store_.spacing_m(choice->key.level),
+                                      settings_.capture.maxAside_m);
+        return ProbeRequest{probeKey(choice->key), store_.keyX_m(choice->key),
+                            store_.keyZ_m(choice->key), aside};
+    });
+    syncStatistics();
 }
 
 void AmbienceVolume::storeStage() {
     // 4. Store: advance the clock (blend, fade, expire, prune), then insert completed probes.
-    const double timeOfDay_h = lastTimeOfDay_h_;
+    const double timeOfDay_h = core_.timeOfDay_h();
     const Clock::time_point t0 = Clock::now();
-    store_.advance(time_s_);
+    store_.advance(core_.time_s());
     const double lifetime = currentLifetime_s();
-    for (const Completed& c : completed_) {
-        ++stats_.probesCompleted;
-        if (c.job.bad) {
-            ++stats_.rejectedProbes;
-            continue;
-        }
+    for (const CompletedProbe& c : core_.takeCompleted()) {
         const auto result =
-            store_.insert(c.job.key, toFloat(c.sh), c.job.position_m, lifetime, timeOfDay_h);
-        if (result == AnchorStore::InsertResult::Rejected) ++stats_.rejectedProbes;
+            store_.insert(latticeKey(c.job.key), c.sh, c.job.position_m, lifetime, timeOfDay_h);
+        if (result == AnchorStore::InsertResult::Rejected) core_.countRejected();
     }
-    completed_.clear();
-    updateFallback(timeOfDay_h);
     if (settings_.relightBySkyLevel) {
         // Stale anchors follow the sky's overall level since their capture (see the header).
         const double now = skyLevel(timeOfDay_h);
@@ -287,8 +206,23 @@ void AmbienceVolume::storeStage() {
             return float(std::clamp(now / skyLevel(a.captureTimeOfDay_h), 1e-3, 1e3));
         });
     }
-    stats_.store_s += secondsSince(t0);
+    core_.addStoreTime(secondsSince(t0));
     stats_.store = store_.statistics();
+    syncStatistics();
+}
+
+void AmbienceVolume::syncStatistics() {
+    const MethodStatistics& m = core_.statistics();
+    stats_.facesThisFrame = m.facesThisFrame;
+    stats_.facesCaptured = m.facesCaptured;
+    stats_.probesCompleted = core_.probesCompleted();
+    stats_.rejectedProbes = m.rejectedProbes;
+    stats_.abortedProbes = core_.abortedProbes();
+    stats_.teleports = m.teleports;
+    stats_.predict_s = m.predict_s;
+    stats_.capture_s = m.capture_s;
+    stats_.project_s = m.project_s;
+    stats_.store_s = m.store_s;
 }
 
 MethodStatistics AmbienceVolume::methodStatistics() const {

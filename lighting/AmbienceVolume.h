@@ -32,6 +32,7 @@
 
 #include "lighting/AmbienceMethod.h"
 #include "lighting/AnchorStore.h"
+#include "lighting/CaptureCore.h"
 #include "lighting/ProbeScheduler.h"
 #include "world/Conventions.h"
 
@@ -46,17 +47,12 @@ class RoadNetwork;
 struct AmbienceVolumeSettings {
     AnchorStoreSettings store;
     ProbeSchedulerSettings scheduler;
-    int facesPerFrame = 1;                   // capture budget (the thesis' one face per frame, 9.1)
+    // What every capturing method shares (lighting/CaptureCore.h): the face budget, the sun
+    // threshold, maxAside_m, the clock's defaults, the teleport distance, the fallback.
+    CaptureSettings capture;
     double nominalFrameTime_s = 1.0 / 60.0;  // frame time assumed before any dt > 0 is seen
-    double defaultTimeRate_hPerS = 1.0 / 3600.0;  // before the rate is measured (real time)
-    double timeJump_h = 0.25;      // a larger change of the time of day in one update is a jump
-    // Texels brighter (luminance radiance [W sr^-1 m^-2]) are the sun disc: taken out of the
-    // SH (the renderer lights the sun directly). The JSON key is "sunThreshold".
-    double sunThreshold = kSunThreshold_Wpsrm2;
-    int fallbackFaceSize = 16;     // cube map size for the fallback SH
-    double fallbackRefresh_h = 1.0 / 60.0;  // recompute the fallback after this much day time
-    double asideFraction = 0.5;  // a probe may move aside up to this x its level's spacing
-    double maxAside_m = 4.0;     // ... and at most this far [m]
+    double asideFraction = 0.5;  // a probe may move aside up to this x its level's spacing,
+                                 // and at most capture.maxAside_m
     // Relighting of stale anchors (an extension of the thesis' expiry, 7.5.3): every anchor is
     // read scaled by skyLevel(now) / skyLevel(its capture's time of day), skyLevel being the
     // mean luminance of the sky-model fallback scene. While the day changes slowly the factor
@@ -66,7 +62,8 @@ struct AmbienceVolumeSettings {
 };
 
 // Parses settings from JSON text: an object whose keys are the field names above (nested
-// objects "store" and "scheduler"); missing keys keep their defaults. Unknown keys, wrong types
+// objects "store" and "scheduler"; the keys of CaptureSettings at the top level); missing keys
+// keep their defaults. Unknown keys, wrong types
 // or out-of-range values throw InputError(where, ...).
 AmbienceVolumeSettings ambienceSettingsFromJson(const std::string& jsonText,
                                                 const std::string& where);
@@ -140,8 +137,8 @@ class AmbienceVolume final : public AmbienceMethod {
     const ProbeScheduler& scheduler() const { return scheduler_; }
     const AmbienceVolumeSettings& settings() const { return settings_; }
     std::optional<ProbeInProgress> probeInProgress() const;
-    double simulationTime_s() const { return time_s_; }
-    double timeRate_hPerS() const { return timeRate_hPerS_; }
+    double simulationTime_s() const { return core_.time_s(); }
+    double timeRate_hPerS() const { return core_.timeRate_hPerS(); }
     // Lifetime given to a capture now (anchorLifetime_s with the measured time rate).
     double currentLifetime_s() const;
 
@@ -149,38 +146,16 @@ class AmbienceVolume final : public AmbienceMethod {
     void loadAnchors(const std::string& path) { store_.load(path); }
 
   private:
-    void updateFallback(double timeOfDay_h);
     double skyLevel(double timeOfDay_h) const;
+    void syncStatistics();
 
-    CubeCapture& capture_;
     const ProbeEnvironment& environment_;
     AmbienceVolumeSettings settings_;
     AnchorStore store_;
     ProbeScheduler scheduler_;
-    std::unique_ptr<CubeMapProjector> projector_;
-    std::vector<float> cube_;
-
-    struct Job {
-        LatticeKey key;
-        glm::dvec3 position_m{0.0};
-        int facesDone = 0;
-        bool bad = false;
-    };
-    std::optional<Job> job_;
-    struct Completed {
-        Job job;
-        ShRgbD sh;
-    };
-    std::vector<Completed> completed_;  // probes finished this frame, stored by storeStage()
+    CaptureCore core_;
     double probesPerSecond_ = 0.0;
-
-    double time_s_ = 0.0;
-    bool haveTime_ = false;
-    double lastTimeOfDay_h_ = 0.0;
-    double timeRate_hPerS_ = 0.0;
     double frameTime_s_ = 0.0;
-    bool haveFallback_ = false;
-    double fallbackTimeOfDay_h_ = 0.0;
     AmbienceStatistics stats_;
     mutable std::unordered_map<int, double> skyLevels_;  // minute of the day -> sky level
 };

@@ -23,10 +23,7 @@
 
 #include "lighting/AnchorField.h"
 #include "lighting/AnchorStore.h"
-#include "lighting/CubeCapture.h"
-#include "lighting/CubeMapProjector.h"
 #include "lighting/JsonFields.h"
-#include "lighting/ProbeCapture.h"
 #include "lighting/ProbeEnvironment.h"
 #include "world/Error.h"
 
@@ -39,18 +36,6 @@ double secondsSince(Clock::time_point t0) {
     return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-// Signed difference b - a of two times of day, in (-12, 12] hours (the wrap at 24 h).
-double dayDifference_h(double a, double b) {
-    double d = std::fmod(b - a, 24.0);
-    if (d > 12.0) d -= 24.0;
-    if (d <= -12.0) d += 24.0;
-    return d;
-}
-
-// The fallback scene's cube size and how far the time of day may move before it is recomputed.
-constexpr int kFallbackFaceSize = 16;
-constexpr double kFallbackRefresh_h = 1.0 / 60.0;
-
 // Cell coordinates beyond this are not formed (x / s must convert to int64 exactly; points that
 // far out get the fallback).
 constexpr double kMaxCell = 1.0e15;
@@ -58,20 +43,8 @@ constexpr double kMaxCell = 1.0e15;
 // objectRange_m / objectSize_m at most: 64 scans 129^2 objects per probe choice.
 constexpr double kMaxObjectRangeCells = 64.0;
 
-bool finite(const glm::dvec3& v) {
-    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-}
-
-// Every coefficient finite and within the range the anchor store accepts.
-bool acceptable(const ShRgb& sh) {
-    for (const glm::vec3& c : sh.c) {
-        for (int ch = 0; ch < 3; ++ch) {
-            if (!std::isfinite(c[ch]) || std::fabs(c[ch]) > AnchorStore::kMaxCoefficient) {
-                return false;
-            }
-        }
-    }
-    return true;
+CellKey cellKey(const ProbeKey& key) {
+    return {key.i, key.k};
 }
 
 // floor(x / s) as an integer cell, if representable.
@@ -140,12 +113,7 @@ BaselineSettings baselineSettingsFromJson(const std::string& jsonText, const std
     constexpr double kBig = 1e9;
     BaselineSettings s;
     readJsonSettings(jsonText, where, [&](JsonFields& f) {
-        f.integer("facesPerFrame", s.facesPerFrame, 1, 64);
-        f.number("sunThreshold", s.sunThreshold, 0.0, std::numeric_limits<double>::infinity());
-        f.number("maxAside_m", s.maxAside_m, 0.0, 1000.0);
-        f.number("defaultTimeRate_hPerS", s.defaultTimeRate_hPerS, -10.0, 10.0);
-        f.number("timeJump_h", s.timeJump_h, 0.0, 12.0);
-        f.number("teleportDistance_m", s.teleportDistance_m, 0.0, kBig);
+        readCaptureSettings(f, s.capture);
         f.integer("gridSize", s.gridSize, 2, 256);
         f.number("gridSpacing_m", s.gridSpacing_m, 1e-3, 1e6);
         f.number("hysteresis", s.hysteresis, 0.0, 1.0);
@@ -179,12 +147,7 @@ std::size_t hashMapBytes(std::size_t buckets, std::size_t elements, std::size_t 
 
 CapturingBaseline::CapturingBaseline(CubeCapture& capture, const ProbeEnvironment& environment,
                                      const BaselineSettings& settings)
-    : capture_(capture), environment_(environment), settings_(settings) {
-    AMB_CHECK(settings.facesPerFrame >= 1);
-    CubeMapProjector::Options options;
-    options.sunThreshold = settings.sunThreshold;
-    projector_ = std::make_unique<CubeMapProjector>(capture_.faceSize(), options);
-    timeRate_hPerS_ = settings.defaultTimeRate_hPerS;
+    : environment_(environment), settings_(settings), core_(capture, environment, settings.capture) {
     lifetime_s_ = currentLifetime_s();
 }
 
@@ -192,138 +155,56 @@ CapturingBaseline::~CapturingBaseline() = default;
 
 double CapturingBaseline::currentLifetime_s() const {
     return anchorLifetime_s(AnchorStoreSettings{}, environment_.sunAngularSpeed_radPerHour(),
-                            timeRate_hPerS_);
+                            core_.timeRate_hPerS());
 }
 
 bool CapturingBaseline::isStale(double captureTime_s) const {
-    return captureTime_s < lastJump_s_ || time_s_ - captureTime_s > lifetime_s_;
+    return captureTime_s < core_.lastJump_s() || core_.time_s() - captureTime_s > lifetime_s_;
 }
 
 double CapturingBaseline::cameraDistance2(double x_m, double z_m) const {
-    const double dx = x_m - camera_m_.x, dz = z_m - camera_m_.z;
+    const glm::dvec3& camera = core_.camera_m();
+    const double dx = x_m - camera.x, dz = z_m - camera.z;
     return dx * dx + dz * dz;
-}
-
-void CapturingBaseline::updateFallback(double timeOfDay_h) {
-    if (haveFallback_ &&
-        !(std::fabs(dayDifference_h(fallbackTimeOfDay_h_, timeOfDay_h)) > kFallbackRefresh_h)) {
-        return;
-    }
-    std::vector<float> cube;
-    environment_.fallbackCubeMap(timeOfDay_h, kFallbackFaceSize, cube);
-    const ShRgb sh = toFloat(projectCubeMap(kFallbackFaceSize, cube).sh);
-    // A broken fallback scene must not put NaN into shAt: keep the previous value (or zero).
-    if (acceptable(sh)) fallback_ = sh;
-    haveFallback_ = true;
-    fallbackTimeOfDay_h_ = timeOfDay_h;
 }
 
 void CapturingBaseline::predictStage(const glm::dvec3& cameraPosition_m,
                                      const glm::dvec3& cameraVelocity_mps, double timeOfDay_h,
                                      double dt_s) {
-    stats_.facesThisFrame = 0;
-    stats_.capture_s = stats_.project_s = stats_.store_s = 0.0;
-    stats_.predict_s = pendingPredict_s_;  // work recorded since the last frame (lookups)
+    core_.beginFrame(cameraPosition_m, cameraVelocity_mps, timeOfDay_h, dt_s);
+    core_.addPredictTime(pendingPredict_s_);  // work recorded since the last frame (lookups)
     pendingPredict_s_ = 0.0;
-    completed_.clear();
     const Clock::time_point t0 = Clock::now();
-    if (!std::isfinite(dt_s) || dt_s < 0.0) dt_s = 0.0;
-    if (!std::isfinite(timeOfDay_h)) timeOfDay_h = timeOfDay_h_;
-    timeOfDay_h = std::fmod(timeOfDay_h, 24.0);
-    if (timeOfDay_h < 0.0) timeOfDay_h += 24.0;
-
-    // Time: clock, rate of the time of day (wrap-safe), jumps (as AmbienceVolume).
-    time_s_ += dt_s;
-    if (haveTime_) {
-        const double d = dayDifference_h(timeOfDay_h_, timeOfDay_h);
-        if (std::fabs(d) > settings_.timeJump_h) {
-            lastJump_s_ = time_s_;
-        } else if (dt_s > 0.0) {
-            timeRate_hPerS_ = d / dt_s;
-        }
-    }
-    haveTime_ = true;
-    timeOfDay_h_ = timeOfDay_h;
     lifetime_s_ = currentLifetime_s();
-
-    // Motion: a step the reported (or previous) speed cannot explain is a teleport; the probe
-    // in progress belongs to the old place.
-    if (finite(cameraPosition_m)) {
-        const double reported = finite(cameraVelocity_mps) ? glm::length(cameraVelocity_mps) : 0.0;
-        if (haveCamera_) {
-            const double speed = std::max(reported, cameraSpeed_mps_);
-            const double allowed = settings_.teleportDistance_m + 3.0 * speed * dt_s;
-            if (glm::length(cameraPosition_m - camera_m_) > allowed) {
-                ++stats_.teleports;
-                job_.reset();
-            }
-        }
-        camera_m_ = cameraPosition_m;
-        cameraSpeed_mps_ = reported;
-        haveCamera_ = true;
-    }
-
-    updateFallback(timeOfDay_h);
     updateStructure();
-    stats_.predict_s += secondsSince(t0);
+    core_.addPredictTime(secondsSince(t0));
 }
 
 void CapturingBaseline::captureStage() {
-    Clock::time_point t0;
-    int budget = settings_.facesPerFrame;
     // A probe whose point left the method's structure (scrolled out, forgotten) is not finished.
-    if (job_ && !wantsProbe(job_->key)) job_.reset();
-    while (budget > 0) {
-        if (!job_) {
-            t0 = Clock::now();
-            std::vector<CellKey> busy;
-            for (const Completed& c : completed_) busy.push_back(c.job.key);
-            const std::optional<ProbeRequest> request = nextProbe(busy);
-            if (request) {
-                Job job;
-                job.key = request->key;
-                job.position_m =
-                    environment_.placeProbe(request->x_m, request->z_m, settings_.maxAside_m);
-                job.startTime_s = time_s_;
-                job_ = job;
-                projector_->reset();
-            }
-            stats_.predict_s += secondsSince(t0);
-            if (!job_) break;  // nothing to capture: the budget stays unused
-        }
-        const ProbeFacesResult r =
-            captureProbeFaces(capture_, *projector_, cube_, job_->position_m, timeOfDay_h_,
-                              job_->facesDone, budget, job_->bad);
-        stats_.capture_s += r.capture_s;
-        stats_.project_s += r.project_s;
-        const int count = r.faces;
-        job_->facesDone += count;
-        budget -= count;
-        stats_.facesThisFrame += count;
-        stats_.facesCaptured += count;
-        if (job_->facesDone == kCubeFaces) {
-            completed_.push_back({*job_, projector_->coefficients()});
-            job_.reset();
-        }
-    }
+    if (core_.job() && !wantsProbe(cellKey(core_.job()->key))) core_.abortJob();
+    const double aside_m = settings_.capture.maxAside_m;
+    core_.captureFaces([&](const std::vector<ProbeKey>& busyKeys) -> std::optional<amb::ProbeRequest> {
+        std::vector<CellKey> busy;
+        for (const ProbeKey& k : busyKeys) busy.push_back(cellKey(k));
+        const std::optional<ProbeRequest> request = nextProbe(busy);
+        if (!request) return std::nullopt;
+        return amb::ProbeRequest{ProbeKey{0, request->key.i, request->key.k}, request->x_m,
+                                 request->z_m, aside_m};
+    });
 }
 
 void CapturingBaseline::storeStage() {
     const Clock::time_point t0 = Clock::now();
-    for (const Completed& c : completed_) {
-        const ShRgb sh = toFloat(c.sh);
-        if (c.job.bad || !acceptable(sh)) {
-            ++stats_.rejectedProbes;
-            continue;
-        }
-        if (wantsProbe(c.job.key)) storeProbe(c.job.key, sh, c.job.startTime_s);
+    for (const CompletedProbe& c : core_.takeCompleted()) {
+        const CellKey key = cellKey(c.job.key);
+        if (wantsProbe(key)) storeProbe(key, c.sh, c.job.startTime_s);
     }
-    completed_.clear();
-    stats_.store_s += secondsSince(t0);
+    core_.addStoreTime(secondsSince(t0));
 }
 
 MethodStatistics CapturingBaseline::methodStatistics() const {
-    MethodStatistics m = stats_;
+    MethodStatistics m = core_.statistics();
     m.probes = probesHeld();
     m.bytes = bytesHeld();
     return m;

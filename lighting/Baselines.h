@@ -3,33 +3,24 @@
 // read by the draw and the measurement).
 //
 // [SECTION] Settings           BaselineSettings, baselineSettingsFromJson
-// [SECTION] Shared machinery   CapturingBaseline: time and time rate, teleports, the fallback,
-//                              one probe captured a face at a time within the face budget,
-//                              rejection of bad probes, statistics
+// [SECTION] Shared machinery   CapturingBaseline: the stages over a CaptureCore (the clock,
+//                              teleports, the fallback, the face budget, rejection), statistics
 // [SECTION] The baselines      ScrollingGridMethod  "grid"      (the DDGI / RTXGI way)
 //                              ReactiveCacheMethod  "reactive"  (the Lumen / kajiya way)
 //                              PerObjectMethod      "object"    (one capture per object)
 //                              NearestAnchorMethod  "nearest"   (ours without blending)
 // [SECTION] Factory            makeCapturingMethod (--ambient volume|nearest|grid|reactive|object)
 //
-// Shared rules (as AmbienceVolume.h, so that only the placement and use of probes differ):
-//   - budget: facesPerFrame faces of CubeCapture::faceSize() per frame; a probe is the six faces
-//     of one position, captured over consecutive frames (one probe per 6 frames at one face per
-//     frame) and projected face by face (CubeMapProjector, sun disc above sunThreshold taken
-//     out). A probe with any NaN, infinite or negative texel, or with a coefficient that is not
-//     finite in float, is rejected (MethodStatistics::rejectedProbes) and never stored.
+// Shared rules: those of lighting/CaptureCore.h (the budget, the clock and jumps, teleports,
+// rejection of bad probes, the fallback), the same core the volume uses, so that only the
+// placement and use of probes differ. Besides:
 //   - probes are placed with ProbeEnvironment::placeProbe(x, z, maxAside_m) at their lattice
 //     point (or object centre).
-//   - where a method has nothing, shAt returns the fallback: the SH of
-//     ProbeEnvironment::fallbackCubeMap(time of day, 16), recomputed when the time of day has
-//     moved by more than a minute since.
-//   - a probe's lifetime is anchorLifetime_s(AnchorStoreSettings{}, sun speed, time rate), the
-//     time rate [hours of day per second] measured from successive predictStage calls (wrap at
-//     24 h). A probe is stale when its age (from its first face) exceeds the lifetime at the
-//     current rate, or when it was started before a jump of the time of day (more than
-//     timeJump_h in one frame). What a method does with stale probes is its own rule.
-//   - a camera step longer than teleportDistance_m + 3 x speed x dt is a teleport (counted); the
-//     probe in progress is dropped.
+//   - where a method has nothing, shAt returns the fallback.
+//   - a probe's lifetime is anchorLifetime_s(AnchorStoreSettings{}, sun speed, time rate). A
+//     probe is stale when its age (from its first face) exceeds the lifetime at the current
+//     rate, or when it was started before a jump of the time of day. What a method does with
+//     stale probes is its own rule.
 //   - deterministic: every choice is ordered by distance and then by integer cell; only the
 //     stage timings read the clock.
 #pragma once
@@ -46,6 +37,7 @@
 
 #include "lighting/AmbienceMethod.h"
 #include "lighting/AmbienceVolume.h"
+#include "lighting/CaptureCore.h"
 
 namespace amb {
 
@@ -57,13 +49,8 @@ class RoadNetwork;
 // ---- Settings -------------------------------------------------------------------------------
 
 struct BaselineSettings {
-    // Shared by every baseline.
-    int facesPerFrame = 1;         // capture budget, as AmbienceVolumeSettings::facesPerFrame
-    double sunThreshold = kSunThreshold_Wpsrm2;  // luminance radiance [W sr^-1 m^-2]: sun disc
-    double maxAside_m = 4.0;       // how far placeProbe may move a probe sideways [m]
-    double defaultTimeRate_hPerS = 1.0 / 3600.0;  // time rate before it is measured [h/s]
-    double timeJump_h = 0.25;           // a larger change of the time of day in a frame is a jump
-    double teleportDistance_m = 100.0;  // a camera step longer than this + 3 x speed x dt [m]
+    // Shared with the volume (lighting/CaptureCore.h; the JSON keys at the top level).
+    CaptureSettings capture;
     // The spacings below are each baseline's best at one face per frame, from `ambience bench
     // --sweep` over the highway, mountain, low-flight, stress-flight and far-flight replays (mean
     // error): grid 24 m 0.369, 48 m 0.257, 96 m 0.167, 128 m 0.149, 192 m 0.148 (128 m kept: the
@@ -124,11 +111,11 @@ class CapturingBaseline : public AmbienceMethod {
     MethodStatistics methodStatistics() const final;
 
     const BaselineSettings& settings() const { return settings_; }
-    double simulationTime_s() const { return time_s_; }
-    double timeRate_hPerS() const { return timeRate_hPerS_; }
+    double simulationTime_s() const { return core_.time_s(); }
+    double timeRate_hPerS() const { return core_.timeRate_hPerS(); }
     // Lifetime of a probe at the current time rate [s].
     double currentLifetime_s() const;
-    const ShRgb& fallback() const { return fallback_; }
+    const ShRgb& fallback() const { return core_.fallback(); }
 
   protected:
     CapturingBaseline(CubeCapture& capture, const ProbeEnvironment& environment,
@@ -158,48 +145,17 @@ class CapturingBaseline : public AmbienceMethod {
     // Work done for the method between frames (e.g. recording lookups) [s]: counted in the next
     // frame's predict time.
     void addPendingPredictTime(double seconds) { pendingPredict_s_ += seconds; }
-    const glm::dvec3& camera_m() const { return camera_m_; }
+    const glm::dvec3& camera_m() const { return core_.camera_m(); }
     // Squared horizontal distance from the camera [m^2].
     double cameraDistance2(double x_m, double z_m) const;
     const ProbeEnvironment& environment() const { return environment_; }
 
   private:
-    void updateFallback(double timeOfDay_h);
-
-    CubeCapture& capture_;
     const ProbeEnvironment& environment_;
     BaselineSettings settings_;
-    std::unique_ptr<CubeMapProjector> projector_;
-    std::vector<float> cube_;
-
-    struct Job {
-        CellKey key;
-        glm::dvec3 position_m{0.0};
-        double startTime_s = 0.0;
-        int facesDone = 0;
-        bool bad = false;
-    };
-    std::optional<Job> job_;
-    struct Completed {
-        Job job;
-        ShRgbD sh;
-    };
-    std::vector<Completed> completed_;
-
-    double time_s_ = 0.0;
-    bool haveTime_ = false;
-    double timeOfDay_h_ = 12.0;
-    double timeRate_hPerS_ = 0.0;
-    double lifetime_s_ = 0.0;   // currentLifetime_s() as of this frame's predictStage
-    double lastJump_s_ = -1.0;  // simulation time of the latest time-of-day jump
-    glm::dvec3 camera_m_{0.0};
-    double cameraSpeed_mps_ = 0.0;
-    bool haveCamera_ = false;
-    ShRgb fallback_;
-    bool haveFallback_ = false;
-    double fallbackTimeOfDay_h_ = 0.0;
+    CaptureCore core_;
+    double lifetime_s_ = 0.0;  // currentLifetime_s() as of this frame's predictStage
     double pendingPredict_s_ = 0.0;
-    MethodStatistics stats_;
 };
 
 // ---- The baselines --------------------------------------------------------------------------

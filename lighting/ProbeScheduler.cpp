@@ -1,6 +1,6 @@
 // ProbeScheduler.cpp — motion prediction and probe choice (see ProbeScheduler.h).
 //
-// [SECTION] Motion model (observe, teleport, road following, prediction)
+// [SECTION] Motion model (observe, road following, prediction)
 // [SECTION] Resolution against speed
 // [SECTION] Candidates and cost
 #include "lighting/ProbeScheduler.h"
@@ -55,23 +55,10 @@ double ProbeScheduler::speed_mps() const {
     return horizontalLength(velocity_);
 }
 
-bool ProbeScheduler::observe(const glm::dvec3& position_m, const glm::dvec3& velocity_mps,
+void ProbeScheduler::observe(const glm::dvec3& position_m, const glm::dvec3& velocity_mps,
                              double now_s) {
-    if (!finite(position_m) || !std::isfinite(now_s)) return false;
+    if (!finite(position_m) || !std::isfinite(now_s)) return;
     const double dt = initialised_ ? std::max(0.0, now_s - now_) : 0.0;
-    bool teleported = false;
-    if (initialised_) {
-        // A step the motion cannot explain (3 x the larger of the reported and the filtered
-        // speed, plus a margin) is a teleport: the old prediction says nothing about the new place.
-        const double speed = std::max(finite(velocity_mps) ? glm::length(velocity_mps) : 0.0,
-                                      glm::length(velocity_));
-        const double allowed = settings_.teleportDistance_m + 3.0 * speed * dt;
-        if (glm::length(position_m - position_) > allowed) {
-            reset();
-            ++teleports_;
-            teleported = true;
-        }
-    }
     // Velocity: as reported, else from the position history.
     glm::dvec3 measured = velocity_mps;
     if (!finite(measured)) {
@@ -115,7 +102,6 @@ bool ProbeScheduler::observe(const glm::dvec3& position_m, const glm::dvec3& vel
             }
         }
     }
-    return teleported;
 }
 
 glm::dvec3 ProbeScheduler::predict(double ahead_s) const {

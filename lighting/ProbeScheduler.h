@@ -4,8 +4,9 @@
 //                          is low-pass filtered (inertia, thesis 8.1: the camera keeps roughly
 //                          its direction for several frames). predictedPath(): samples of the
 //                          future ground track — a straight line along the filtered velocity, or,
-//                          on a road and moving along it, the road ahead. A jump further than the
-//                          motion allows is a teleport: the history and prediction restart there.
+//                          on a road and moving along it, the road ahead. After a teleport
+//                          (CaptureCore.h) the owner calls reset(): the history and the
+//                          prediction restart at the new place.
 // [SECTION] Resolution     finestLevel(): the finest lattice level worth capturing at the current
 //                          speed. Keeping a corridor `corridorCells` cells wide along the track
 //                          populated at spacing s costs speed x corridorCells / s probes per
@@ -45,7 +46,6 @@ struct ProbeSchedulerSettings {
     double historyLength_s = 2.0;         // position history kept
     double roadSnap_m = 6.0;     // within halfWidth + this of a road's centre the camera is on it
     double roadAlignment = 0.7;  // |cos| between motion and road direction needed to follow it
-    double teleportDistance_m = 100.0;  // a step longer than this + 3 x speed x dt is a teleport
     // Resolution against speed.
     // Width of the finest-level corridor along the path, in cells. 4 from `ambience bench
     // --tune` (candidate t4 of its tune.csv): 2 -> 4 lowered the mean error over the highway,
@@ -82,15 +82,16 @@ class ProbeScheduler {
     void setRoads(const RoadNetwork* roads) { roads_ = roads; }
 
     // Feeds the camera at simulation time now_s. A non-finite velocity is replaced by the one
-    // from the position history. Returns true if a teleport was detected (prediction reset).
-    bool observe(const glm::dvec3& position_m, const glm::dvec3& velocity_mps, double now_s);
+    // from the position history.
+    void observe(const glm::dvec3& position_m, const glm::dvec3& velocity_mps, double now_s);
+    // Forgets the motion (after a teleport, CaptureCore.h: the old prediction says nothing
+    // about the new place).
     void reset();
 
     glm::dvec3 position_m() const { return position_; }
     glm::dvec3 velocity_mps() const { return velocity_; }  // filtered
     double speed_mps() const;                              // horizontal, filtered
     bool onRoad() const { return onRoad_; }
-    std::int64_t teleports() const { return teleports_; }
 
     // Ground-track samples (y = camera height) at tau = 0, pathStep_s, ..., horizon_s.
     struct PathSample {
@@ -125,7 +126,6 @@ class ProbeScheduler {
     int roadIndex_ = -1;
     double roadAlong_m_ = 0.0;
     double roadDirection_ = 1.0;  // +1 along increasing arc length, -1 against
-    std::int64_t teleports_ = 0;
 };
 
 }  // namespace amb

@@ -64,7 +64,7 @@ TEST(AmbienceVolume, OneFacePerFrameOneProbePerSixFrames) {
     }
     // Three faces per frame: a probe every two frames.
     AmbienceVolumeSettings three;
-    three.facesPerFrame = 3;
+    three.capture.facesPerFrame = 3;
     Rig fast(three);
     fast.run(20, {10.0, 1.7, 20.0});
     EXPECT_EQ(fast.volume.statistics().probesCompleted, 10);
@@ -225,7 +225,7 @@ TEST(AmbienceVolumeSettings, FromJson) {
         R"({"facesPerFrame": 2, "store": {"blendTime_s": 0.5, "levels": 4},
             "scheduler": {"horizon_s": 4.5}})",
         "test.json");
-    EXPECT_EQ(s.facesPerFrame, 2);
+    EXPECT_EQ(s.capture.facesPerFrame, 2);
     EXPECT_EQ(s.store.blendTime_s, 0.5);
     EXPECT_EQ(s.store.levels, 4);
     EXPECT_EQ(s.scheduler.horizon_s, 4.5);

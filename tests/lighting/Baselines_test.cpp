@@ -66,7 +66,7 @@ bool identical(const ShRgb& a, const ShRgb& b) {
 ShRgb captureAt(double x_m, double z_m, double timeOfDay_h = 12.0) {
     FakeCubeCapture reference(kFace);
     CubeMapProjector::Options options;
-    options.sunThreshold = BaselineSettings{}.sunThreshold;
+    options.sunThreshold = BaselineSettings{}.capture.sunThreshold;
     const std::vector<float> cube = reference.captureAll({x_m, kProbeHeight, z_m}, timeOfDay_h);
     return toFloat(projectCubeMap(kFace, cube, options).sh);
 }
@@ -114,7 +114,7 @@ TEST(ScrollingGridMethod, ConvergesToCapturesBilinearly) {
     BaselineSettings s = testLayout();
     s.gridSize = 4;
     s.gridSpacing_m = 24.0;
-    s.facesPerFrame = 6;  // a whole probe per frame
+    s.capture.facesPerFrame = 6;  // a whole probe per frame
     FakeCubeCapture capture(kFace);
     FlatProbeEnvironment environment;
     ScrollingGridMethod grid(capture, environment, s);
@@ -153,7 +153,7 @@ TEST(ScrollingGridMethod, HysteresisClosedForm) {
     // after k updates, value = c + (a - c) h^k.
     BaselineSettings s = testLayout();
     s.gridSize = 2;
-    s.facesPerFrame = 6;
+    s.capture.facesPerFrame = 6;
     s.hysteresis = 0.9;
     FakeCubeCapture capture(kFace);
     FlatProbeEnvironment environment;
@@ -181,7 +181,7 @@ TEST(ScrollingGridMethod, HysteresisClosedForm) {
 TEST(ScrollingGridMethod, ScrollingKeepsIntegerCellsExactFarFromTheOrigin) {
     BaselineSettings s = testLayout();
     s.gridSize = 4;
-    s.facesPerFrame = 6;
+    s.capture.facesPerFrame = 6;
     const double spacing = s.gridSpacing_m;
     FakeCubeCapture capture(kFace);
     FlatProbeEnvironment environment;
@@ -267,7 +267,7 @@ TEST(ReactiveCacheMethod, NoLookupsNoCaptures) {
 
 TEST(ReactiveCacheMethod, CapturesTheCornersOfLookupsNearestFirst) {
     BaselineSettings s = testLayout();
-    s.facesPerFrame = 6;
+    s.capture.facesPerFrame = 6;
     const double spacing = s.cacheSpacing_m;  // 12 m
     FakeCubeCapture capture(kFace);
     FlatProbeEnvironment environment;
@@ -309,7 +309,7 @@ TEST(ReactiveCacheMethod, CapturesTheCornersOfLookupsNearestFirst) {
 
 TEST(ReactiveCacheMethod, DroppedAfterTheTimeout) {
     BaselineSettings s = testLayout();
-    s.facesPerFrame = 6;
+    s.capture.facesPerFrame = 6;
     FakeCubeCapture capture(kFace);
     FlatProbeEnvironment environment;
     ReactiveCacheMethod cache(capture, environment, s);
@@ -339,7 +339,7 @@ TEST(ReactiveCacheMethod, MissingBeforeStale) {
     // makes them stale, and B, further from the camera, is looked up too: B's four missing
     // probes are captured first, then A's four again.
     BaselineSettings s = testLayout();
-    s.facesPerFrame = 6;
+    s.capture.facesPerFrame = 6;
     FakeCubeCapture capture(kFace);
     FlatProbeEnvironment environment;
     ReactiveCacheMethod cache(capture, environment, s);
@@ -369,7 +369,7 @@ TEST(ReactiveCacheMethod, MissingBeforeStale) {
 
 TEST(PerObjectMethod, EachPointGetsItsObjectsCaptureAndNothingElse) {
     BaselineSettings s = testLayout();
-    s.facesPerFrame = 6;
+    s.capture.facesPerFrame = 6;
     s.objectRange_m = 40.0;
     FakeCubeCapture capture(kFace);
     FlatProbeEnvironment environment;
@@ -412,7 +412,7 @@ TEST(PerObjectMethod, EachPointGetsItsObjectsCaptureAndNothingElse) {
 
 TEST(PerObjectMethod, RecapturedAfterTheLifetimeForgottenFarAway) {
     BaselineSettings s = testLayout();
-    s.facesPerFrame = 6;
+    s.capture.facesPerFrame = 6;
     s.objectRange_m = 20.0;
     FakeCubeCapture capture(kFace);
     FlatProbeEnvironment environment;
@@ -446,7 +446,7 @@ TEST(PerObjectMethod, RecapturedAfterTheLifetimeForgottenFarAway) {
 
 TEST(NearestAnchorMethod, ValueIsTheNearestAnchorsWithoutBlending) {
     AmbienceVolumeSettings vs;
-    vs.facesPerFrame = 6;
+    vs.capture.facesPerFrame = 6;
     FakeCubeCapture capture(kFace);
     FlatProbeEnvironment environment;
     NearestAnchorMethod nearest(capture, environment, vs);
@@ -514,9 +514,9 @@ struct Lookups {
 TEST(Baselines, FaceBudgetAndWholeProbesPerPosition) {
     for (const char* name : kBaselineNames) {
         AmbienceVolumeSettings vs;
-        vs.facesPerFrame = 2;
+        vs.capture.facesPerFrame = 2;
         BaselineSettings bs = testLayout();
-        bs.facesPerFrame = 2;
+        bs.capture.facesPerFrame = 2;
         FakeCubeCapture capture(kFace);
         FlatProbeEnvironment environment;
         auto method = makeCapturingMethod(name, capture, environment, vs, bs, nullptr);
@@ -561,9 +561,9 @@ TEST(Baselines, PoisonedProbesNeverReachShAt) {
     for (const Poison kind : {Poison::NaN, Poison::Inf, Poison::Negative}) {
         for (const char* name : kBaselineNames) {
             AmbienceVolumeSettings vs;
-            vs.facesPerFrame = 6;  // whole probes per frame: none left half done at the end
+            vs.capture.facesPerFrame = 6;  // whole probes per frame: none left half done at the end
             BaselineSettings bs = testLayout();
-            bs.facesPerFrame = 6;
+            bs.capture.facesPerFrame = 6;
             FakeCubeCapture capture(kFace);
             capture.poisonEvery(2, kind, 3);
             FlatProbeEnvironment environment;
@@ -609,7 +609,7 @@ TEST(BaselineSettings, FromJson) {
         R"({"facesPerFrame": 2, "gridSize": 8, "gridSpacing_m": 12.5, "hysteresis": 0.9,
             "cacheSpacing_m": 6, "unusedTimeout_s": 1.5, "objectRange_m": 80})",
         "baselines.json");
-    EXPECT_EQ(s.facesPerFrame, 2);
+    EXPECT_EQ(s.capture.facesPerFrame, 2);
     EXPECT_EQ(s.gridSize, 8);
     EXPECT_EQ(s.gridSpacing_m, 12.5);
     EXPECT_EQ(s.hysteresis, 0.9);
@@ -617,7 +617,7 @@ TEST(BaselineSettings, FromJson) {
     EXPECT_EQ(s.unusedTimeout_s, 1.5);
     EXPECT_EQ(s.objectRange_m, 80.0);
     EXPECT_EQ(s.objectSize_m, BaselineSettings{}.objectSize_m);  // missing keys keep defaults
-    EXPECT_EQ(s.sunThreshold, 5000.0);
+    EXPECT_EQ(s.capture.sunThreshold, 5000.0);
     const auto failsNaming = [](const std::string& json, const std::string& key) {
         try {
             baselineSettingsFromJson(json, "b.json");

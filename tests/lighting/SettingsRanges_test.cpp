@@ -52,7 +52,6 @@ const Key kVolumeKeys[] = {
     {"scheduler", "historyLength_s", false},
     {"scheduler", "roadSnap_m", false},
     {"scheduler", "roadAlignment", false},
-    {"scheduler", "teleportDistance_m", false},
     {"scheduler", "corridorCells", false},
     {"scheduler", "maxLevel", true},
     {"scheduler", "finestRingCells", false},
@@ -70,6 +69,7 @@ const Key kVolumeKeys[] = {
     {nullptr, "fallbackRefresh_h", false},
     {nullptr, "asideFraction", false},
     {nullptr, "maxAside_m", false},
+    {nullptr, "teleportDistance_m", false},
 };
 
 const Key kBaselineKeys[] = {
@@ -79,7 +79,8 @@ const Key kBaselineKeys[] = {
     {nullptr, "gridSize", true},         {nullptr, "gridSpacing_m", false},
     {nullptr, "hysteresis", false},      {nullptr, "cacheSpacing_m", false},
     {nullptr, "unusedTimeout_s", false}, {nullptr, "objectSize_m", false},
-    {nullptr, "objectRange_m", false},
+    {nullptr, "objectRange_m", false},   {nullptr, "fallbackFaceSize", true},
+    {nullptr, "fallbackRefresh_h", false},
 };
 
 // A JSON number that reads back as `v` (infinity as the largest double JSON can hold).

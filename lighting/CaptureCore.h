@@ -1,0 +1,200 @@
+// CaptureCore.h — what every capturing method shares, so that only where a method places its
+// probes and how it reads them differ (docs/ARCHITECTURE.md "Methods"). The volume
+// (AmbienceVolume.h) and every capturing baseline (Baselines.h) own one CaptureCore; a rule fixed
+// here is fixed for all of them.
+//
+// [SECTION] Settings   CaptureSettings: the capture budget, the sun threshold, how far a probe
+//                      may move aside, the clock's defaults, the teleport distance, the fallback
+// [SECTION] Clock      beginFrame(): the simulation clock, the rate of the time of day (the wrap
+//                      at 24 h handled), jumps of the time of day, teleports, the fallback
+// [SECTION] Jobs       captureFaces(): the face budget spent on the probe in progress, a probe
+//                      captured face by face over consecutive frames and projected as each face
+//                      arrives; takeCompleted(): finished probes, checked
+//
+// The rules:
+//   - time: dt_s <= 0 or not finite counts as 0; a time of day that is not finite keeps the last
+//     one. The rate of the time of day [h/s] is measured between frames; a change of more than
+//     timeJump_h in one frame is a jump (the rate keeps its last value; the method decides what
+//     a jump does to what it holds).
+//   - teleport: a camera step longer than teleportDistance_m + 3 x max(reported speed, previous
+//     reported speed) x dt is a teleport (counted); the probe in progress is dropped (counted as
+//     aborted).
+//   - budget: facesPerFrame faces of CubeCapture::faceSize() per frame; a probe is the six faces
+//     of one position (one probe per 6 frames at one face per frame), each projected as it
+//     arrives (CubeMapProjector, the sun disc above sunThreshold taken out).
+//   - rejection: a probe with any texel that is NaN, infinite or negative, or with a coefficient
+//     that is not finite or above AnchorStore::kMaxCoefficient in float, is counted in
+//     rejectedProbes and never handed to the method.
+//   - fallback: the SH of ProbeEnvironment::fallbackCubeMap (sky model over flat ground) at
+//     fallbackFaceSize, recomputed when the time of day has moved by more than fallbackRefresh_h;
+//     a fallback that is not finite keeps the previous value (zero at first).
+//   - determinism: only the stage timings read the clock.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "lighting/AmbienceMethod.h"
+#include "lighting/SH.h"
+#include "world/Conventions.h"
+
+namespace amb {
+
+class CubeCapture;
+class CubeMapProjector;
+class JsonFields;
+class ProbeEnvironment;
+
+// ---- Settings -------------------------------------------------------------------------------
+
+// Shared by every capturing method (the JSON keys of both settings files, at the top level).
+struct CaptureSettings {
+    int facesPerFrame = 1;  // capture budget (the thesis' one face per frame, 9.1)
+    // Texels brighter (luminance radiance [W sr^-1 m^-2]) are the sun disc: taken out of the SH
+    // (the renderer lights the sun directly). The JSON key is "sunThreshold".
+    double sunThreshold = kSunThreshold_Wpsrm2;
+    double maxAside_m = 4.0;  // how far ProbeEnvironment::placeProbe may move a probe [m]
+    double defaultTimeRate_hPerS = 1.0 / 3600.0;  // before the rate is measured (real time)
+    double timeJump_h = 0.25;           // a larger change of the time of day in a frame is a jump
+    double teleportDistance_m = 100.0;  // a camera step longer than this + 3 x speed x dt [m]
+    int fallbackFaceSize = 16;          // cube map size of the fallback SH
+    double fallbackRefresh_h = 1.0 / 60.0;  // recompute the fallback after this much day time
+};
+
+// Reads the keys above from a settings object (JsonFields, lighting/JsonFields.h).
+void readCaptureSettings(JsonFields& fields, CaptureSettings& settings);
+
+// ---- Probes ---------------------------------------------------------------------------------
+
+// A probe's key in its method's structure: a lattice point (level, i, k) of the volume, a cell
+// of a grid or cache, an object. Exact however far from the origin.
+struct ProbeKey {
+    int level = 0;
+    std::int64_t i = 0, k = 0;
+    bool operator==(const ProbeKey& o) const { return level == o.level && i == o.i && k == o.k; }
+    bool operator!=(const ProbeKey& o) const { return !(*this == o); }
+};
+
+// A probe a method wants captured: its key, its ground point before placement and how far
+// placement may move it aside [m].
+struct ProbeRequest {
+    ProbeKey key;
+    double x_m = 0.0, z_m = 0.0;
+    double aside_m = 0.0;
+};
+
+// A probe being captured.
+struct ProbeJob {
+    ProbeKey key;
+    glm::dvec3 position_m{0.0};  // where it is captured (after placement)
+    double startTime_s = 0.0;    // simulation time of its first face
+    int facesDone = 0;           // 0..6
+    bool bad = false;            // a texel was NaN, infinite or negative
+};
+
+// A probe whose six faces are in, checked: what the method may store.
+struct CompletedProbe {
+    ProbeJob job;
+    ShRgb sh;  // the coefficients in float
+};
+
+// What beginFrame() saw.
+struct FrameEvents {
+    bool timeJump = false;  // the time of day jumped
+    bool teleport = false;  // the camera teleported (the probe in progress was dropped)
+};
+
+// ---- The core -------------------------------------------------------------------------------
+
+class CaptureCore {
+  public:
+    // `capture` and `environment` must outlive the core.
+    CaptureCore(CubeCapture& capture, const ProbeEnvironment& environment,
+                const CaptureSettings& settings);
+    ~CaptureCore();
+    CaptureCore(const CaptureCore&) = delete;
+    CaptureCore& operator=(const CaptureCore&) = delete;
+
+    // Stage 2's shared part (see the rules above): clears this frame's statistics and the
+    // probes completed last frame, advances the clock, detects a jump of the time of day and a
+    // teleport, refreshes the fallback.
+    FrameEvents beginFrame(const glm::dvec3& cameraPosition_m, const glm::dvec3& cameraVelocity_mps,
+                           double timeOfDay_h, double dt_s);
+
+    // Stage 3: spends the face budget. When no probe is in progress, `next(busy)` names the
+    // next one (or nothing: the rest of the budget stays unused); `busy` lists the keys
+    // completed this frame and not yet taken. The time `next` takes counts as predict time.
+    using NextProbe = std::function<std::optional<ProbeRequest>(const std::vector<ProbeKey>& busy)>;
+    void captureFaces(const NextProbe& next);
+
+    // Stage 4's shared part: the probes completed this frame, bad ones counted in
+    // rejectedProbes and left out. Empties the list.
+    std::vector<CompletedProbe> takeCompleted();
+
+    // Drops the probe in progress (its point left the method's structure).
+    void abortJob() { job_.reset(); }
+    const std::optional<ProbeJob>& job() const { return job_; }
+
+    // The clock.
+    double time_s() const { return time_s_; }
+    double timeOfDay_h() const { return timeOfDay_h_; }
+    double timeRate_hPerS() const { return timeRate_hPerS_; }
+    // Simulation time of the latest jump of the time of day (-1: none yet).
+    double lastJump_s() const { return lastJump_s_; }
+    const glm::dvec3& camera_m() const { return camera_m_; }
+    // The SH where a method has nothing (always finite).
+    const ShRgb& fallback() const { return fallback_; }
+    // True in the frame the fallback was recomputed.
+    bool fallbackChanged() const { return fallbackChanged_; }
+
+    const CaptureSettings& settings() const { return settings_; }
+    // Counters since construction and this frame's stage times; methods add their own work to
+    // the times (addPredictTime, addStoreTime) and fill probes and bytes.
+    const MethodStatistics& statistics() const { return stats_; }
+    std::int64_t probesCompleted() const { return probesCompleted_; }
+    std::int64_t abortedProbes() const { return abortedProbes_; }
+    void addPredictTime(double seconds) { stats_.predict_s += seconds; }
+    void addStoreTime(double seconds) { stats_.store_s += seconds; }
+    // A probe the method itself refused (e.g. its store rejected it).
+    void countRejected() { ++stats_.rejectedProbes; }
+
+  private:
+    void updateFallback(double timeOfDay_h);
+
+    CubeCapture& capture_;
+    const ProbeEnvironment& environment_;
+    CaptureSettings settings_;
+    std::unique_ptr<CubeMapProjector> projector_;
+    std::vector<float> cube_;
+    std::optional<ProbeJob> job_;
+    struct Done {
+        ProbeJob job;
+        ShRgbD sh;
+    };
+    std::vector<Done> completed_;
+
+    double time_s_ = 0.0;
+    bool haveTime_ = false;
+    double timeOfDay_h_ = 12.0;
+    double timeRate_hPerS_ = 0.0;
+    double lastJump_s_ = -1.0;
+    glm::dvec3 camera_m_{0.0};
+    double cameraSpeed_mps_ = 0.0;
+    bool haveCamera_ = false;
+    ShRgb fallback_;
+    bool haveFallback_ = false, fallbackChanged_ = false;
+    double fallbackTimeOfDay_h_ = 0.0;
+    MethodStatistics stats_;
+    std::int64_t probesCompleted_ = 0, abortedProbes_ = 0;
+};
+
+// Signed difference b - a of two times of day, in (-12, 12] hours (the wrap at 24 h).
+double dayDifference_h(double a, double b);
+
+}  // namespace amb

@@ -1,0 +1,245 @@
+// CaptureCore_test.cpp — the rules every capturing method shares (lighting/CaptureCore.h): the
+// clock and the rate of the time of day across the 24 h wrap, jumps, the teleport rule and the
+// probe it drops, the face budget (a probe over six frames at one face per frame, six probes in
+// one frame at 36 faces), poisoned probes counted and never handed on, the fallback refreshed by
+// the time of day and never NaN; and that the volume and a baseline, given the same captures,
+// count the same faces, probes, rejections and teleports.
+#include "lighting/CaptureCore.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "FakeCubeCapture.h"
+#include "lighting/AmbienceVolume.h"
+#include "lighting/Baselines.h"
+#include "lighting/CubeMapProjector.h"
+
+namespace amb {
+namespace {
+
+using testing_support::FakeCubeCapture;
+using testing_support::FlatProbeEnvironment;
+using testing_support::Poison;
+
+constexpr double kDt = 1.0 / 30.0;
+
+// A request for the probe over (x, 0) with key (0, i, 0), i counting up.
+struct Counter {
+    std::int64_t next = 0;
+    std::optional<ProbeRequest> operator()(const std::vector<ProbeKey>&) {
+        ProbeRequest r;
+        r.key = ProbeKey{0, next, 0};
+        r.x_m = 10.0 * double(next++);
+        return r;
+    }
+};
+
+// An environment whose fallback scene is absurd (a broken sky model: 1e30 everywhere, finite
+// texels whose SH leaves the range the store accepts; NaN texels the projection already zeroes).
+class NanEnvironment final : public testing_support::FlatProbeEnvironment {
+  public:
+    bool broken = false;
+    void fallbackCubeMap(double timeOfDay_h, int n, std::vector<float>& rgb) const override {
+        FlatProbeEnvironment::fallbackCubeMap(timeOfDay_h, n, rgb);
+        if (broken) std::fill(rgb.begin(), rgb.end(), 1e30f);
+    }
+};
+
+TEST(CaptureCore, ClockRateWrapsAtMidnightAndJumpsAreSeen) {
+    FakeCubeCapture capture(4);
+    FlatProbeEnvironment environment;
+    CaptureCore core(capture, environment, CaptureSettings{});
+    EXPECT_DOUBLE_EQ(core.timeRate_hPerS(), CaptureSettings{}.defaultTimeRate_hPerS);
+    // 23.9 h -> 0.1 h over 2 s: 0.2 h forward across midnight, 0.1 h per second.
+    EXPECT_FALSE(core.beginFrame({0, 2, 0}, {0, 0, 0}, 23.9, 0.0).timeJump);
+    EXPECT_FALSE(core.beginFrame({0, 2, 0}, {0, 0, 0}, 24.1, 2.0).timeJump);
+    EXPECT_NEAR(core.timeRate_hPerS(), 0.1, 1e-12);
+    EXPECT_NEAR(core.timeOfDay_h(), 0.1, 1e-12);
+    EXPECT_DOUBLE_EQ(core.time_s(), 2.0);
+    EXPECT_DOUBLE_EQ(core.lastJump_s(), -1.0);
+    // Six hours in one frame is a jump: the rate keeps its value, the jump is dated.
+    EXPECT_TRUE(core.beginFrame({0, 2, 0}, {0, 0, 0}, 6.1, 1.0).timeJump);
+    EXPECT_NEAR(core.timeRate_hPerS(), 0.1, 1e-12);
+    EXPECT_DOUBLE_EQ(core.lastJump_s(), 3.0);
+    // A bad dt adds no time; a bad time of day keeps the last one.
+    core.beginFrame({0, 2, 0}, {0, 0, 0}, std::nan(""), std::nan(""));
+    EXPECT_DOUBLE_EQ(core.time_s(), 3.0);
+    EXPECT_NEAR(core.timeOfDay_h(), 6.1, 1e-12);
+    core.beginFrame({0, 2, 0}, {0, 0, 0}, 6.1, -1.0);
+    EXPECT_DOUBLE_EQ(core.time_s(), 3.0);
+}
+
+TEST(CaptureCore, TeleportIsAStepTheSpeedCannotExplainAndDropsTheProbe) {
+    FakeCubeCapture capture(4);
+    FlatProbeEnvironment environment;
+    CaptureCore core(capture, environment, CaptureSettings{});
+    Counter next;
+    glm::dvec3 p(0.0);
+    const glm::dvec3 v(30.0, 0.0, 0.0);
+    for (int f = 0; f < 3; ++f, p += v * kDt) {
+        EXPECT_FALSE(core.beginFrame(p, v, 12.0, kDt).teleport);
+        core.captureFaces(std::ref(next));
+    }
+    ASSERT_TRUE(core.job());
+    EXPECT_EQ(core.job()->facesDone, 3);
+    // A 10 s hitch at 30 m/s moves 300 m: within 100 m + 3 x 30 m/s x 10 s, motion.
+    p += v * 10.0;
+    EXPECT_FALSE(core.beginFrame(p, v, 12.0, 10.0).teleport);
+    EXPECT_TRUE(core.job());
+    // 5 km in one frame is a teleport: counted, and the probe of the old place is dropped.
+    const FrameEvents e = core.beginFrame(p + glm::dvec3(5000.0, 0.0, 3000.0), v, 12.0, kDt);
+    EXPECT_TRUE(e.teleport);
+    EXPECT_EQ(core.statistics().teleports, 1);
+    EXPECT_EQ(core.abortedProbes(), 1);
+    EXPECT_FALSE(core.job());
+    // A non-finite camera is ignored, not a teleport.
+    const double nan = std::nan("");
+    EXPECT_FALSE(core.beginFrame({nan, nan, nan}, v, 12.0, kDt).teleport);
+    EXPECT_EQ(core.statistics().teleports, 1);
+}
+
+TEST(CaptureCore, BudgetSpreadsAProbeOverFramesOrFillsAFrameWithProbes) {
+    FlatProbeEnvironment environment;
+    {
+        FakeCubeCapture capture(4);
+        CaptureCore core(capture, environment, CaptureSettings{});  // one face per frame
+        Counter next;
+        for (int f = 0; f < 6; ++f) {
+            core.beginFrame({0, 2, 0}, {0, 0, 0}, 12.0, kDt);
+            core.captureFaces(std::ref(next));
+            EXPECT_EQ(core.statistics().facesThisFrame, 1);
+            const std::vector<CompletedProbe> done = core.takeCompleted();
+            EXPECT_EQ(done.size(), f == 5 ? 1u : 0u);
+            if (!done.empty()) {
+                EXPECT_EQ(done[0].job.key, (ProbeKey{0, 0, 0}));
+                EXPECT_DOUBLE_EQ(done[0].job.startTime_s, kDt);  // its first face's frame
+            }
+        }
+        EXPECT_EQ(core.statistics().facesCaptured, 6);
+        EXPECT_EQ(capture.calls().size(), 6u);
+    }
+    {
+        FakeCubeCapture capture(4);
+        CaptureSettings s;
+        s.facesPerFrame = 36;
+        CaptureCore core(capture, environment, s);
+        std::vector<std::size_t> busySeen;
+        Counter counter;
+        core.beginFrame({0, 2, 0}, {0, 0, 0}, 12.0, kDt);
+        core.captureFaces([&](const std::vector<ProbeKey>& busy) {
+            busySeen.push_back(busy.size());
+            return counter(busy);
+        });
+        // Six whole probes, each asked for with the ones completed before it listed as busy.
+        EXPECT_EQ(busySeen, (std::vector<std::size_t>{0, 1, 2, 3, 4, 5}));
+        const std::vector<CompletedProbe> done = core.takeCompleted();
+        ASSERT_EQ(done.size(), 6u);
+        // Each equals the projection of the same capture taken whole.
+        FakeCubeCapture reference(4);
+        const std::vector<float> cube = reference.captureAll({30.0, 2.0, 0.0}, 12.0);
+        const ShRgb whole = toFloat(projectCubeMap(4, cube).sh);
+        for (int k = 0; k < kShCoefficients; ++k)
+            EXPECT_NEAR(done[3].sh.c[k].x, whole.c[k].x, 1e-5 * std::fabs(whole.c[0].x) + 1e-7);
+    }
+    {
+        // Nothing to capture: the budget stays unused.
+        FakeCubeCapture capture(4);
+        CaptureCore core(capture, environment, CaptureSettings{});
+        core.beginFrame({0, 2, 0}, {0, 0, 0}, 12.0, kDt);
+        core.captureFaces([](const std::vector<ProbeKey>&) { return std::optional<ProbeRequest>(); });
+        EXPECT_EQ(core.statistics().facesThisFrame, 0);
+        EXPECT_TRUE(capture.calls().empty());
+    }
+}
+
+TEST(CaptureCore, PoisonedProbesAreCountedAndNeverHandedOn) {
+    for (Poison kind : {Poison::NaN, Poison::Inf, Poison::Negative}) {
+        FakeCubeCapture capture(4);
+        capture.poisonEvery(2, kind);
+        FlatProbeEnvironment environment;
+        CaptureSettings s;
+        s.facesPerFrame = 6;
+        CaptureCore core(capture, environment, s);
+        Counter next;
+        int handedOn = 0;
+        for (int f = 0; f < 10; ++f) {
+            core.beginFrame({0, 2, 0}, {0, 0, 0}, 12.0, kDt);
+            core.captureFaces(std::ref(next));
+            for (const CompletedProbe& c : core.takeCompleted()) {
+                ++handedOn;
+                for (const glm::vec3& v : c.sh.c) EXPECT_TRUE(std::isfinite(v.x + v.y + v.z));
+            }
+        }
+        EXPECT_EQ(core.probesCompleted(), 10);
+        EXPECT_EQ(core.statistics().rejectedProbes, capture.poisonedProbes());
+        EXPECT_EQ(handedOn + capture.poisonedProbes(), 10);
+        EXPECT_GT(capture.poisonedProbes(), 0);
+    }
+}
+
+TEST(CaptureCore, FallbackFollowsTheTimeOfDayAndIsNeverNaN) {
+    FakeCubeCapture capture(4);
+    NanEnvironment environment;
+    CaptureSettings s;
+    s.fallbackRefresh_h = 0.5;
+    CaptureCore core(capture, environment, s);
+    core.beginFrame({0, 2, 0}, {0, 0, 0}, 12.0, kDt);
+    EXPECT_TRUE(core.fallbackChanged());
+    const ShRgb noon = core.fallback();
+    EXPECT_GT(noon.c[0].x, 0.0f);
+    // Less than the refresh interval: kept.
+    core.beginFrame({0, 2, 0}, {0, 0, 0}, 12.4, kDt);
+    EXPECT_FALSE(core.fallbackChanged());
+    // Night: recomputed, darker (the fake's sky follows the time of day).
+    core.beginFrame({0, 2, 0}, {0, 0, 0}, 12.2, kDt);
+    core.beginFrame({0, 2, 0}, {0, 0, 0}, 12.0 + 0.2 * 3, kDt);
+    EXPECT_TRUE(core.fallbackChanged());
+    // A broken fallback scene keeps the last good value.
+    environment.broken = true;
+    const ShRgb before = core.fallback();
+    core.beginFrame({0, 2, 0}, {0, 0, 0}, 13.5, kDt);
+    EXPECT_FALSE(core.fallbackChanged());
+    for (int k = 0; k < kShCoefficients; ++k) EXPECT_EQ(core.fallback().c[k], before.c[k]);
+}
+
+// The volume and a baseline share the core: on the same moving camera, with the same poisoned
+// captures and a teleport, they count faces, rejections and teleports alike.
+TEST(CaptureCore, VolumeAndBaselineCountAlike) {
+    FlatProbeEnvironment environment;
+    FakeCubeCapture volumeCapture(4), gridCapture(4);
+    volumeCapture.poisonEvery(3, Poison::NaN);
+    gridCapture.poisonEvery(3, Poison::NaN);
+    AmbienceVolumeSettings vs;
+    BaselineSettings bs;
+    vs.capture.facesPerFrame = bs.capture.facesPerFrame = 2;
+    AmbienceVolume volume(volumeCapture, environment, vs);
+    ScrollingGridMethod grid(gridCapture, environment, bs);
+    glm::dvec3 p(0.0, 2.0, 0.0);
+    const glm::dvec3 v(20.0, 0.0, 0.0);
+    for (int f = 0; f < 120; ++f) {
+        if (f == 60) p += glm::dvec3(20000.0, 0.0, 0.0);  // a cut
+        for (AmbienceMethod* m : {static_cast<AmbienceMethod*>(&volume),
+                                  static_cast<AmbienceMethod*>(&grid)}) {
+            m->predictStage(p, v, 12.0, kDt);
+            m->captureStage();
+            m->storeStage();
+        }
+        p += v * kDt;
+    }
+    const MethodStatistics a = volume.methodStatistics(), b = grid.methodStatistics();
+    EXPECT_EQ(a.facesCaptured, 240);
+    EXPECT_EQ(b.facesCaptured, 240);
+    EXPECT_EQ(a.teleports, 1);
+    EXPECT_EQ(b.teleports, 1);
+    EXPECT_EQ(a.rejectedProbes, volumeCapture.poisonedProbes());
+    EXPECT_EQ(b.rejectedProbes, gridCapture.poisonedProbes());
+    EXPECT_GT(a.rejectedProbes, 0);
+}
+
+}  // namespace
+}  // namespace amb
