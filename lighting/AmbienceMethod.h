@@ -1,6 +1,6 @@
 // AmbienceMethod.h — one way of giving ambience to ground points, run frame by frame: ours (the
 // dynamic ambience volume, AmbienceVolume.h) and the baselines it is measured against
-// (Baselines.h; docs/DESIGN.md "Measuring speed against error"). The frame loop drives every
+// (Baselines.h; docs/ARCHITECTURE.md "Measuring speed against error"). The frame loop drives every
 // method through the same three stages with the same capture budget, and the draw and the
 // measurement read the same shAt (objects) and cornerShAt (terrain corners), so what is
 // measured is what is drawn.
@@ -51,7 +51,7 @@ class AmbienceMethod {
     // Short name, as given to --ambient.
     virtual std::string methodName() const = 0;
 
-    // The frame's stages 2-4 (docs/DESIGN.md "The frame"). dt_s <= 0 or non-finite: no time passes.
+    // The frame's stages 2-4 (docs/ARCHITECTURE.md "The frame"). dt_s <= 0 or non-finite: no time passes.
     virtual void predictStage(const glm::dvec3& cameraPosition_m,
                               const glm::dvec3& cameraVelocity_mps, double timeOfDay_h,
                               double dt_s) = 0;

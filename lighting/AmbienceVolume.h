@@ -1,5 +1,5 @@
 // AmbienceVolume.h — the dynamic ambience volume: predict, capture, project, store, blend, and
-// answer "what ambience at this ground point" (thesis 5, 7-9; docs/DESIGN.md "The frame", 2-4).
+// answer "what ambience at this ground point" (thesis 5, 7-9; docs/ARCHITECTURE.md "The frame", 2-4).
 //
 // Per frame the renderer calls update(camera, time of day, dt), which runs, in order:
 //   1. time     simulation clock += dt; the rate of the time of day (hours per second, wrap at
@@ -101,7 +101,7 @@ class AmbienceVolume final : public AmbienceMethod {
     // ages or blends, the budget is still spent. timeOfDay_h in hours, any value (wrapped).
     void update(const glm::dvec3& cameraPosition_m, const glm::dvec3& cameraVelocity_mps,
                 double timeOfDay_h, double dt_s);
-    // The same in the frame's three stages (docs/DESIGN.md "The frame", 2-4), for a frame loop
+    // The same in the frame's three stages (docs/ARCHITECTURE.md "The frame", 2-4), for a frame loop
     // that times them separately: predict (time, motion model), capture (this frame's faces, each
     // projected as it arrives), store (advance the clock, insert completed probes).
     void predictStage(const glm::dvec3& cameraPosition_m, const glm::dvec3& cameraVelocity_mps,

@@ -1,5 +1,5 @@
 // AnchorStore.h — the sparse, hierarchical store of ambience anchors along the ground plane
-// (thesis 7.5, 7.6, 8.4, 9.3; docs/DESIGN.md "Anchor store"), with blending and smooth
+// (thesis 7.5, 7.6, 8.4, 9.3; docs/ARCHITECTURE.md "Anchor store"), with blending and smooth
 // (hierarchical bicubic Hermite) interpolation.
 //
 // [SECTION] Lattice        Level L has spacing s_L = s_0 / 3^L (3 x 3 subdivision, the thesis'
@@ -68,7 +68,7 @@ struct AnchorStoreSettings {
     // (1 - (d / R)^2)^2): the level's own and, with weight finerWeight each, the finer levels'.
     // At level 0 (the coarsest; its coarser value is the fallback, the sky over flat ground) the
     // reach is coarseReachCells. Chosen by `ambience bench` on the highway and mountain drives
-    // (docs/DESIGN.md, "Interpolation"): reach 1 (the own level's neighbours do not reach a hole,
+    // (docs/ARCHITECTURE.md, "Interpolation"): reach 1 (the own level's neighbours do not reach a hole,
     // finer anchors within one cell do) and finerWeight 1 gave mean errors 0.142 and 0.178,
     // against 0.154 and 0.187 with reach 2 and the own level alone.
     int reachCells = 1;
@@ -81,7 +81,7 @@ struct AnchorStoreSettings {
     // bilinear cells of the same anchors, kept beside the smooth ones. The draw interpolates
     // their colours linearly across each patch, so a kink at a lattice line cannot show there,
     // and the bilinear cells measured the lower error at those points on every shipped replay
-    // (docs/DESIGN.md, "Interpolation"). false: fixed points read interpolate() too.
+    // (docs/ARCHITECTURE.md, "Interpolation"). false: fixed points read interpolate() too.
     bool bilinearFixedPoints = true;
 };
 
@@ -141,7 +141,7 @@ struct Anchor {
 };
 
 // Lifetime of a capture from how fast the lighting changes (thesis 7.5.3: samples expire at a
-// rate set by how fast the light changes; docs/DESIGN.md "Blending"):
+// rate set by how fast the light changes; docs/ARCHITECTURE.md "Blending"):
 //     lifetime = clamp(allowedSunAngle / (sunSpeed x |timeRate|), minLifetime, maxLifetime)
 // with sunSpeed the sun's angular speed across the sky [rad per hour of day] and timeRate the
 // hours of day that pass per simulated second (1/3600 in real time). Time standing still gives

@@ -1,5 +1,5 @@
 // Baselines.h — the ways of giving ambience that the dynamic ambience volume is measured against
-// (docs/DESIGN.md "Measuring speed against error": same capture budget, same replays, same shAt
+// (docs/ARCHITECTURE.md "Measuring speed against error": same capture budget, same replays, same shAt
 // read by the draw and the measurement).
 //
 // [SECTION] Settings           BaselineSettings, baselineSettingsFromJson

@@ -2,7 +2,7 @@
 //
 // Declared here, without GL, so the lighting code (scheduler, anchor store, oracle) can ask for
 // captures; the GL implementation lives in app/ (CubeCaptureGl.cpp). What is drawn
-// (docs/DESIGN.md, "Capture"): the terrain proxy mesh, tree proxies, the road, the sky and the
+// (docs/ARCHITECTURE.md, "Capture"): the terrain proxy mesh, tree proxies, the road, the sky and the
 // sun — nothing dynamic (thesis 8.2). Face order and texel orientation are those of
 // world/Conventions.h (cubeTexelDirection): face f, texel (column i, row j) looks along
 // cubeTexelDirection(f, i, j, N).

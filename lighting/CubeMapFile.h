@@ -1,4 +1,4 @@
-// CubeMapFile.h — a cube map as one image file (docs/DESIGN.md, "Cube maps"; world/Conventions.h).
+// CubeMapFile.h — a cube map as one image file (docs/ARCHITECTURE.md, "Cube maps"; world/Conventions.h).
 //
 // The file is a single image of width N and height 6N: the six N x N faces stacked vertically in
 // the order +X, -X, +Y, -Y, +Z, -Z, face row 0 at the top of each face. Any format OpenImageIO

@@ -1,4 +1,4 @@
-// Metrics.h — how wrong the applied ambience is, and how much it pops (docs/DESIGN.md
+// Metrics.h — how wrong the applied ambience is, and how much it pops (docs/ARCHITECTURE.md
 // "Measuring speed against error").
 //
 // [SECTION] Irradiance distance

@@ -3,7 +3,7 @@
 // no anchor is in reach. WorldProbeEnvironment answers from the generated World; tests may answer
 // analytically.
 //
-// [SECTION] Probe placement (docs/DESIGN.md "Capture": never inside terrain or a tree)
+// [SECTION] Probe placement (docs/ARCHITECTURE.md "Capture": never inside terrain or a tree)
 //   The probe goes probeHeight_m above the terrain (or the water surface) at the lattice point.
 //   If that point lies within a plant's footprint (crown or rock radius x scale + clearance_m),
 //   it is moved aside to the nearest free spot on rings of up to maxAside_m; if none is free it

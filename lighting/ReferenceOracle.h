@@ -1,5 +1,5 @@
 // ReferenceOracle.h — the reference oracle, independent of every method, and the error budget
-// that splits a method's error against it into its causes (docs/DESIGN.md "Measuring speed
+// that splits a method's error against it into its causes (docs/ARCHITECTURE.md "Measuring speed
 // against error").
 //
 // [SECTION] Reference oracle

@@ -1,6 +1,6 @@
 #version 450 core
 #extension GL_GOOGLE_include_directive : require
-// terrain.frag — Lambertian terrain lit by the main light and the ambient slot of docs/DESIGN.md
+// terrain.frag — Lambertian terrain lit by the main light and the ambient slot of docs/ARCHITECTURE.md
 // ("Terrain and objects"): one ambient irradiance per patch corner, bilinear across the patch
 // (thesis 8.6); a road piece's comes per vertex instead.
 #include "common.glsl"

@@ -1,4 +1,4 @@
-// Conventions.h — the project's conventions, stated once (docs/DESIGN.md, "Conventions").
+// Conventions.h — the project's conventions, stated once (docs/ARCHITECTURE.md, "Conventions").
 //
 // [SECTION] Axes and units
 //   Right-handed, +Y up, metres, seconds, radians. The ground plane is XZ; heights are h(x, z).
@@ -57,7 +57,7 @@ constexpr T luminance(const glm::vec<3, T, Q>& rgb) {
 // lower half, the hemisphere ambient). A float, as the fallback has always read it.
 inline constexpr float kGroundAlbedo = 0.2f;
 // Luminance radiance [W sr^-1 m^-2, the sky model's units] above which a cube-map texel is the
-// sun disc, kept out of the SH as a directional light (docs/DESIGN.md "Spherical harmonics").
+// sun disc, kept out of the SH as a directional light (docs/ARCHITECTURE.md "Spherical harmonics").
 // The default of every `sunThreshold` setting.
 inline constexpr double kSunThreshold_Wpsrm2 = 5000.0;
 

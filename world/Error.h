@@ -1,4 +1,4 @@
-// Error.h — the two error channels (docs/DESIGN.md "Style").
+// Error.h — the two error channels (docs/ARCHITECTURE.md "Style").
 //   InputError: bad input from a user or a file. Says where (file, field, sample index) and what
 //               was expected. The CLI prints it on one line and exits with code 2.
 //   AMB_CHECK:  a programmer error; prints the failed condition and aborts.

@@ -101,7 +101,7 @@ struct TerrainMesh {
     std::vector<TerrainCorner> corners;
 };
 
-// Corner values stitched across LOD boundaries (docs/DESIGN.md "Terrain and objects").
+// Corner values stitched across LOD boundaries (docs/ARCHITECTURE.md "Terrain and objects").
 // The corners whose values must be evaluated to draw the patches `patches` (indices into
 // mesh.patches) stitched: their evaluated corners and the ends of the coarser edges their other
 // corners read, each once, ascending. O(patches).

@@ -1,5 +1,5 @@
 // BenchCommand.cpp — `ambience bench`: replays x methods x parameter points, speed against error
-// (docs/DESIGN.md "Measuring speed against error").
+// (docs/ARCHITECTURE.md "Measuring speed against error").
 //
 // Each run is a child process `ambience run --no-frames --measure-every K --oracle ...`, so a run
 // that fails (or crashes) is recorded with its error and the sweep goes on, and `--jobs` runs

@@ -6,7 +6,7 @@ Usage: python3 bench-plots.py DIR
 Reads DIR/results.csv (one row per replay x method x parameter point) and, for every row whose
 status is "ok", DIR/<run_dir>/measure.csv (one row per measured frame). Writes PNG files into
 DIR and prints the path of each file written, one a line. Errors are relative L2 distances of
-the applied irradiance to a fresh capture (the oracle), so 0.1 is 10 %; see docs/DESIGN.md,
+the applied irradiance to a fresh capture (the oracle), so 0.1 is 10 %; see docs/ARCHITECTURE.md,
 "Measuring speed against error".
 
 Exit codes: 0 success; 2 bad usage, or results.csv missing or without any "ok" row; 3 matplotlib

@@ -1,6 +1,6 @@
 // CompareCommand.cpp — `ambience compare`: one frame of a replay as the method draws it, the same
 // frame with the reference's ambient, and a per-pixel heat map of the ambient error, side by side
-// (docs/DESIGN.md "Measuring speed against error": a picture users can read).
+// (docs/ARCHITECTURE.md "Measuring speed against error": a picture users can read).
 //
 // Steps: (1) play the replay with the method up to --frame, without the main view (the draw's
 // lookups stood in, as `ambience run --no-frames` does); (2) render that frame shaded, and as the
@@ -85,7 +85,7 @@ void runCompare(const CompareOptions& o) {
     BaselineSettings baselines;
     if (o.facesPerFrame < 1 || o.facesPerFrame > kMaxFacesPerFrame)
         throw InputError("--faces-per-frame", "expected 1 to " + std::to_string(kMaxFacesPerFrame));
-    volumeSettings.facesPerFrame = baselines.facesPerFrame = o.facesPerFrame;
+    volumeSettings.capture.facesPerFrame = baselines.capture.facesPerFrame = o.facesPerFrame;
     if (o.grid < 2 || o.grid > 256) throw InputError("--grid", "expected 2 to 256 pixels");
     if (o.referenceSize < 4 || o.referenceSize > 256)
         throw InputError("--reference-size", "expected 4 to 256");

@@ -1,6 +1,6 @@
 // ProbeCommand.cpp — `ambience probe`: capture one cube map at a point, of the static coarse
 // scene the methods capture or of the full scene the reference oracle captures (--scene), and
-// write it as the vertical-strip EXR of docs/DESIGN.md ("Cube maps").
+// write it as the vertical-strip EXR of docs/ARCHITECTURE.md ("Cube maps").
 #include <cmath>
 #include <cstdio>
 #include <sstream>

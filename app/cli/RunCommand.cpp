@@ -201,7 +201,7 @@ void runReplay(RunOptions o) {
         throw InputError("--faces-per-frame",
                          "expected 1 to " + std::to_string(kMaxFacesPerFrame));
     // One capture budget for every method.
-    volumeSettings.facesPerFrame = baselines.facesPerFrame = o.facesPerFrame;
+    volumeSettings.capture.facesPerFrame = baselines.capture.facesPerFrame = o.facesPerFrame;
     checkLoops(replay, o);
     if (o.measureEvery < 0) throw InputError("--measure-every", "must be >= 0");
     if (!o.oracle.empty() && o.measureEvery == 0)
@@ -288,7 +288,7 @@ void runReplay(RunOptions o) {
     std::unique_ptr<ErrorMeter> meter;
     MeasureSettings measureSettings;
     measureSettings.every = o.measureEvery;
-    measureSettings.sunThreshold = volumeSettings.sunThreshold;
+    measureSettings.sunThreshold = volumeSettings.capture.sunThreshold;
     // The oracle depends on the replay, the frames measured and the capture settings only.
     const std::string oracleSignature =
         fs::path(o.replay).filename().string() + " stride=" + std::to_string(o.stride) +

@@ -21,7 +21,7 @@ struct AmbientSet {
 };
 
 // ---- AmbientSource ---------------------------------------------------------------------------
-// What the draw needs from the ambient term (docs/DESIGN.md "The frame", stage 5): the
+// What the draw needs from the ambient term (docs/ARCHITECTURE.md "The frame", stage 5): the
 // irradiance at each terrain-patch corner and road vertex for its normal, and one set of R&H
 // matrices per object.
 // Constant and hemisphere ambient implement it now; the ambience volume implements it next.

@@ -1,4 +1,4 @@
-// FrameLoop.cpp — one frame: the seven stages of docs/DESIGN.md "The frame" in order, each timed.
+// FrameLoop.cpp — one frame: the seven stages of docs/ARCHITECTURE.md "The frame" in order, each timed.
 #include "app/frame/FrameLoop.h"
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// FrameLoop.h — the frame, its stages listed once, in order (docs/DESIGN.md, "The frame"):
+// FrameLoop.h — the frame, its stages listed once, in order (docs/ARCHITECTURE.md, "The frame"):
 //   1. advance      the replay camera (fixed dt) and the time of day
 //   2. predict      the scheduler's motion model picks the next probe position(s)
 //   3. capture      this frame's share of cube faces of the static coarse scene

@@ -1,6 +1,6 @@
 // Platform.h — "give me a GL 4.5 core context and a surface": a window, or W x H offscreen.
 //
-// Three small implementations of one interface (docs/DESIGN.md "Style": headless is a platform,
+// Three small implementations of one interface (docs/ARCHITECTURE.md "Style": headless is a platform,
 // not a special case): EGL surfaceless or device (PlatformEgl.cpp), OSMesa software
 // (PlatformOsMesa.cpp) and a GLFW window (PlatformGlfw.cpp). Offscreen platforms render into
 // framebuffer objects owned by the renderer; the platform only provides the current context. GL

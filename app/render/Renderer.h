@@ -1,6 +1,6 @@
 // Renderer.h — the main view: linear HDR into a float target, then exposure and tone mapping
 // (shaders/tonemap.frag: ACES filmic fit, sRGB) into an 8-bit target that is read back (offscreen)
-// or blitted to the window. Shadows: none (the direct light is unshadowed; docs/DESIGN.md
+// or blitted to the window. Shadows: none (the direct light is unshadowed; docs/ARCHITECTURE.md
 // "Known limits").
 //
 // [SECTION] Renderer   one frame of the main view

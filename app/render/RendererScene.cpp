@@ -224,7 +224,7 @@ void RendererScene::buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj
     std::size_t objects = 0;
     addPlants(eye_m, &viewProj, false, ambient, out, &objects);
     if (vehicle_) {
-        // The camera's own car (docs/DESIGN.md "Terrain and objects": vegetation and vehicle
+        // The camera's own car (docs/ARCHITECTURE.md "Terrain and objects": vegetation and vehicle
         // get per-pixel SH).
         ObjectInstance inst;
         const glm::dvec3 rel = vehicle_->position_m - eye_m;
@@ -247,7 +247,7 @@ void RendererScene::addRoads(const glm::dvec3& eye_m, const glm::mat4* viewProj,
     Frustum frustum{};
     if (viewProj) frustum = frustumOf(*viewProj);
     // The ambient at every vertex of the visible pieces, with the vertex's own normal, in one
-    // batch (docs/DESIGN.md "Terrain and objects").
+    // batch (docs/ARCHITECTURE.md "Terrain and objects").
     std::vector<const RoadChunk*> drawn;
     std::vector<glm::dvec3> at, normal;
     for (const RoadChunk& c : roads_) {

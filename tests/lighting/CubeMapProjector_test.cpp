@@ -132,7 +132,7 @@ TEST(CubeMapProjector, SkyAndGround) {
 
 // A map bright only on one face: the band-1 coefficient of that face's axis has the face's sign
 // and dominates the other two (which vanish by symmetry, 1e-6); a map bright only in texel
-// (0, 0) of a face gives the signs of the table in docs/DESIGN.md ("Cube maps") at u, v < 0,
+// (0, 0) of a face gives the signs of the table in docs/ARCHITECTURE.md ("Cube maps") at u, v < 0,
 // which catches a flipped or transposed face.
 TEST(CubeMapProjector, FaceOrientation) {
     const int n = 8;

@@ -83,7 +83,7 @@ TEST(ShBasis, OrthonormalByQuadrature) {
         for (int j = 0; j < 9; ++j) EXPECT_NEAR(gram[i][j], i == j ? 1.0 : 0.0, 1e-13) << i << j;
 }
 
-// Values from the SH table of docs/DESIGN.md ("Conventions") at hand-picked directions;
+// Values from the SH table of docs/ARCHITECTURE.md ("Conventions") at hand-picked directions;
 // tolerance 1e-6 (the table's digits).
 TEST(ShBasis, ValuesAtKnownDirections) {
     const auto up = shBasis(glm::dvec3(0, 0, 1));
