@@ -50,9 +50,7 @@ struct AnchorStoreSettings {
     int levels = 5;
     // Time over which a refreshed anchor moves from its old to its new coefficients, and over
     // which a new anchor fades in (or an expired one fades out) of the interpolation [s].
-    // 1 s from `ambience bench --tune` (candidate t5 of its tune.csv over the highway, mountain,
-    // low-flight and stress-flight replays at one face per frame): 2 s -> 1 s lowered the mean
-    // error from 0.1432 to 0.1410 with the corridor below; 4 s raised it to 0.1529.
+    // (why this value: docs/TUNING.md "Anchor store")
     double blendTime_s = 1.0;
     // Lifetime (see anchorLifetime_s): the sun may move this far across the sky before a capture
     // is considered out of date [rad] (2 degrees).
@@ -67,10 +65,8 @@ struct AnchorStoreSettings {
     // levels' value corrected by the residuals of the anchors within reachCells x s_L (kernel
     // (1 - (d / R)^2)^2): the level's own and, with weight finerWeight each, the finer levels'.
     // At level 0 (the coarsest; its coarser value is the fallback, the sky over flat ground) the
-    // reach is coarseReachCells. Chosen by `ambience bench` on the highway and mountain drives
-    // (docs/ARCHITECTURE.md, "Interpolation"): reach 1 (the own level's neighbours do not reach a hole,
-    // finer anchors within one cell do) and finerWeight 1 gave mean errors 0.142 and 0.178,
-    // against 0.154 and 0.187 with reach 2 and the own level alone.
+    // reach is coarseReachCells (both in cells of that level's spacing; finerWeight in [0, 1]).
+    // See docs/ARCHITECTURE.md, "Interpolation". (why these values: docs/TUNING.md "Anchor store")
     int reachCells = 1;
     int coarseReachCells = 2;
     double finerWeight = 1.0;
@@ -79,9 +75,8 @@ struct AnchorStoreSettings {
     bool smoothInterpolation = true;
     // Points that do not move (terrain patch corners, road vertices: interpolateFixed) read the
     // bilinear cells of the same anchors, kept beside the smooth ones. The draw interpolates
-    // their colours linearly across each patch, so a kink at a lattice line cannot show there,
-    // and the bilinear cells measured the lower error at those points on every shipped replay
-    // (docs/ARCHITECTURE.md, "Interpolation"). false: fixed points read interpolate() too.
+    // their colours linearly across each patch, so a kink at a lattice line cannot show there.
+    // false: fixed points read interpolate() too. (why this value: docs/TUNING.md "Anchor store")
     bool bilinearFixedPoints = true;
 };
 

@@ -51,12 +51,8 @@ class RoadNetwork;
 struct BaselineSettings {
     // Shared with the volume (lighting/CaptureCore.h; the JSON keys at the top level).
     CaptureSettings capture;
-    // The spacings below are each baseline's best at one face per frame, from `ambience bench
-    // --sweep` over the highway, mountain, low-flight, stress-flight and far-flight replays (mean
-    // error): grid 24 m 0.369, 48 m 0.257, 96 m 0.167, 128 m 0.149, 192 m 0.148 (128 m kept: the
-    // same error with a grid that reaches 1 km instead of 1.5 km); reactive 12 m 0.442, 24 m
-    // 0.366, 48 m 0.276, 96 m 0.185; object 32 m 0.360, 64 m 0.277, 256 m 0.191. At this budget
-    // a dense layout cannot be refreshed as fast as the camera moves, so coarse probes win.
+    // The probe spacing or object size of each baseline below is in metres.
+    // (why these values: docs/TUNING.md "Baselines")
     // ScrollingGridMethod.
     int gridSize = 16;             // G: the grid holds G x G probes
     double gridSpacing_m = 128.0;  // s: probe spacing, also the lattice the grid snaps to [m]

@@ -47,15 +47,11 @@ struct ProbeSchedulerSettings {
     double roadSnap_m = 6.0;     // within halfWidth + this of a road's centre the camera is on it
     double roadAlignment = 0.7;  // |cos| between motion and road direction needed to follow it
     // Resolution against speed.
-    // Width of the finest-level corridor along the path, in cells. 4 from `ambience bench
-    // --tune` (candidate t4 of its tune.csv): 2 -> 4 lowered the mean error over the highway,
-    // mountain, low-flight and stress-flight replays from 0.183 to 0.143 (the mountain road's
-    // from 0.32 to 0.17); 1 raised it to 0.277, and 6 or 8 (a later sweep) to 0.154-0.156.
+    // Width of the finest-level corridor along the path, in cells.
+    // (why this value: docs/TUNING.md "Scheduler")
     double corridorCells = 4.0;
-    // Never capture finer than this level. 2 (27 m with the default lattice) from `ambience bench
-    // --sweep` (point finest27m, out/bench2): the day time-lapse 0.448 -> 0.225 mean error, the
-    // mountain road's largest pop 0.28 -> 0.02, every other replay within 0.002: finer anchors
-    // cost captures that a moving camera outruns at one face per frame.
+    // Never capture finer than this lattice level (0: the coarsest; level 2 is 27 m with the
+    // default lattice). (why this value: docs/TUNING.md "Scheduler")
     int maxLevel = 2;
     // Candidates and priority.
     double finestRingCells = 1.0;     // finest-level candidates within this x s_L of the path
