@@ -219,25 +219,33 @@ RunReport::Summary RunReport::summary() const {
     return {timingStats(ms).median, timingStats(ms).p95, timingStats(tris).median};
 }
 
-void RunReport::write(const std::string& path) const {
-    using nlohmann::json;
-    auto statsJson = [](const std::vector<double>& v) {
-        const TimingStats s = timingStats(v);
-        return json{{"median", s.median}, {"p95", s.p95}, {"max", s.max}, {"mean", s.mean}};
-    };
-    json j;
-    j["replay"] = replay;
-    j["backend"] = backend;
-    j["GL_VERSION"] = glVersion;
-    j["GL_RENDERER"] = glRenderer;
-    j["size"] = {{"width", width}, {"height", height}};
-    j["ambient"] = ambient;
-    j["frameStep_s"] = frameStep_s;
-    j["frameCount"] = frames.size();
-    j["loops"] = loops;
-    j["wall_s"] = wall_s;
+namespace {
+
+using nlohmann::json;
+
+json statsJson(const std::vector<double>& v) {
+    const TimingStats s = timingStats(v);
+    return json{{"median", s.median}, {"p95", s.p95}, {"max", s.max}, {"mean", s.mean}};
+}
+
+// What was run and how: the replay, the GL backend, the image and the run's settings.
+void addRunSettingsJson(json& j, const RunReport& report) {
+    j["replay"] = report.replay;
+    j["backend"] = report.backend;
+    j["GL_VERSION"] = report.glVersion;
+    j["GL_RENDERER"] = report.glRenderer;
+    j["size"] = {{"width", report.width}, {"height", report.height}};
+    j["ambient"] = report.ambient;
+    j["frameStep_s"] = report.frameStep_s;
+    j["frameCount"] = report.frames.size();
+    j["loops"] = report.loops;
+    j["wall_s"] = report.wall_s;
     j["shadows"] = "none";
     j["toneMapping"] = "exposure (white Lambertian at 0.6), ACES filmic fit (Narkowicz 2015), sRGB";
+}
+
+// Timing statistics per frame stage and of whole frames, triangle counts and the median fps.
+void addTimingsJson(json& j, const std::vector<FrameRecord>& frames) {
     json stages = json::object();
     for (int s = 0; s < kFrameStages; ++s) {
         std::vector<double> v;
@@ -256,129 +264,147 @@ void RunReport::write(const std::string& path) const {
     j["triangles"] = statsJson(tris);
     const double median = timingStats(frameMs).median;
     j["fps_median"] = median > 0 ? 1000.0 / median : 0.0;
-    {
-        // Resident memory after each frame, for soak runs: bounded if nothing leaks. The rows
-        // of this report (kept until the end) are part of it.
-        std::vector<double> rss;
-        std::size_t cuts = 0;
-        for (const FrameRecord& f : frames) rss.push_back(double(f.rss_kB)), cuts += f.cut;
-        j["cameraCuts"] = cuts;
-        // What one row of this report holds in memory (rows allocate nothing of their own).
-        const std::size_t rowBytes = sizeof(FrameRecord);
-        j["memory"] = {{"rssStart_kB", frames.empty() ? 0 : frames.front().rss_kB},
-                       {"rssEnd_kB", frames.empty() ? 0 : frames.back().rss_kB},
-                       {"rss_kB", statsJson(rss)},
-                       {"rssPeak_kB", rssPeak_kB},
-                       {"heapStart_kB", frames.empty() ? 0 : frames.front().heap_kB},
-                       {"heapEnd_kB", frames.empty() ? 0 : frames.back().heap_kB},
-                       {"reportRowBytes", rowBytes}};
+}
+
+void addMemoryJson(json& j, const std::vector<FrameRecord>& frames, std::size_t rssPeak_kB) {
+    // Resident memory after each frame, for soak runs: bounded if nothing leaks. The rows
+    // of this report (kept until the end) are part of it.
+    std::vector<double> rss;
+    std::size_t cuts = 0;
+    for (const FrameRecord& f : frames) rss.push_back(double(f.rss_kB)), cuts += f.cut;
+    j["cameraCuts"] = cuts;
+    // What one row of this report holds in memory (rows allocate nothing of their own).
+    const std::size_t rowBytes = sizeof(FrameRecord);
+    j["memory"] = {{"rssStart_kB", frames.empty() ? 0 : frames.front().rss_kB},
+                   {"rssEnd_kB", frames.empty() ? 0 : frames.back().rss_kB},
+                   {"rss_kB", statsJson(rss)},
+                   {"rssPeak_kB", rssPeak_kB},
+                   {"heapStart_kB", frames.empty() ? 0 : frames.front().heap_kB},
+                   {"heapEnd_kB", frames.empty() ? 0 : frames.back().heap_kB},
+                   {"reportRowBytes", rowBytes}};
+}
+
+// The ambience method's summary; only for runs whose frames carry its state (not empty).
+json ambienceJson(const RunReport& report) {
+    const std::vector<FrameRecord>& frames = report.frames;
+    // The ambience's share of frame time: stages 2-5 plus the lookups the draw makes
+    // (terrain corners and objects ask the volume while the draw list is built).
+    double ambienceMs = 0.0, captureMs = 0.0, totalMs = 0.0;
+    std::vector<double> anchors, bytes, lookupMs, perFrameAmbienceMs;
+    std::int64_t faces = 0;
+    std::size_t maxAnchors = 0, maxBytes = 0;
+    for (const FrameRecord& f : frames) {
+        ambienceMs += f.stageMs[int(FrameStage::Predict)] +
+                      f.stageMs[int(FrameStage::Capture)] + f.stageMs[int(FrameStage::Store)] +
+                      f.stageMs[int(FrameStage::Interpolate)] + f.ambience.lookupMs;
+        perFrameAmbienceMs.push_back(
+            f.stageMs[int(FrameStage::Predict)] + f.stageMs[int(FrameStage::Capture)] +
+            f.stageMs[int(FrameStage::Store)] + f.stageMs[int(FrameStage::Interpolate)] +
+            f.ambience.lookupMs);
+        faces += f.ambience.faces;
+        captureMs += f.stageMs[int(FrameStage::Capture)];
+        totalMs += f.frameMs;
+        anchors.push_back(double(f.ambience.anchors));
+        bytes.push_back(double(f.ambience.bytes));
+        lookupMs.push_back(f.ambience.lookupMs);
+        maxAnchors = std::max(maxAnchors, f.ambience.anchors);
+        maxBytes = std::max(maxBytes, f.ambience.bytes);
     }
-    const bool volume = !frames.empty() && frames.front().ambience.active;
+    const FrameRecord& last = frames.back();
+    const auto& t = report.ambienceTotals;
+    const double frameStep_s = report.frameStep_s;
+    json a = {
+        {"anchorsEnd", last.ambience.anchors},
+        {"anchorsMax", maxAnchors},
+        {"anchors", statsJson(anchors)},
+        {"bytesEnd", last.ambience.bytes},
+        {"bytesMax", maxBytes},
+        {"bytesPerAnchorEnd", last.ambience.anchors
+                                  ? double(last.ambience.bytes) / double(last.ambience.anchors)
+                                  : 0.0},
+        {"facesCaptured", t.facesCaptured},
+        {"probesCompleted", t.probesCompleted},
+        {"rejectedProbes", t.rejectedProbes},
+        {"teleports", t.teleports},
+        {"anchorsInserted", t.inserted},
+        {"anchorsRefreshed", t.refreshed},
+        {"anchorsExpired", t.expired},
+        {"captureTrianglesPerFace", t.captureTriangles},
+        {"storeScans", t.storeScans},
+        {"nonFiniteAnchorsMax", t.nonFiniteAnchorsMax},
+        {"lookup_ms", statsJson(lookupMs)},
+        // Stages 2-5 and the draw's lookups, per frame.
+        {"ambience_ms", statsJson(perFrameAmbienceMs)},
+        {"facesPerSecond", frames.size() > 1 && frameStep_s > 0
+                               ? double(faces) / (double(frames.size()) * frameStep_s)
+                               : 0.0},
+        {"shareOfFrameTime", totalMs > 0 ? ambienceMs / totalMs : 0.0},
+        {"captureShareOfFrameTime", totalMs > 0 ? captureMs / totalMs : 0.0},
+    };
+    // Only a method with an anchor store is scanned.
+    if (t.storeScans > 0) a["storeFinite"] = t.nonFiniteAnchorsMax == 0;
+    return a;
+}
+
+// One frame's row of the JSON report; `volume`: the frames carry the ambience method's state.
+json frameRowJson(const FrameRecord& f, bool volume) {
+    json r{{"frame", f.index},
+           {"loop", f.loop},
+           {"time_s", f.time_s},
+           {"replayTime_s", f.replayTime_s},
+           {"cut", f.cut},
+           {"rss_kB", f.rss_kB},
+           {"heap_kB", f.heap_kB},
+           {"timeOfDay_h", f.timeOfDay_h},
+           {"frame_ms", f.frameMs},
+           {"triangles", f.render.triangles},
+           {"terrainPatches", f.render.terrainPatches},
+           {"terrainPatchesDrawn", f.render.terrainPatchesDrawn},
+           {"objectsDrawn", f.render.objectsDrawn},
+           {"terrainRebuilt", f.render.terrainRebuilt}};
+    for (int s = 0; s < kFrameStages; ++s)
+        r[std::string(toString(FrameStage(s))) + "_ms"] = f.stageMs[s];
     if (volume) {
-        // The ambience's share of frame time: stages 2-5 plus the lookups the draw makes
-        // (terrain corners and objects ask the volume while the draw list is built).
-        double ambienceMs = 0.0, captureMs = 0.0, totalMs = 0.0;
-        std::vector<double> anchors, bytes, lookupMs, perFrameAmbienceMs;
-        std::int64_t faces = 0;
-        std::size_t maxAnchors = 0, maxBytes = 0;
-        for (const FrameRecord& f : frames) {
-            ambienceMs += f.stageMs[int(FrameStage::Predict)] +
-                          f.stageMs[int(FrameStage::Capture)] + f.stageMs[int(FrameStage::Store)] +
-                          f.stageMs[int(FrameStage::Interpolate)] + f.ambience.lookupMs;
-            perFrameAmbienceMs.push_back(
-                f.stageMs[int(FrameStage::Predict)] + f.stageMs[int(FrameStage::Capture)] +
-                f.stageMs[int(FrameStage::Store)] + f.stageMs[int(FrameStage::Interpolate)] +
-                f.ambience.lookupMs);
-            faces += f.ambience.faces;
-            captureMs += f.stageMs[int(FrameStage::Capture)];
-            totalMs += f.frameMs;
-            anchors.push_back(double(f.ambience.anchors));
-            bytes.push_back(double(f.ambience.bytes));
-            lookupMs.push_back(f.ambience.lookupMs);
-            maxAnchors = std::max(maxAnchors, f.ambience.anchors);
-            maxBytes = std::max(maxBytes, f.ambience.bytes);
-        }
-        const FrameRecord& last = frames.back();
-        const auto& t = ambienceTotals;
-        j["ambience"] = {
-            {"anchorsEnd", last.ambience.anchors},
-            {"anchorsMax", maxAnchors},
-            {"anchors", statsJson(anchors)},
-            {"bytesEnd", last.ambience.bytes},
-            {"bytesMax", maxBytes},
-            {"bytesPerAnchorEnd", last.ambience.anchors
-                                      ? double(last.ambience.bytes) / double(last.ambience.anchors)
-                                      : 0.0},
-            {"facesCaptured", t.facesCaptured},
-            {"probesCompleted", t.probesCompleted},
-            {"rejectedProbes", t.rejectedProbes},
-            {"teleports", t.teleports},
-            {"anchorsInserted", t.inserted},
-            {"anchorsRefreshed", t.refreshed},
-            {"anchorsExpired", t.expired},
-            {"captureTrianglesPerFace", t.captureTriangles},
-            {"storeScans", t.storeScans},
-            {"nonFiniteAnchorsMax", t.nonFiniteAnchorsMax},
-            {"lookup_ms", statsJson(lookupMs)},
-            // Stages 2-5 and the draw's lookups, per frame.
-            {"ambience_ms", statsJson(perFrameAmbienceMs)},
-            {"facesPerSecond", frames.size() > 1 && frameStep_s > 0
-                                   ? double(faces) / (double(frames.size()) * frameStep_s)
-                                   : 0.0},
-            {"shareOfFrameTime", totalMs > 0 ? ambienceMs / totalMs : 0.0},
-            {"captureShareOfFrameTime", totalMs > 0 ? captureMs / totalMs : 0.0},
-        };
-        // Only a method with an anchor store is scanned.
-        if (t.storeScans > 0) j["ambience"]["storeFinite"] = t.nonFiniteAnchorsMax == 0;
+        r["anchors"] = f.ambience.anchors;
+        r["anchorBytes"] = f.ambience.bytes;
+        r["facesCaptured"] = f.ambience.faces;
+        r["finestLevel"] = f.ambience.finestLevel;
+        r["ambientLookups"] = f.ambience.lookups;
+        r["ambientLookup_ms"] = f.ambience.lookupMs;
+        r["volumePredict_ms"] = f.ambience.predictMs;
+        r["volumeCapture_ms"] = f.ambience.captureMs;
+        r["volumeProject_ms"] = f.ambience.projectMs;
+        r["volumeStore_ms"] = f.ambience.storeMs;
+        r["anchorsPerLevel"] =
+            std::vector<std::size_t>(f.ambience.anchorsPerLevel.begin(),
+                                     f.ambience.anchorsPerLevel.begin() + f.ambience.levels);
     }
-    if (!measurementJson.empty()) j["measurement"] = json::parse(measurementJson);
+    return r;
+}
+
+// The summary `head` followed by the "frames" array of per-frame rows.
+void writeReportJson(const std::string& path, const json& head,
+                     const std::vector<FrameRecord>& frames, bool volume) {
     std::ofstream out(path);
     if (!out) throw InputError(path, "cannot write the report");
     // The rows are written one at a time, each on one line: a JSON tree of an hour's rows would
     // take hundreds of MB.
-    std::string head = j.dump(1);  // "{\n ... \n}": drop the "\n}" and go on with the rows
-    head.resize(head.size() - 2);
-    out << head << ",\n \"frames\": [";
+    std::string text = head.dump(1);  // "{\n ... \n}": drop the "\n}" and go on with the rows
+    text.resize(text.size() - 2);
+    out << text << ",\n \"frames\": [";
     bool firstRow = true;
     for (const FrameRecord& f : frames) {
-        json r{{"frame", f.index},
-               {"loop", f.loop},
-               {"time_s", f.time_s},
-               {"replayTime_s", f.replayTime_s},
-               {"cut", f.cut},
-               {"rss_kB", f.rss_kB},
-               {"heap_kB", f.heap_kB},
-               {"timeOfDay_h", f.timeOfDay_h},
-               {"frame_ms", f.frameMs},
-               {"triangles", f.render.triangles},
-               {"terrainPatches", f.render.terrainPatches},
-               {"terrainPatchesDrawn", f.render.terrainPatchesDrawn},
-               {"objectsDrawn", f.render.objectsDrawn},
-               {"terrainRebuilt", f.render.terrainRebuilt}};
-        for (int s = 0; s < kFrameStages; ++s)
-            r[std::string(toString(FrameStage(s))) + "_ms"] = f.stageMs[s];
-        if (volume) {
-            r["anchors"] = f.ambience.anchors;
-            r["anchorBytes"] = f.ambience.bytes;
-            r["facesCaptured"] = f.ambience.faces;
-            r["finestLevel"] = f.ambience.finestLevel;
-            r["ambientLookups"] = f.ambience.lookups;
-            r["ambientLookup_ms"] = f.ambience.lookupMs;
-            r["volumePredict_ms"] = f.ambience.predictMs;
-            r["volumeCapture_ms"] = f.ambience.captureMs;
-            r["volumeProject_ms"] = f.ambience.projectMs;
-            r["volumeStore_ms"] = f.ambience.storeMs;
-            r["anchorsPerLevel"] =
-                std::vector<std::size_t>(f.ambience.anchorsPerLevel.begin(),
-                                         f.ambience.anchorsPerLevel.begin() + f.ambience.levels);
-        }
-        out << (firstRow ? "\n  " : ",\n  ") << r.dump();
+        out << (firstRow ? "\n  " : ",\n  ") << frameRowJson(f, volume).dump();
         firstRow = false;
     }
     out << "\n ]\n}\n";
     if (!out) throw InputError(path, "cannot write the report");
+}
 
-    const std::string csvPath = std::filesystem::path(path).replace_extension(".csv").string();
+// The per-frame rows as CSV; the volume's columns (one per anchor level of the first frame) only
+// when the frames carry the ambience method's state.
+void writeReportCsv(const std::string& csvPath, const std::vector<FrameRecord>& frames,
+                    bool volume) {
     std::ofstream csv(csvPath);
     if (!csv) throw InputError(csvPath, "cannot write the report CSV");
     csv << "frame,time_s,timeOfDay_h,frame_ms";
@@ -413,6 +439,21 @@ void RunReport::write(const std::string& path) const {
         csv << "\n";
     }
     if (!csv) throw InputError(csvPath, "cannot write the report CSV");
+}
+
+}  // namespace
+
+void RunReport::write(const std::string& path) const {
+    const bool volume = !frames.empty() && frames.front().ambience.active;
+    json j;
+    addRunSettingsJson(j, *this);
+    addTimingsJson(j, frames);
+    addMemoryJson(j, frames, rssPeak_kB);
+    if (volume) j["ambience"] = ambienceJson(*this);
+    if (!measurementJson.empty()) j["measurement"] = json::parse(measurementJson);
+    writeReportJson(path, j, frames, volume);
+    const std::string csvPath = std::filesystem::path(path).replace_extension(".csv").string();
+    writeReportCsv(csvPath, frames, volume);
 }
 
 // ---- Measurement ---------------------------------------------------------------------------
