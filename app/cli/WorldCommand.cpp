@@ -121,8 +121,9 @@ void drawLine(std::vector<unsigned char>& img, int w, int h, glm::dvec2 a, glm::
     }
 }
 
-void runWorldMap(const WorldMapOptions& o) {
-    // ---- [SECTION] Options and validation
+// ---- [SECTION] Options and validation
+
+void checkMapOptions(const WorldMapOptions& o) {
     if (o.pixels < 16 || o.pixels > 8192) {
         throw InputError("--pixels",
                          "expected an image size in [16, 8192], got " + std::to_string(o.pixels));
@@ -131,63 +132,91 @@ void runWorldMap(const WorldMapOptions& o) {
     if (!std::isfinite(o.size_m) || (o.size_m != 0.0 && (o.size_m < 1.0 || o.size_m > 1e7))) {
         throw InputError("--size", "expected a map size in metres in [1, 1e7]");
     }
-    {
-        FilePlan files;
-        files.input("--replay", o.replayPath);
-        files.output("--map", o.mapPath);
-        files.output("--heightmap", o.heightmapPath);
-        files.check();
-    }
-    WorldSettings settings;
-    settings.seed = o.seed;
-    std::optional<Replay> replay;
-    glm::dvec2 centre(0.0);
-    double size_m = o.size_m > 0.0 ? o.size_m : 12000.0;
-    if (!o.replayPath.empty()) {
-        replay = readReplay(o.replayPath);
-        settings = replay->world;
-        if (!replay->samples.empty()) {
-            glm::dvec2 lo(1e300), hi(-1e300);
-            for (const CameraSample& s : replay->samples) {
-                lo = glm::min(lo, glm::dvec2(s.position_m.x, s.position_m.z));
-                hi = glm::max(hi, glm::dvec2(s.position_m.x, s.position_m.z));
-            }
-            centre = 0.5 * (lo + hi);
-            if (o.size_m <= 0.0)
-                size_m = std::max(2000.0, 1.15 * std::max(hi.x - lo.x, hi.y - lo.y));
-        }
-    }
-    if (!o.centre.empty()) centre = parseCentre(o.centre);
+    FilePlan files;
+    files.input("--replay", o.replayPath);
+    files.output("--map", o.mapPath);
+    files.output("--heightmap", o.heightmapPath);
+    files.check();
+}
 
-    const World world(settings);
-    const int n = o.pixels;
-    const double pixel_m = size_m / n;
-    const double x0 = centre.x - 0.5 * size_m, z0 = centre.y - 0.5 * size_m;
+// The square of the world the map shows, and its pixel grid.
+struct MapArea {
+    glm::dvec2 centre{0.0};     // X, Z [m]
+    double size_m = 0.0;        // width and height
+    int n = 0;                  // pixels per side
+    double pixel_m = 0.0;       // width of one pixel
+    double x0 = 0.0, z0 = 0.0;  // X and Z of the map's corner at pixel (0, 0) [m]
+
     // Pixel (i, j): column i grows with +X, row j grows with +Z (north = -Z at the top).
-    auto worldX = [&](double i) { return x0 + (i + 0.5) * pixel_m; };
-    auto worldZ = [&](double j) { return z0 + (j + 0.5) * pixel_m; };
+    double worldX(double i) const { return x0 + (i + 0.5) * pixel_m; }
+    double worldZ(double j) const { return z0 + (j + 0.5) * pixel_m; }
+    glm::dvec2 toPixel(const glm::dvec3& p) const {
+        return glm::dvec2((p.x - x0) / pixel_m, (p.z - z0) / pixel_m);
+    }
+};
 
-    // ---- [SECTION] Sampling the world on the map grid
-    std::vector<double> height(std::size_t(n) * n), road(std::size_t(n) * n);
+// 12 km around the origin, or the replay's extent around its centre; --size and --centre win.
+MapArea mapArea(const WorldMapOptions& o, const std::optional<Replay>& replay) {
+    MapArea a;
+    a.size_m = o.size_m > 0.0 ? o.size_m : 12000.0;
+    if (replay && !replay->samples.empty()) {
+        glm::dvec2 lo(1e300), hi(-1e300);
+        for (const CameraSample& s : replay->samples) {
+            lo = glm::min(lo, glm::dvec2(s.position_m.x, s.position_m.z));
+            hi = glm::max(hi, glm::dvec2(s.position_m.x, s.position_m.z));
+        }
+        a.centre = 0.5 * (lo + hi);
+        if (o.size_m <= 0.0) a.size_m = std::max(2000.0, 1.15 * std::max(hi.x - lo.x, hi.y - lo.y));
+    }
+    if (!o.centre.empty()) a.centre = parseCentre(o.centre);
+    a.n = o.pixels;
+    a.pixel_m = a.size_m / a.n;
+    a.x0 = a.centre.x - 0.5 * a.size_m;
+    a.z0 = a.centre.y - 0.5 * a.size_m;
+    return a;
+}
+
+// ---- [SECTION] Sampling the world on the map grid
+
+struct MapSamples {
+    std::vector<double> height, road;  // per pixel: terrain height [m] and road weight
+    int nd = 0;                        // side of the density grid
+    std::vector<float> density;        // tree density on a grid of half the resolution
+};
+
+MapSamples sampleWorld(const World& world, const MapArea& area) {
+    const int n = area.n;
+    MapSamples m;
+    m.height.resize(std::size_t(n) * n);
+    m.road.resize(std::size_t(n) * n);
     tbb::parallel_for(0, n, [&](int j) {
         for (int i = 0; i < n; ++i) {
             const std::size_t idx = std::size_t(j) * n + i;
-            height[idx] = world.heightAndRoad(worldX(i), worldZ(j), &road[idx]);
+            m.height[idx] = world.heightAndRoad(area.worldX(i), area.worldZ(j), &m.road[idx]);
         }
     });
     // Tree density on a grid of half the resolution (it costs a few height evaluations).
     const int nd = (n + 1) / 2;
-    std::vector<float> density(std::size_t(nd) * nd);
+    m.nd = nd;
+    m.density.resize(std::size_t(nd) * nd);
     tbb::parallel_for(0, nd, [&](int j) {
         for (int i = 0; i < nd; ++i) {
-            density[std::size_t(j) * nd + i] = static_cast<float>(
-                world.vegetation().treeDensity(worldX(2 * i + 0.5), worldZ(2 * j + 0.5)));
+            m.density[std::size_t(j) * nd + i] = static_cast<float>(
+                world.vegetation().treeDensity(area.worldX(2 * i + 0.5), area.worldZ(2 * j + 0.5)));
         }
     });
+    return m;
+}
 
-    // ---- [SECTION] Colouring
+// ---- [SECTION] Colouring
+
+// The map as RGB8: albedo with hill shading and the forest tint on land, blue by depth in water.
+std::vector<unsigned char> shadedRelief(const World& world, const MapArea& area,
+                                        const MapSamples& m, double water) {
+    const int n = area.n, nd = m.nd;
+    const double pixel_m = area.pixel_m;
+    const std::vector<double>& height = m.height;
     const glm::dvec3 light = glm::normalize(glm::dvec3(-1.0, 1.2, -1.0));  // from the north-west
-    const double water = settings.waterLevel_m;
     std::vector<unsigned char> img(std::size_t(n) * n * 3);
     tbb::parallel_for(0, n, [&](int j) {
         for (int i = 0; i < n; ++i) {
@@ -202,7 +231,7 @@ void runWorldMap(const WorldMapOptions& o) {
                 ((j1 - j0) * pixel_m);
             const glm::dvec3 normal = glm::normalize(glm::dvec3(-dhdx, 1.0, -dhdz));
             const GroundSample g =
-                world.classify(worldX(i), worldZ(j), height[idx], road[idx], normal);
+                world.classify(area.worldX(i), area.worldZ(j), height[idx], m.road[idx], normal);
             glm::dvec3 c;
             if (height[idx] < water) {
                 const double depth = water - height[idx];
@@ -213,7 +242,7 @@ void runWorldMap(const WorldMapOptions& o) {
                 const double shade = 0.35 + 0.75 * std::max(glm::dot(normal, light), 0.0);
                 c = glm::dvec3(g.albedo) * 2.2 * shade;
                 const double d =
-                    density[std::size_t(std::min(j / 2, nd - 1)) * nd + std::min(i / 2, nd - 1)];
+                    m.density[std::size_t(std::min(j / 2, nd - 1)) * nd + std::min(i / 2, nd - 1)];
                 c = glm::mix(c, glm::dvec3(0.03, 0.16, 0.05) * shade * 1.4, 0.85 * d);
             }
             // Display gamma (the map is for eyes, not for measurement).
@@ -223,58 +252,99 @@ void runWorldMap(const WorldMapOptions& o) {
             }
         }
     });
+    return img;
+}
 
-    // ---- [SECTION] Overlays
-    auto toPixel = [&](const glm::dvec3& p) {
-        return glm::dvec2((p.x - x0) / pixel_m, (p.z - z0) / pixel_m);
-    };
+// ---- [SECTION] Overlays
+
+int overlayLineRadius(const MapArea& area) {
+    return std::max(1, area.n / 700);
+}
+
+void drawRoads(std::vector<unsigned char>& img, const World& world, const MapArea& area) {
+    const int n = area.n;
     const unsigned char roadColours[2][3] = {{250, 235, 190}, {255, 170, 60}};
-    const int lineRadius = std::max(1, n / 700);
+    const int lineRadius = overlayLineRadius(area);
     for (std::size_t r = 0; r < world.roads().roads().size(); ++r) {
         const auto& line = world.roads().roads()[r].centreline;
         for (std::size_t s = 1; s < line.size(); ++s) {
-            drawLine(img, n, n, toPixel(line[s - 1]), toPixel(line[s]), roadColours[r % 2],
-                     lineRadius);
+            drawLine(img, n, n, area.toPixel(line[s - 1]), area.toPixel(line[s]),
+                     roadColours[r % 2], lineRadius);
         }
     }
-    if (replay) {
-        const unsigned char red[3] = {230, 20, 30};
-        const auto& samples = replay->samples;
-        for (std::size_t s = 1; s < samples.size(); ++s) {
-            if (samples[s].cut) continue;  // a teleport: no line across it
-            drawLine(img, n, n, toPixel(samples[s - 1].position_m), toPixel(samples[s].position_m),
-                     red, lineRadius);
-        }
-        if (!samples.empty()) {
-            const unsigned char white[3] = {255, 255, 255};
-            const glm::dvec2 p = toPixel(samples.front().position_m);
-            drawLine(img, n, n, p, p, white, 3 * lineRadius);
-        }
-    }
+}
 
-    // ---- [SECTION] Writing
-    const std::vector<std::pair<std::string, float>> geo = {{"ambience:originX_m", float(x0)},
-                                                            {"ambience:originZ_m", float(z0)},
-                                                            {"ambience:pixel_m", float(pixel_m)}};
+// The replay's path in red, and a white dot where it starts.
+void drawReplayPath(std::vector<unsigned char>& img, const MapArea& area,
+                    const std::vector<CameraSample>& samples) {
+    const int n = area.n;
+    const int lineRadius = overlayLineRadius(area);
+    const unsigned char red[3] = {230, 20, 30};
+    for (std::size_t s = 1; s < samples.size(); ++s) {
+        if (samples[s].cut) continue;  // a teleport: no line across it
+        drawLine(img, n, n, area.toPixel(samples[s - 1].position_m),
+                 area.toPixel(samples[s].position_m), red, lineRadius);
+    }
+    if (!samples.empty()) {
+        const unsigned char white[3] = {255, 255, 255};
+        const glm::dvec2 p = area.toPixel(samples.front().position_m);
+        drawLine(img, n, n, p, p, white, 3 * lineRadius);
+    }
+}
+
+// ---- [SECTION] Writing
+
+// The map and (with --heightmap) the heights, both tagged with where they lie in the world.
+void writeMapImages(const WorldMapOptions& o, const MapArea& area,
+                    const std::vector<unsigned char>& img, const MapSamples& m) {
+    const int n = area.n;
+    const std::vector<std::pair<std::string, float>> geo = {
+        {"ambience:originX_m", float(area.x0)},
+        {"ambience:originZ_m", float(area.z0)},
+        {"ambience:pixel_m", float(area.pixel_m)}};
     writeImage(o.mapPath, n, n, 3, img, OIIO::TypeDesc::UINT8, geo);
     if (!o.heightmapPath.empty()) {
-        std::vector<float> hf(height.begin(), height.end());
+        std::vector<float> hf(m.height.begin(), m.height.end());
         writeImage(o.heightmapPath, n, n, 1, hf, OIIO::TypeDesc::FLOAT, geo);
     }
+}
+
+void printMapSummary(const WorldMapOptions& o, const WorldSettings& settings, const MapArea& area,
+                     const MapSamples& m, std::size_t roads, bool replayDrawn) {
+    const double water = settings.waterLevel_m;
     double lo = 1e300, hi = -1e300, waterShare = 0.0, meanDensity = 0.0;
-    for (double h : height) {
+    for (double h : m.height) {
         lo = std::min(lo, h);
         hi = std::max(hi, h);
         waterShare += h < water;
     }
-    for (float d : density) meanDensity += d;
+    for (float d : m.density) meanDensity += d;
     std::printf("world map: seed %llu, %.0f m wide around (%.1f, %.1f), %d px (%.2f m/px) -> %s\n",
-                static_cast<unsigned long long>(settings.seed), size_m, centre.x, centre.y, n,
-                pixel_m, o.mapPath.c_str());
+                static_cast<unsigned long long>(settings.seed), area.size_m, area.centre.x,
+                area.centre.y, area.n, area.pixel_m, o.mapPath.c_str());
     std::printf("  heights %.1f .. %.1f m, water %.1f %%, mean tree density %.3f, roads %zu%s\n",
-                lo, hi, 100.0 * waterShare / height.size(), meanDensity / density.size(),
-                world.roads().roads().size(), replay ? ", replay path drawn" : "");
+                lo, hi, 100.0 * waterShare / m.height.size(), meanDensity / m.density.size(), roads,
+                replayDrawn ? ", replay path drawn" : "");
     if (!o.heightmapPath.empty()) std::printf("  heightmap -> %s\n", o.heightmapPath.c_str());
+}
+
+void runWorldMap(const WorldMapOptions& o) {
+    checkMapOptions(o);
+    WorldSettings settings;
+    settings.seed = o.seed;
+    std::optional<Replay> replay;
+    if (!o.replayPath.empty()) {
+        replay = readReplay(o.replayPath);
+        settings = replay->world;
+    }
+    const MapArea area = mapArea(o, replay);
+    const World world(settings);
+    const MapSamples samples = sampleWorld(world, area);
+    std::vector<unsigned char> img = shadedRelief(world, area, samples, settings.waterLevel_m);
+    drawRoads(img, world, area);
+    if (replay) drawReplayPath(img, area, replay->samples);
+    writeMapImages(o, area, img, samples);
+    printMapSummary(o, settings, area, samples, world.roads().roads().size(), replay.has_value());
 }
 
 }  // namespace
