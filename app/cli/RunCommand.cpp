@@ -177,22 +177,37 @@ void ensureDirectory(const std::string& dir, const std::string& option) {
     }
 }
 
-void runReplay(RunOptions o) {
-    // (1) inputs
+// What the checks of a run's options settle before any work.
+struct RunPlan {
+    Replay replay;
+    Backend backend = Backend::Auto;
+    AmbienceVolumeSettings volumeSettings;
+    BaselineSettings baselines;
+    OracleKind oracleKind = OracleKind::Self;
+    Size size;
+    std::string name;  // the replay's label
+};
+
+// Stage (1) of a run: reads the replay and the settings files, checks every option, completes
+// the output paths in `o` and checks them (no output may overwrite an input or another output).
+// Throws InputError.
+RunPlan planRun(RunOptions& o) {
     if (o.replay.empty()) o.replay = defaultReplayPath();
-    const Replay replay = readReplay(o.replay);
-    const Backend backend = parseBackend(o.backend, "--backend");
-    if (backend == Backend::Glfw)
+    RunPlan plan;
+    plan.replay = readReplay(o.replay);
+    const Replay& replay = plan.replay;
+    plan.backend = parseBackend(o.backend, "--backend");
+    if (plan.backend == Backend::Glfw)
         throw InputError("--backend", "run is headless: auto, egl or osmesa");
-    // "volume" is the dynamic ambience volume; the others are the baselines (VolumeAmbience.h).
+    // "volume" is the dynamic ambience volume; the others are the baselines (app/frame/MethodStages.h).
     checkAmbienceMethod(o.ambient, "--ambient");
     const bool useVolume = o.ambient == "volume";
-    AmbienceVolumeSettings volumeSettings;
+    AmbienceVolumeSettings& volumeSettings = plan.volumeSettings;
     if (!o.ambienceConfig.empty()) {
         volumeSettings = ambienceSettingsFromJson(
             readSettingsFile(o.ambienceConfig, "ambience settings file"), o.ambienceConfig);
     }
-    BaselineSettings baselines;
+    BaselineSettings& baselines = plan.baselines;
     if (!o.baselineConfig.empty()) {
         baselines = baselineSettingsFromJson(
             readSettingsFile(o.baselineConfig, "baseline settings file"), o.baselineConfig);
@@ -206,8 +221,8 @@ void runReplay(RunOptions o) {
     if (o.measureEvery < 0) throw InputError("--measure-every", "must be >= 0");
     if (!o.oracle.empty() && o.measureEvery == 0)
         throw InputError("--oracle", "needs --measure-every K");
-    const OracleKind oracleKind = parseOracleKind(o.oracleKind, "--oracle-kind");
-    o.referenceOn = oracleKind == OracleKind::Reference || !o.reference.empty();
+    plan.oracleKind = parseOracleKind(o.oracleKind, "--oracle-kind");
+    o.referenceOn = plan.oracleKind == OracleKind::Reference || !o.reference.empty();
     if (o.referenceOn && o.measureEvery == 0)
         throw InputError(o.reference.empty() ? "--oracle-kind" : "--reference",
                          "needs --measure-every K");
@@ -231,15 +246,15 @@ void runReplay(RunOptions o) {
     if (!useVolume && o.debugOverlay) throw InputError("--debug-overlay", "needs --ambient volume");
     if (!useVolume && (!o.saveAnchors.empty() || !o.loadAnchors.empty()))
         throw InputError("--save-anchors/--load-anchors", "need --ambient volume");
-    const Size size = parseSize(o.size, "--size");
+    plan.size = parseSize(o.size, "--size");
     if (o.every < 1) throw InputError("--every", "must be at least 1");
     if (o.stride < 1) throw InputError("--stride", "must be at least 1");
     if (o.maxFrames < 0) throw InputError("--max-frames", "must be >= 0");
     if (!(o.share > 0.0 && o.share <= 1.0)) throw InputError("--share", "expected (0, 1]");
     // The replay's name is only a label: as a file name it is reduced to a safe stem, so a
     // replay cannot make a run write outside its output folder.
-    const std::string name = replay.name.empty() ? fs::path(o.replay).stem().string() : replay.name;
-    const std::string stem = safeFileStem(name);
+    plan.name = replay.name.empty() ? fs::path(o.replay).stem().string() : replay.name;
+    const std::string stem = safeFileStem(plan.name);
     if (o.out.empty()) o.out = "out/run-" + stem;
     ensureDirectory(o.out, "--out");
     if (o.frames.empty()) o.frames = o.out + "/frames";
@@ -269,125 +284,67 @@ void runReplay(RunOptions o) {
         files.check();
     }
 
-    // (2) platform and renderer
-    auto platform = createOffscreenPlatform(backend, size.width, size.height);
-    const World world(replay.world);
-    RenderSettings rs;
-    rs.width = size.width;
-    rs.height = size.height;
-    rs.drawVehicle = replay.mode == ReplayMode::Drive && !o.noVehicle;
-    Renderer renderer(world, rs);
-    auto stages = makeMethodStages(renderer, o.ambient, volumeSettings, baselines, o.faceSize);
-    AmbienceVolume* volume = stages->volume();
-    if (volume && !o.loadAnchors.empty()) volume->loadAnchors(o.loadAnchors);
-    FrameLoop loop(replay, renderer, *stages, o.stride, o.loops);
-    loop.setDrawMainView(!o.noFrames);
-    stages->setLookupStandIn(o.noFrames);
+    return plan;
+}
 
-    // The error measurement: the oracle's captures use the same capture as the method.
+// A run's error measurement: the meter, the reference oracle's capture and the signatures its
+// caches are kept under.
+struct RunMeasurement {
     std::unique_ptr<ErrorMeter> meter;
+    std::unique_ptr<CubeCaptureGl> referenceCapture;
+    std::string oracleSignature, referenceSignature;
+};
+
+// The meter for --measure-every (none without it), its caches loaded, attached to `stages`.
+RunMeasurement startMeasurement(const RunOptions& o, const RunPlan& plan, const World& world,
+                                MethodAmbienceStages& stages) {
+    RunMeasurement m;
+    // The error measurement: the oracle's captures use the same capture as the method.
     MeasureSettings measureSettings;
     measureSettings.every = o.measureEvery;
-    measureSettings.sunThreshold = volumeSettings.capture.sunThreshold;
+    measureSettings.sunThreshold = plan.volumeSettings.capture.sunThreshold;
     // The oracle depends on the replay, the frames measured and the capture settings only.
-    const std::string oracleSignature =
+    m.oracleSignature =
         fs::path(o.replay).filename().string() + " stride=" + std::to_string(o.stride) +
         " every=" + std::to_string(o.measureEvery) + " face=" + std::to_string(o.faceSize) +
         " sunThreshold=" + std::to_string(measureSettings.sunThreshold) +
         " frames=" + std::to_string(o.maxFrames) +
         (o.loops > 1 ? " loops=" + std::to_string(o.loops) : std::string());
     if (o.measureEvery > 0) {
-        meter = std::make_unique<ErrorMeter>(stages->cubeCapture(), stages->environment(),
-                                             measureSettings);
-        if (!o.oracle.empty() && fs::exists(o.oracle)) meter->loadOracle(o.oracle, oracleSignature);
+        m.meter = std::make_unique<ErrorMeter>(stages.cubeCapture(), stages.environment(),
+                                               measureSettings);
+        if (!o.oracle.empty() && fs::exists(o.oracle))
+            m.meter->loadOracle(o.oracle, m.oracleSignature);
     }
     // The reference oracle: the full scene at 64 x 64 (lighting/ReferenceOracle.h).
-    std::unique_ptr<CubeCaptureGl> referenceCapture;
     const ReferenceSettings& ref = o.referenceSettings;
-    const std::string referenceSignature =
-        oracleSignature + " reference: face=" + std::to_string(ref.faceSize) +
+    m.referenceSignature =
+        m.oracleSignature + " reference: face=" + std::to_string(ref.faceSize) +
         " scene=full rule=" + std::to_string(ref.legendreNodes) +
         " every=" + std::to_string(ref.every) + " trees=" + std::to_string(ref.objectTrees);
-    if (meter && o.referenceOn) {
-        referenceCapture = std::make_unique<CubeCaptureGl>(world, ref.faceSize, CaptureScene::Full);
-        meter->attachReference(*referenceCapture, ref, oracleKind == OracleKind::Reference);
+    if (m.meter && o.referenceOn) {
+        m.referenceCapture =
+            std::make_unique<CubeCaptureGl>(world, ref.faceSize, CaptureScene::Full);
+        m.meter->attachReference(*m.referenceCapture, ref,
+                                 plan.oracleKind == OracleKind::Reference);
         if (!o.reference.empty() && fs::exists(o.reference))
-            meter->loadReference(o.reference, referenceSignature);
+            m.meter->loadReference(o.reference, m.referenceSignature);
     }
-    if (meter) stages->attachMeter(meter.get());
-    // A shorter run (--share) measures a prefix of the full run's witnesses: the same frames,
-    // so it reads the same oracle caches.
-    const int frames = std::max(
-        1, int(std::ceil(o.share * double(o.maxFrames > 0 ? std::min(o.maxFrames, loop.frameCount())
-                                                          : loop.frameCount()))));
+    if (m.meter) stages.attachMeter(m.meter.get());
+    return m;
+}
 
-    RunReport report;
-    report.replay = o.replay;
-    report.backend = toString(platform->backend());
-    report.glVersion = platform->glVersion();
-    report.glRenderer = platform->glRenderer();
-    report.width = size.width;
-    report.height = size.height;
-    report.ambient = o.ambient;
-    report.frameStep_s = loop.frameStep_s();
-    report.loops = o.loops;
-    // Rows in one block from the start: no copy of them all when a long run outgrows it.
-    report.frames.reserve(std::size_t(frames));
-
-    std::unique_ptr<VideoPipe> video;
-    if (!o.video.empty()) {
-        video =
-            std::make_unique<VideoPipe>(o.video, size.width, size.height, 1.0 / loop.frameStep_s());
-    }
-    std::fprintf(stderr, "run: %s, %d frames at %dx%d on %s (%s)\n", name.c_str(), frames,
-                 size.width, size.height, report.backend.c_str(), report.glRenderer.c_str());
-
-    // (3) frames
-    ProgressBar progress(frames);
-    const auto start = std::chrono::steady_clock::now();
-    for (int i = 0; i < frames; ++i) {
-        FrameRecord rec = loop.step();
-        if (volume) {
-            auto& t = report.ambienceTotals;
-            t.nonFiniteAnchorsMax =
-                std::max(t.nonFiniteAnchorsMax, nonFiniteAnchors(volume->store()));
-            ++t.storeScans;
-        }
-        const CameraSample camera = replay.sampleAt(rec.replayTime_s);
-        if (meter && o.screenWitnesses > 0 && meter->referenceFrameNow())
-            takeScreenWitnesses(renderer, camera, stages->ambient(), o.screenWitnesses, rec.index,
-                                rec.timeOfDay_h, *meter);
-        const bool writeFrame = o.frames != "none" && rec.index % o.every == 0;
-        if (writeFrame || video) {
-            auto pixels = renderer.readRgb8();
-            if (o.debugOverlay && volume) {
-                drawAnchorOverlay(pixels, size.width, size.height, renderer.viewProjection(camera),
-                                  camera.position_m, *volume);
-            }
-            if (writeFrame) {
-                char file[64];
-                std::snprintf(file, sizeof(file), "/frame-%05d.png", rec.index);
-                writeImageRgb8(o.frames + file, size.width, size.height, pixels);
-            }
-            if (video) video->write(pixels);
-        }
-        // After everything this frame allocated (captures, lookups, frames written).
-        rec.rss_kB = residentMemory_kB();
-        rec.heap_kB = heapInUse_kB();
-        report.frames.push_back(rec);
-        progress.update(i + 1, rec.frameMs);
-    }
-    progress.finish();
-    report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    report.rssPeak_kB = peakResidentMemory_kB();
-    if (video) video->close();
+// The run's totals from the method (and the volume's store), after the last frame; the
+// anchors saved with --save-anchors.
+void addAmbienceTotals(const RunOptions& o, MethodAmbienceStages& stages, RunReport& report) {
+    AmbienceVolume* volume = stages.volume();
     {
-        const MethodStatistics st = stages->method().methodStatistics();
+        const MethodStatistics st = stages.method().methodStatistics();
         auto& t = report.ambienceTotals;
         t.facesCaptured = st.facesCaptured;
         t.rejectedProbes = st.rejectedProbes;
         t.teleports = st.teleports;
-        t.captureTriangles = stages->cubeCapture().lastTriangles();
+        t.captureTriangles = stages.cubeCapture().lastTriangles();
     }
     if (volume) {
         const AmbienceStatistics& st = volume->statistics();
@@ -401,20 +358,31 @@ void runReplay(RunOptions o) {
         t.expired = st.store.expired;
         if (!o.saveAnchors.empty()) volume->saveAnchors(o.saveAnchors);
     }
-    if (meter) {
+}
+
+// The measurement's part of the report and its files: measure.csv, reference.csv, the caches.
+void finishMeasurement(const RunOptions& o, RunMeasurement& m, RunReport& report) {
+    ErrorMeter* meter = m.meter.get();
+    if (!meter) return;
+    {
         report.measurementJson = measurementJson(*meter);
         writeMeasureCsv(*meter, (fs::path(o.report).parent_path() / "measure.csv").string());
         if (!o.oracle.empty() && meter->oracleCaptures() > 0)
-            meter->saveOracle(o.oracle, oracleSignature);
+            meter->saveOracle(o.oracle, m.oracleSignature);
         if (meter->hasReference()) {
             writeReferenceCsv(*meter, (fs::path(o.report).parent_path() / "reference.csv").string());
             if (!o.reference.empty() && meter->referenceCaptures() > 0)
-                meter->saveReference(o.reference, referenceSignature);
+                meter->saveReference(o.reference, m.referenceSignature);
         }
     }
 
-    // (4) report
-    report.write(o.report);
+}
+
+// What a run prints when it is done.
+void printRunSummary(const RunOptions& o, const RunPlan& plan, int frames, const RunReport& report,
+                     const ErrorMeter* meter, const AmbienceVolume* volume, bool video) {
+    const Size& size = plan.size;
+    const std::string& name = plan.name;
     const auto summary = report.summary();
     std::printf("rendered %d frames of %s at %dx%d on %s (%s)\n", frames, name.c_str(), size.width,
                 size.height, report.backend.c_str(), report.glRenderer.c_str());
@@ -459,6 +427,104 @@ void runReplay(RunOptions o) {
     if (meter)
         std::printf("  measurement: %s\n",
                     (fs::path(o.report).parent_path() / "measure.csv").string().c_str());
+}
+
+void runReplay(RunOptions o) {
+    // (1) inputs
+    const RunPlan plan = planRun(o);
+    // (2) platform and renderer
+    const Replay& replay = plan.replay;
+    const Size& size = plan.size;
+    auto platform = createOffscreenPlatform(plan.backend, size.width, size.height);
+    const World world(replay.world);
+    RenderSettings rs;
+    rs.width = size.width;
+    rs.height = size.height;
+    rs.drawVehicle = replay.mode == ReplayMode::Drive && !o.noVehicle;
+    Renderer renderer(world, rs);
+    auto stages =
+        makeMethodStages(renderer, o.ambient, plan.volumeSettings, plan.baselines, o.faceSize);
+    AmbienceVolume* volume = stages->volume();
+    if (volume && !o.loadAnchors.empty()) volume->loadAnchors(o.loadAnchors);
+    FrameLoop loop(replay, renderer, *stages, o.stride, o.loops);
+    loop.setDrawMainView(!o.noFrames);
+    stages->setLookupStandIn(o.noFrames);
+
+    // The error measurement: the oracle's captures use the same capture as the method.
+    RunMeasurement measurement = startMeasurement(o, plan, world, *stages);
+    ErrorMeter* meter = measurement.meter.get();
+    // A shorter run (--share) measures a prefix of the full run's witnesses: the same frames,
+    // so it reads the same oracle caches.
+    const int frames = std::max(
+        1, int(std::ceil(o.share * double(o.maxFrames > 0 ? std::min(o.maxFrames, loop.frameCount())
+                                                          : loop.frameCount()))));
+
+    RunReport report;
+    report.replay = o.replay;
+    report.backend = toString(platform->backend());
+    report.glVersion = platform->glVersion();
+    report.glRenderer = platform->glRenderer();
+    report.width = size.width;
+    report.height = size.height;
+    report.ambient = o.ambient;
+    report.frameStep_s = loop.frameStep_s();
+    report.loops = o.loops;
+    // Rows in one block from the start: no copy of them all when a long run outgrows it.
+    report.frames.reserve(std::size_t(frames));
+
+    std::unique_ptr<VideoPipe> video;
+    if (!o.video.empty()) {
+        video =
+            std::make_unique<VideoPipe>(o.video, size.width, size.height, 1.0 / loop.frameStep_s());
+    }
+    std::fprintf(stderr, "run: %s, %d frames at %dx%d on %s (%s)\n", plan.name.c_str(), frames,
+                 size.width, size.height, report.backend.c_str(), report.glRenderer.c_str());
+
+    // (3) frames
+    ProgressBar progress(frames);
+    const auto start = std::chrono::steady_clock::now();
+    for (int i = 0; i < frames; ++i) {
+        FrameRecord rec = loop.step();
+        if (volume) {
+            auto& t = report.ambienceTotals;
+            t.nonFiniteAnchorsMax =
+                std::max(t.nonFiniteAnchorsMax, nonFiniteAnchors(volume->store()));
+            ++t.storeScans;
+        }
+        const CameraSample camera = replay.sampleAt(rec.replayTime_s);
+        if (meter && o.screenWitnesses > 0 && meter->referenceFrameNow())
+            takeScreenWitnesses(renderer, camera, stages->ambient(), o.screenWitnesses, rec.index,
+                                rec.timeOfDay_h, *meter);
+        const bool writeFrame = o.frames != "none" && rec.index % o.every == 0;
+        if (writeFrame || video) {
+            auto pixels = renderer.readRgb8();
+            if (o.debugOverlay && volume) {
+                drawAnchorOverlay(pixels, size.width, size.height, renderer.viewProjection(camera),
+                                  camera.position_m, *volume);
+            }
+            if (writeFrame) {
+                char file[64];
+                std::snprintf(file, sizeof(file), "/frame-%05d.png", rec.index);
+                writeImageRgb8(o.frames + file, size.width, size.height, pixels);
+            }
+            if (video) video->write(pixels);
+        }
+        // After everything this frame allocated (captures, lookups, frames written).
+        rec.rss_kB = residentMemory_kB();
+        rec.heap_kB = heapInUse_kB();
+        report.frames.push_back(rec);
+        progress.update(i + 1, rec.frameMs);
+    }
+    progress.finish();
+    report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    report.rssPeak_kB = peakResidentMemory_kB();
+    if (video) video->close();
+    addAmbienceTotals(o, *stages, report);
+    finishMeasurement(o, measurement, report);
+
+    // (4) report
+    report.write(o.report);
+    printRunSummary(o, plan, frames, report, meter, volume, video != nullptr);
 }
 
 }  // namespace
