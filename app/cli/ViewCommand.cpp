@@ -9,6 +9,8 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <string>
+#include <utility>
 
 #include <CLI/CLI.hpp>
 #include <glm/geometric.hpp>
@@ -72,10 +74,8 @@ bool keyDown(GLFWwindow* w, int key) {
     return glfwGetKey(w, key) == GLFW_PRESS;
 }
 
-void runView(const ViewOptions& o) {
-    Replay replay;
-    const bool haveReplay = !o.replay.empty();
-    if (haveReplay) replay = readReplay(o.replay);
+// Checks every option and the files before any work; returns the window size.
+Size checkViewOptions(const ViewOptions& o) {
     const Size size = parseSize(o.size, "--size");
     checkAmbienceMethod(o.ambient, "--ambient");
     if (o.debugOverlay && o.ambient != "volume")
@@ -84,32 +84,111 @@ void runView(const ViewOptions& o) {
     if (!o.screenshot.empty() && o.frames == 0) {
         throw InputError("--screenshot", "needs --frames N (the frame to save)");
     }
+    FilePlan files;
+    files.input("--replay", o.replay);
+    files.output("--screenshot", o.screenshot);
+    files.check();
+    if (!o.replay.empty() && resolvedPath(o.record) == resolvedPath(o.replay))
+        throw InputError("--record", "'" + o.record + "' is also the input --replay");
+    return size;
+}
 
-    {
-        FilePlan files;
-        files.input("--replay", o.replay);
-        files.output("--screenshot", o.screenshot);
-        files.check();
-        if (!o.replay.empty() && resolvedPath(o.record) == resolvedPath(o.replay))
-            throw InputError("--record", "'" + o.record + "' is also the input --replay");
-    }
-
-    std::unique_ptr<Platform> platform;
+std::unique_ptr<Platform> openWindow(const Size& size) {
     try {
-        platform = createGlfwPlatform(size.width, size.height, "ambience", true);
+        return createGlfwPlatform(size.width, size.height, "ambience", true);
     } catch (const PlatformUnavailable& e) {
         // Almost always a machine without a display: say what to do instead.
         throw InputError("view", std::string(e.what()) +
                                      "; 'view' opens a window: run it on a display, under "
                                      "'xvfb-run', or use 'ambience run' to render headless");
     }
+}
+
+// Free flight: W A S D move, Q E down / up, Shift faster, right mouse button + drag looks
+// around; never below 1 m above the ground.
+CameraSample flyFree(GLFWwindow* window, const World& world, FreeCamera& free, double& lastX,
+                     double& lastY) {
+    double x = 0.0, y = 0.0;
+    glfwGetCursorPos(window, &x, &y);
+    if (glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS) {
+        free.yaw_rad += (x - lastX) * 0.004;
+        free.pitch_rad = std::clamp(free.pitch_rad - (y - lastY) * 0.004, -1.5, 1.5);
+    }
+    lastX = x;
+    lastY = y;
+    const CameraSample s = free.sample();
+    const glm::dvec3 right = glm::normalize(glm::cross(s.forward, glm::dvec3(0, 1, 0)));
+    const double speed = (keyDown(window, GLFW_KEY_LEFT_SHIFT) ? 120.0 : 20.0) * kStep_s;
+    glm::dvec3 move(0.0);
+    if (keyDown(window, GLFW_KEY_W)) move += s.forward;
+    if (keyDown(window, GLFW_KEY_S)) move -= s.forward;
+    if (keyDown(window, GLFW_KEY_D)) move += right;
+    if (keyDown(window, GLFW_KEY_A)) move -= right;
+    if (keyDown(window, GLFW_KEY_E)) move.y += 1.0;
+    if (keyDown(window, GLFW_KEY_Q)) move.y -= 1.0;
+    free.position += move * speed;
+    const double ground = world.height(free.position.x, free.position.z) + 1.0;
+    free.position.y = std::max(free.position.y, ground);
+    return free.sample();
+}
+
+// The R key: the camera at the viewer's fixed step, written as a fly replay of `world`.
+class CameraRecorder {
+  public:
+    CameraRecorder(const WorldSettings& world, std::string path)
+        : world_(world), path_(std::move(path)) {}
+    void toggle(double timeOfDay_h) {
+        on_ = !on_;
+        if (on_) {
+            recording_ = Replay();
+            recording_.name = "recorded";
+            recording_.description = "recorded in the viewer";
+            recording_.world = world_;
+            recording_.mode = ReplayMode::Fly;
+            recording_.timeOfDayStart_h = timeOfDay_h;
+            recording_.timeRate = 0.0;
+            recording_.step_s = kStep_s;
+            std::fprintf(stderr, "view: recording\n");
+        } else if (!recording_.samples.empty()) {
+            writeReplay(recording_, path_);
+            std::fprintf(stderr, "view: recorded %zu samples to %s\n", recording_.samples.size(),
+                         path_.c_str());
+        }
+    }
+    void add(const CameraSample& camera) {
+        if (!on_) return;
+        CameraSample s = camera;
+        s.time_s = double(recording_.samples.size()) * kStep_s;
+        s.cut = false;
+        recording_.samples.push_back(s);
+    }
+    // At exit: what is still being recorded is written.
+    void finish() {
+        if (on_ && !recording_.samples.empty()) writeReplay(recording_, path_);
+    }
+
+  private:
+    WorldSettings world_;
+    std::string path_;
+    Replay recording_;
+    bool on_ = false;
+};
+
+void runView(const ViewOptions& o) {
+    const Size size = checkViewOptions(o);
+    Replay replay;
+    const bool haveReplay = !o.replay.empty();
+    if (haveReplay) replay = readReplay(o.replay);
+
+    std::unique_ptr<Platform> platform = openWindow(size);
     GLFWwindow* window = static_cast<GLFWwindow*>(platform->nativeWindow());
     const World world(replay.world);
     RenderSettings rs;
     rs.width = size.width;
     rs.height = size.height;
     Renderer renderer(world, rs);
-    auto stages = makeMethodStages(renderer, o.ambient, AmbienceVolumeSettings{}, BaselineSettings{});
+    auto stages =
+        makeMethodStages(renderer, o.ambient, AmbienceVolumeSettings{}, BaselineSettings{});
     AmbienceVolume* volume = stages->volume();
     // The frame of `run`, with the camera and the clocks from the keyboard and the mouse.
     FrameLoop loop(renderer, *stages);
@@ -124,8 +203,7 @@ void runView(const ViewOptions& o) {
     } else {
         free.position = glm::dvec3(0.0, world.height(0.0, 0.0) + 20.0, 0.0);
     }
-    Replay recording;
-    bool recordingOn = false;
+    CameraRecorder recorder(replay.world, o.record);
     int screenshots = 0;
     bool prev[GLFW_KEY_LAST + 1] = {};
     auto pressed = [&](int key) {
@@ -164,55 +242,12 @@ void runView(const ViewOptions& o) {
                 timeOfDay_h = replay.timeOfDayAt_h(replayTime_s);
             }
         } else {
-            double x = 0.0, y = 0.0;
-            glfwGetCursorPos(window, &x, &y);
-            if (glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS) {
-                free.yaw_rad += (x - lastX) * 0.004;
-                free.pitch_rad = std::clamp(free.pitch_rad - (y - lastY) * 0.004, -1.5, 1.5);
-            }
-            lastX = x;
-            lastY = y;
-            const CameraSample s = free.sample();
-            const glm::dvec3 right = glm::normalize(glm::cross(s.forward, glm::dvec3(0, 1, 0)));
-            const double speed = (keyDown(window, GLFW_KEY_LEFT_SHIFT) ? 120.0 : 20.0) * kStep_s;
-            glm::dvec3 move(0.0);
-            if (keyDown(window, GLFW_KEY_W)) move += s.forward;
-            if (keyDown(window, GLFW_KEY_S)) move -= s.forward;
-            if (keyDown(window, GLFW_KEY_D)) move += right;
-            if (keyDown(window, GLFW_KEY_A)) move -= right;
-            if (keyDown(window, GLFW_KEY_E)) move.y += 1.0;
-            if (keyDown(window, GLFW_KEY_Q)) move.y -= 1.0;
-            free.position += move * speed;
-            const double ground = world.height(free.position.x, free.position.z) + 1.0;
-            free.position.y = std::max(free.position.y, ground);
-            cam = free.sample();
+            cam = flyFree(window, world, free, lastX, lastY);
         }
 
         // Record the camera at the fixed step.
-        if (pressed(GLFW_KEY_R)) {
-            recordingOn = !recordingOn;
-            if (recordingOn) {
-                recording = Replay();
-                recording.name = "recorded";
-                recording.description = "recorded in the viewer";
-                recording.world = replay.world;
-                recording.mode = ReplayMode::Fly;
-                recording.timeOfDayStart_h = timeOfDay_h;
-                recording.timeRate = 0.0;
-                recording.step_s = kStep_s;
-                std::fprintf(stderr, "view: recording\n");
-            } else if (!recording.samples.empty()) {
-                writeReplay(recording, o.record);
-                std::fprintf(stderr, "view: recorded %zu samples to %s\n", recording.samples.size(),
-                             o.record.c_str());
-            }
-        }
-        if (recordingOn) {
-            CameraSample s = cam;
-            s.time_s = double(recording.samples.size()) * kStep_s;
-            s.cut = false;
-            recording.samples.push_back(s);
-        }
+        if (pressed(GLFW_KEY_R)) recorder.toggle(timeOfDay_h);
+        recorder.add(cam);
 
         // Every stage of the frame (FrameLoop), on the window's camera and clocks.
         FrameInput input;
@@ -241,7 +276,7 @@ void runView(const ViewOptions& o) {
         platform->swapBuffers();
         if (last) break;
     }
-    if (recordingOn && !recording.samples.empty()) writeReplay(recording, o.record);
+    recorder.finish();
 }
 
 }  // namespace
