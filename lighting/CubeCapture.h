@@ -26,8 +26,8 @@ inline constexpr CubeFaceMask cubeFaceBit(int face) {
 struct CubeCaptureStats {
     int faces = 0;              // faces rendered by the call
     std::size_t triangles = 0;  // triangles submitted per face (capture scene size)
-    double milliseconds = 0.0;  // wall time of the call, read-back included
-    double msPerFace() const { return faces > 0 ? milliseconds / faces : 0.0; }
+    double wall_ms = 0.0;  // wall time of the call, read-back included
+    double perFace_ms() const { return faces > 0 ? wall_ms / faces : 0.0; }
 };
 
 class CubeCapture {

@@ -82,7 +82,7 @@ void runProbe(const ProbeOptions& o) {
         "(%.2f ms in the first call, which builds the scene)\n",
         toString(platform->backend()), platform->glRenderer().c_str(), toString(scene),
         stats.triangles,
-        warm.msPerFace(), stats.msPerFace());
+        warm.perFace_ms(), stats.perFace_ms());
 }
 
 }  // namespace

@@ -387,7 +387,7 @@ void printRunSummary(const RunOptions& o, const RunPlan& plan, int frames, const
     std::printf("rendered %d frames of %s at %dx%d on %s (%s)\n", frames, name.c_str(), size.width,
                 size.height, report.backend.c_str(), report.glRenderer.c_str());
     std::printf("frame time median %.1f ms (%.1f fps), p95 %.1f ms; triangles median %.0f\n",
-                summary.frameMedianMs, 1000.0 / summary.frameMedianMs, summary.frameP95Ms,
+                summary.frameMedian_ms, 1000.0 / summary.frameMedian_ms, summary.frameP95_ms,
                 summary.trianglesMedian);
     if (meter) {
         const Summary e = summarize(meter->errors()), p = summarize(meter->pops());
@@ -513,7 +513,7 @@ void runReplay(RunOptions o) {
         rec.rss_kB = residentMemory_kB();
         rec.heap_kB = heapInUse_kB();
         report.frames.push_back(rec);
-        progress.update(i + 1, rec.frameMs);
+        progress.update(i + 1, rec.frame_ms);
     }
     progress.finish();
     report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -213,7 +213,7 @@ TimingStats timingStats(std::vector<double> v) {
 RunReport::Summary RunReport::summary() const {
     std::vector<double> ms, tris;
     for (const FrameRecord& f : frames) {
-        ms.push_back(f.frameMs);
+        ms.push_back(f.frame_ms);
         tris.push_back(double(f.render.triangles));
     }
     return {timingStats(ms).median, timingStats(ms).p95, timingStats(tris).median};
@@ -249,20 +249,20 @@ void addTimingsJson(json& j, const std::vector<FrameRecord>& frames) {
     json stages = json::object();
     for (int s = 0; s < kFrameStages; ++s) {
         std::vector<double> v;
-        for (const FrameRecord& f : frames) v.push_back(f.stageMs[s]);
+        for (const FrameRecord& f : frames) v.push_back(f.stage_ms[s]);
         stages[toString(FrameStage(s))] = statsJson(v);
     }
-    std::vector<double> frameMs, sceneMs, tris;
+    std::vector<double> frame_ms, scene_ms, tris;
     for (const FrameRecord& f : frames) {
-        frameMs.push_back(f.frameMs);
-        sceneMs.push_back(f.render.sceneMs);
+        frame_ms.push_back(f.frame_ms);
+        scene_ms.push_back(f.render.scene_ms);
         tris.push_back(double(f.render.triangles));
     }
     j["stages_ms"] = stages;
-    j["frame_ms"] = statsJson(frameMs);
-    j["drawListBuild_ms"] = statsJson(sceneMs);
+    j["frame_ms"] = statsJson(frame_ms);
+    j["drawListBuild_ms"] = statsJson(scene_ms);
     j["triangles"] = statsJson(tris);
-    const double median = timingStats(frameMs).median;
+    const double median = timingStats(frame_ms).median;
     j["fps_median"] = median > 0 ? 1000.0 / median : 0.0;
 }
 
@@ -289,24 +289,24 @@ json ambienceJson(const RunReport& report) {
     const std::vector<FrameRecord>& frames = report.frames;
     // The ambience's share of frame time: stages 2-5 plus the lookups the draw makes
     // (terrain corners and objects ask the volume while the draw list is built).
-    double ambienceMs = 0.0, captureMs = 0.0, totalMs = 0.0;
-    std::vector<double> anchors, bytes, lookupMs, perFrameAmbienceMs;
+    double ambience_ms = 0.0, capture_ms = 0.0, total_ms = 0.0;
+    std::vector<double> anchors, bytes, lookup_ms, perFrameAmbience_ms;
     std::int64_t faces = 0;
     std::size_t maxAnchors = 0, maxBytes = 0;
     for (const FrameRecord& f : frames) {
-        ambienceMs += f.stageMs[int(FrameStage::Predict)] +
-                      f.stageMs[int(FrameStage::Capture)] + f.stageMs[int(FrameStage::Store)] +
-                      f.stageMs[int(FrameStage::Interpolate)] + f.ambience.lookupMs;
-        perFrameAmbienceMs.push_back(
-            f.stageMs[int(FrameStage::Predict)] + f.stageMs[int(FrameStage::Capture)] +
-            f.stageMs[int(FrameStage::Store)] + f.stageMs[int(FrameStage::Interpolate)] +
-            f.ambience.lookupMs);
+        ambience_ms += f.stage_ms[int(FrameStage::Predict)] +
+                      f.stage_ms[int(FrameStage::Capture)] + f.stage_ms[int(FrameStage::Store)] +
+                      f.stage_ms[int(FrameStage::Interpolate)] + f.ambience.lookup_ms;
+        perFrameAmbience_ms.push_back(
+            f.stage_ms[int(FrameStage::Predict)] + f.stage_ms[int(FrameStage::Capture)] +
+            f.stage_ms[int(FrameStage::Store)] + f.stage_ms[int(FrameStage::Interpolate)] +
+            f.ambience.lookup_ms);
         faces += f.ambience.faces;
-        captureMs += f.stageMs[int(FrameStage::Capture)];
-        totalMs += f.frameMs;
+        capture_ms += f.stage_ms[int(FrameStage::Capture)];
+        total_ms += f.frame_ms;
         anchors.push_back(double(f.ambience.anchors));
         bytes.push_back(double(f.ambience.bytes));
-        lookupMs.push_back(f.ambience.lookupMs);
+        lookup_ms.push_back(f.ambience.lookup_ms);
         maxAnchors = std::max(maxAnchors, f.ambience.anchors);
         maxBytes = std::max(maxBytes, f.ambience.bytes);
     }
@@ -332,14 +332,14 @@ json ambienceJson(const RunReport& report) {
         {"captureTrianglesPerFace", t.captureTriangles},
         {"storeScans", t.storeScans},
         {"nonFiniteAnchorsMax", t.nonFiniteAnchorsMax},
-        {"lookup_ms", statsJson(lookupMs)},
+        {"lookup_ms", statsJson(lookup_ms)},
         // Stages 2-5 and the draw's lookups, per frame.
-        {"ambience_ms", statsJson(perFrameAmbienceMs)},
+        {"ambience_ms", statsJson(perFrameAmbience_ms)},
         {"facesPerSecond", frames.size() > 1 && frameStep_s > 0
                                ? double(faces) / (double(frames.size()) * frameStep_s)
                                : 0.0},
-        {"shareOfFrameTime", totalMs > 0 ? ambienceMs / totalMs : 0.0},
-        {"captureShareOfFrameTime", totalMs > 0 ? captureMs / totalMs : 0.0},
+        {"shareOfFrameTime", total_ms > 0 ? ambience_ms / total_ms : 0.0},
+        {"captureShareOfFrameTime", total_ms > 0 ? capture_ms / total_ms : 0.0},
     };
     // Only a method with an anchor store is scanned.
     if (t.storeScans > 0) a["storeFinite"] = t.nonFiniteAnchorsMax == 0;
@@ -356,25 +356,25 @@ json frameRowJson(const FrameRecord& f, bool volume) {
            {"rss_kB", f.rss_kB},
            {"heap_kB", f.heap_kB},
            {"timeOfDay_h", f.timeOfDay_h},
-           {"frame_ms", f.frameMs},
+           {"frame_ms", f.frame_ms},
            {"triangles", f.render.triangles},
            {"terrainPatches", f.render.terrainPatches},
            {"terrainPatchesDrawn", f.render.terrainPatchesDrawn},
            {"objectsDrawn", f.render.objectsDrawn},
            {"terrainRebuilt", f.render.terrainRebuilt}};
     for (int s = 0; s < kFrameStages; ++s)
-        r[std::string(toString(FrameStage(s))) + "_ms"] = f.stageMs[s];
+        r[std::string(toString(FrameStage(s))) + "_ms"] = f.stage_ms[s];
     if (volume) {
         r["anchors"] = f.ambience.anchors;
         r["anchorBytes"] = f.ambience.bytes;
         r["facesCaptured"] = f.ambience.faces;
         r["finestLevel"] = f.ambience.finestLevel;
         r["ambientLookups"] = f.ambience.lookups;
-        r["ambientLookup_ms"] = f.ambience.lookupMs;
-        r["volumePredict_ms"] = f.ambience.predictMs;
-        r["volumeCapture_ms"] = f.ambience.captureMs;
-        r["volumeProject_ms"] = f.ambience.projectMs;
-        r["volumeStore_ms"] = f.ambience.storeMs;
+        r["ambientLookup_ms"] = f.ambience.lookup_ms;
+        r["volumePredict_ms"] = f.ambience.predict_ms;
+        r["volumeCapture_ms"] = f.ambience.capture_ms;
+        r["volumeProject_ms"] = f.ambience.project_ms;
+        r["volumeStore_ms"] = f.ambience.store_ms;
         r["anchorsPerLevel"] =
             std::vector<std::size_t>(f.ambience.anchorsPerLevel.begin(),
                                      f.ambience.anchorsPerLevel.begin() + f.ambience.levels);
@@ -418,16 +418,16 @@ void writeReportCsv(const std::string& csvPath, const std::vector<FrameRecord>& 
     }
     csv << ",rss_kB,heap_kB,cut,loop,popMove\n";
     for (const FrameRecord& f : frames) {
-        csv << f.index << "," << f.time_s << "," << f.timeOfDay_h << "," << f.frameMs;
-        for (int s = 0; s < kFrameStages; ++s) csv << "," << f.stageMs[s];
+        csv << f.index << "," << f.time_s << "," << f.timeOfDay_h << "," << f.frame_ms;
+        for (int s = 0; s < kFrameStages; ++s) csv << "," << f.stage_ms[s];
         csv << "," << f.render.triangles << "," << f.render.terrainPatches << ","
             << f.render.terrainPatchesDrawn << "," << f.render.objectsDrawn << ","
             << (f.render.terrainRebuilt ? 1 : 0);
         if (volume) {
             csv << "," << f.ambience.anchors << "," << f.ambience.bytes << "," << f.ambience.faces
                 << "," << f.ambience.finestLevel << "," << f.ambience.lookups << ","
-                << f.ambience.lookupMs << "," << f.ambience.predictMs << "," << f.ambience.captureMs
-                << "," << f.ambience.projectMs << "," << f.ambience.storeMs;
+                << f.ambience.lookup_ms << "," << f.ambience.predict_ms << "," << f.ambience.capture_ms
+                << "," << f.ambience.project_ms << "," << f.ambience.store_ms;
             for (std::size_t l = 0; l < csvLevels; ++l) {
                 const bool held = l < std::size_t(f.ambience.levels);
                 csv << "," << (held ? f.ambience.anchorsPerLevel[l] : 0);

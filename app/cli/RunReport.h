@@ -45,7 +45,7 @@ class VideoPipe {
 class ProgressBar {
   public:
     explicit ProgressBar(int total);
-    void update(int done, double frameMs);
+    void update(int done, double frame_ms);
     void finish();
 
   private:
@@ -102,7 +102,7 @@ struct RunReport {
     std::string measurementJson;
 
     struct Summary {
-        double frameMedianMs = 0.0, frameP95Ms = 0.0, trianglesMedian = 0.0;
+        double frameMedian_ms = 0.0, frameP95_ms = 0.0, trianglesMedian = 0.0;
     };
     Summary summary() const;
     // Writes `path` (JSON) and the per-frame rows as CSV beside it (same name, .csv).

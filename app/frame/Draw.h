@@ -47,8 +47,8 @@ struct RenderStats {
     std::size_t triangles = 0;
     std::size_t terrainPatches = 0, terrainPatchesDrawn = 0, objectsDrawn = 0;
     bool terrainRebuilt = false;
-    double sceneMs = 0.0;  // building the draw list (CPU)
-    double drawMs = 0.0;   // submitting GL commands (CPU)
+    double scene_ms = 0.0;  // building the draw list (CPU)
+    double draw_ms = 0.0;   // submitting GL commands (CPU)
 };
 
 // The main view as the frame loop sees it.

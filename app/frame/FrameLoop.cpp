@@ -87,7 +87,7 @@ FrameRecord FrameLoop::run(FrameState& frame, Clock::time_point start) {
     Clock::time_point mark = start;
     auto lap = [&](FrameStage stage) {
         const auto now = Clock::now();
-        rec.stageMs[int(stage)] = std::chrono::duration<double, std::milli>(now - mark).count();
+        rec.stage_ms[int(stage)] = std::chrono::duration<double, std::milli>(now - mark).count();
         mark = now;
     };
     view_.setViewTimeOfDay(frame.timeOfDay_h);
@@ -115,7 +115,7 @@ FrameRecord FrameLoop::run(FrameState& frame, Clock::time_point start) {
     rec.timeOfDay_h = frame.timeOfDay_h;
     rec.cut = frame.camera.cut;
     lap(FrameStage::Measure);
-    rec.frameMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    rec.frame_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     // The method's state and its error, outside the frame's time.
     ambience_.measure(frame, rec);
     return rec;

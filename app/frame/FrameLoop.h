@@ -82,8 +82,8 @@ struct FrameRecord {
                                                                 // point (measured runs; NaN: none)
     std::size_t rss_kB = 0;      // resident memory of the process after the frame (0: unknown)
     std::size_t heap_kB = 0;     // of which malloc has handed out and not had back (0: unknown)
-    std::array<double, kFrameStages> stageMs{};  // CPU wall time per stage
-    double frameMs = 0.0;                        // all stages
+    std::array<double, kFrameStages> stage_ms{};  // CPU wall time per stage
+    double frame_ms = 0.0;                        // all stages
     RenderStats render;
     // The ambience method (ours or a baseline): state after the frame.
     struct Ambience {
@@ -92,10 +92,10 @@ struct FrameRecord {
         int faces = 0;            // cube faces captured this frame
         int finestLevel = 0;      // the scheduler's finest lattice level this frame
         std::size_t lookups = 0;  // ambient lookups answered for the draw
-        double lookupMs = 0.0;    // CPU time of those lookups (inside the draw stage)
-        double captureMs = 0.0;   // of which GL capture (inside the capture stage)
+        double lookup_ms = 0.0;    // CPU time of those lookups (inside the draw stage)
+        double capture_ms = 0.0;   // of which GL capture (inside the capture stage)
         // The volume's own timings of its stages [ms] (project = SH projection of the faces).
-        double predictMs = 0.0, projectMs = 0.0, storeMs = 0.0;
+        double predict_ms = 0.0, project_ms = 0.0, store_ms = 0.0;
         // Alive anchors per level, coarsest first: the first `levels` entries (0 without an
         // anchor store). Inline, so that the rows of a long run allocate nothing per frame.
         std::array<std::size_t, kMaxAnchorLevels> anchorsPerLevel{};

@@ -15,7 +15,7 @@ namespace amb {
 
 namespace {
 using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t0) {
+double elapsed_ms(Clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 }  // namespace
@@ -59,7 +59,7 @@ glm::vec3 MethodAmbient::cornerIrradiance(const glm::dvec3& position_m,
     const glm::vec3 e = glm::max(shIrradiance(sh, glm::vec3(normal)), glm::vec3(0.0f));
     ++lookups_;
     note(position_m);
-    lookupMs_ += msSince(t0);
+    lookup_ms_ += elapsed_ms(t0);
     return e;
 }
 
@@ -77,7 +77,7 @@ void MethodAmbient::cornerIrradianceBatch(std::size_t count, const glm::dvec3* p
         note(positions_m[i]);
     }
     lookups_ += count;
-    lookupMs_ += msSince(t0);
+    lookup_ms_ += elapsed_ms(t0);
 }
 
 std::uint32_t MethodAmbient::objectSet(const glm::dvec3& position_m,
@@ -89,7 +89,7 @@ std::uint32_t MethodAmbient::objectSet(const glm::dvec3& position_m,
     sets.push_back(AmbientSet{m.r, m.g, m.b});
     ++lookups_;
     note(position_m);
-    lookupMs_ += msSince(t0);
+    lookup_ms_ += elapsed_ms(t0);
     return std::uint32_t(sets.size() - 1);
 }
 
@@ -169,11 +169,11 @@ void MethodAmbienceStages::measure(const FrameState& frame, FrameRecord& rec) {
     a.bytes = st.bytes;
     a.faces = st.facesThisFrame;
     a.lookups = ambient_->lookups();
-    a.lookupMs = ambient_->lookupMs();
-    a.captureMs = st.capture_s * 1e3;
-    a.predictMs = st.predict_s * 1e3;
-    a.projectMs = st.project_s * 1e3;
-    a.storeMs = st.store_s * 1e3;
+    a.lookup_ms = ambient_->lookup_ms();
+    a.capture_ms = st.capture_s * 1e3;
+    a.predict_ms = st.predict_s * 1e3;
+    a.project_ms = st.project_s * 1e3;
+    a.store_ms = st.store_s * 1e3;
     if (const AmbienceVolume* v = volume()) {
         const AmbienceStatistics& vs = v->statistics();
         a.finestLevel = vs.finestLevel;
@@ -191,7 +191,7 @@ void MethodAmbienceStages::measure(const FrameState& frame, FrameRecord& rec) {
         const auto t0 = Clock::now();
         method_->shAt(standInX_.size(), standInX_.data(), standInZ_.data(), standInSh_.data());
         a.lookups = standInX_.size();
-        a.lookupMs = msSince(t0);
+        a.lookup_ms = elapsed_ms(t0);
         addLookups(standInX_, standInZ_);
     }
 }

@@ -44,16 +44,16 @@ class MethodAmbient final : public AmbientSource {
     // Lookups and CPU time spent answering them since the last reset (they run inside the draw
     // stage, where the scene asks for them), and where they were.
     std::size_t lookups() const { return lookups_; }
-    double lookupMs() const { return lookupMs_; }
+    double lookup_ms() const { return lookup_ms_; }
     const std::vector<double>& lookupX() const { return x_; }
     const std::vector<double>& lookupZ() const { return z_; }
-    void resetCounters() { lookups_ = 0, lookupMs_ = 0.0, x_.clear(), z_.clear(); }
+    void resetCounters() { lookups_ = 0, lookup_ms_ = 0.0, x_.clear(), z_.clear(); }
 
   private:
     void note(const glm::dvec3& p) const;
     const AmbienceMethod& method_;
     mutable std::size_t lookups_ = 0;
-    mutable double lookupMs_ = 0.0;
+    mutable double lookup_ms_ = 0.0;
     mutable std::vector<double> x_, z_;
     mutable std::vector<double> batchX_, batchZ_;  // scratch of the batch
     mutable std::vector<ShRgb> batchSh_;

@@ -186,7 +186,7 @@ CubeCaptureStats CubeCaptureGl::capture(const glm::dvec3& position_m, double tim
         const float scale = float(sunSolidAngle / cubeTexelSolidAngle(i, j, n_));
         for (int c = 0; c < 3; ++c) dst[3 * t + c] += sky_.sunDiscRadiance[c] * scale;
     }
-    stats.milliseconds = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    stats.wall_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     lastStats_ = stats;
     return stats;
 }
