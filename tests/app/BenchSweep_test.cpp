@@ -1,4 +1,4 @@
-// BenchSweep_test.cpp — the sweep file of `ambience bench` (app/BenchSweep.h): what it accepts,
+// BenchSweep_test.cpp — the sweep file of `ambience bench` (app/bench/BenchSweep.h): what it accepts,
 // and the inputs the fuzzer (tests/fuzz/fuzz_sweep) showed must be refused.
 #include <gtest/gtest.h>
 

@@ -1,11 +1,15 @@
 // FuzzStubs.h — a tiny CPU capture and a flat environment, so the settings and oracle targets
-// can build the objects that consume what the readers accepted (no GL, no world).
+// can build the objects that consume what the readers accepted (no GL, no world); and the drive
+// every settings target gives the methods it builds.
 #pragma once
 
+#include <cmath>
 #include <vector>
 
 #include <glm/vec3.hpp>
 
+#include "FuzzSupport.h"
+#include "lighting/AmbienceMethod.h"
 #include "lighting/CubeCapture.h"
 #include "lighting/ProbeEnvironment.h"
 
@@ -44,5 +48,23 @@ class StubEnvironment final : public ProbeEnvironment {
         rgb.assign(std::size_t(6 * n * n * 3), 0.3f);
     }
 };
+
+// A short drive of `method` (14 frames at 30 m/s, so a probe completes and is stored, with a few
+// lookups noted for the methods that place probes by demand); then every lookup must be finite.
+inline void driveAndCheck(AmbienceMethod& method) {
+    const double x[] = {0.0, 5.0, -30.0}, z[] = {0.0, 7.0, 12.0};
+    for (int f = 0; f < 14; ++f) {
+        const glm::dvec3 camera(0.5 * f, 2.0, 0.25 * f);
+        method.noteLookups(3, x, z);
+        method.predictStage(camera, glm::dvec3(30.0, 0.0, 15.0), 12.0 + 0.001 * f, 1.0 / 60);
+        method.captureStage();
+        method.storeStage();
+    }
+    for (double p : {0.0, 3.0, -40.0, 1000.0}) {
+        const ShRgb sh = method.shAt(p, 0.5 * p);
+        for (const auto& k : sh.c)
+            for (int c = 0; c < 3; ++c) AMB_FUZZ_EXPECT(std::isfinite(k[c]));
+    }
+}
 
 }  // namespace amb::fuzz

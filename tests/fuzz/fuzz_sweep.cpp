@@ -1,4 +1,4 @@
-// fuzz_sweep — amb::parseSweep (app/BenchSweep.h), the parameter points of `ambience bench
+// fuzz_sweep — amb::parseSweep (app/bench/BenchSweep.h), the parameter points of `ambience bench
 // --sweep`. Accepted points must hold what the bench relies on: the default point first, unique
 // labels without separators, 1-64 faces per frame, settings objects that serialise.
 #include <set>
@@ -9,7 +9,7 @@
 #include "world/Error.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-    // The names `ambience run --ambient` takes (app/VolumeAmbience.cpp).
+    // The names `ambience run --ambient` takes (app/frame/MethodStages.cpp).
     static const std::vector<std::string> methods = {"volume", "nearest",  "grid",      "reactive",
                                                      "object", "constant", "hemisphere"};
     std::vector<amb::SweepPoint> points;

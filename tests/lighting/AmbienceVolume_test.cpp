@@ -9,6 +9,8 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+
+#include "ShChecks.h"
 #include <glm/geometric.hpp>
 
 #include "FakeCubeCapture.h"
@@ -18,26 +20,14 @@
 namespace amb {
 namespace {
 
+using testing_support::allFinite;
+using testing_support::maxDiff;
+
 using testing_support::FakeCubeCapture;
 using testing_support::FlatProbeEnvironment;
 using testing_support::Poison;
 
 constexpr double kDt = 1.0 / 60.0;
-
-bool allFinite(const ShRgb& sh) {
-    for (const auto& c : sh.c) {
-        if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.z)) return false;
-    }
-    return true;
-}
-
-double maxDiff(const ShRgb& a, const ShRgb& b) {
-    double m = 0.0;
-    for (int k = 0; k < kShCoefficients; ++k) {
-        for (int ch = 0; ch < 3; ++ch) m = std::max(m, std::fabs(double(a.c[k][ch]) - b.c[k][ch]));
-    }
-    return m;
-}
 
 struct Rig {
     FakeCubeCapture capture;

@@ -13,11 +13,16 @@
 
 #include <gtest/gtest.h>
 
+#include "ShChecks.h"
+
 #include "lighting/AnchorField.h"
 #include "lighting/AnchorStore.h"
 
 namespace amb {
 namespace {
+
+using testing_support::allFinite;
+using testing_support::maxDiff;
 
 ShRgb makeSh(float v) {
     ShRgb sh;
@@ -25,24 +30,6 @@ ShRgb makeSh(float v) {
         sh.c[k] = glm::vec3(v * (1.0f + k), v * (0.5f + 0.25f * k), v * (2.0f - 0.1f * k));
     }
     return sh;
-}
-
-// Largest absolute coefficient difference.
-double maxDiff(const ShRgb& a, const ShRgb& b) {
-    double m = 0.0;
-    for (int k = 0; k < kShCoefficients; ++k) {
-        for (int ch = 0; ch < 3; ++ch) m = std::max(m, std::fabs(double(a.c[k][ch]) - b.c[k][ch]));
-    }
-    return m;
-}
-
-bool allFinite(const ShRgb& sh) {
-    for (int k = 0; k < kShCoefficients; ++k) {
-        for (int ch = 0; ch < 3; ++ch) {
-            if (!std::isfinite(sh.c[k][ch])) return false;
-        }
-    }
-    return true;
 }
 
 // A store whose anchors are inserted at once at full weight (blend time 0); bilinear unless

@@ -14,12 +14,17 @@
 
 #include <gtest/gtest.h>
 
+#include "ShChecks.h"
+
 #include "FakeCubeCapture.h"
 #include "lighting/CubeMapProjector.h"
 #include "world/Error.h"
 
 namespace amb {
 namespace {
+
+using testing_support::allFinite;
+using testing_support::maxDiff;
 
 using testing_support::FakeCubeCapture;
 using testing_support::FlatProbeEnvironment;
@@ -41,21 +46,6 @@ BaselineSettings testLayout() {
     s.objectSize_m = 32.0;
     s.objectRange_m = 150.0;
     return s;
-}
-
-bool allFinite(const ShRgb& sh) {
-    for (const auto& c : sh.c) {
-        if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.z)) return false;
-    }
-    return true;
-}
-
-double maxDiff(const ShRgb& a, const ShRgb& b) {
-    double m = 0.0;
-    for (int k = 0; k < kShCoefficients; ++k) {
-        for (int ch = 0; ch < 3; ++ch) m = std::max(m, std::fabs(double(a.c[k][ch]) - b.c[k][ch]));
-    }
-    return m;
 }
 
 bool identical(const ShRgb& a, const ShRgb& b) {

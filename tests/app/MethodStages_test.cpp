@@ -1,4 +1,4 @@
-// VolumeAmbience_test.cpp — `ambience run` with the dynamic ambience volume: probes are
+// MethodStages_test.cpp — `ambience run` with the dynamic ambience volume: probes are
 // captured at the budget, anchors enter the store, the report accounts for them, the store
 // saves to .vdb and warm-starts a later run, and bad volume options are input errors.
 #include <cmath>
