@@ -53,7 +53,7 @@ vec3 shadeLambert(vec3 albedo, vec3 n, vec3 ambientIrradiance) {
     return albedo / PI * (max(ambientIrradiance, vec3(0.0)) + direct);
 }
 
-// The screen witnesses' outputs (app/Renderer.h, RenderOutput): instead of the shaded colour,
+// The screen witnesses' outputs (app/render/Renderer.h, RenderOutput): instead of the shaded colour,
 // the ambient irradiance as the draw applies it, the world normal or the albedo; alpha names
 // the surface (1 terrain, 2 road, 3 object, 4 object drawn with a simplified mesh). Returns false
 // for the shaded colour.

@@ -121,7 +121,7 @@ std::vector<ReplayRef> resolveReplays(const std::string& list) {
     return out;
 }
 
-using Point = SweepPoint;  // app/BenchSweep.h
+using Point = SweepPoint;  // app/bench/BenchSweep.h
 
 void flatten(const json& j, const std::string& prefix, std::string& out) {
     for (auto it = j.begin(); it != j.end(); ++it) {

@@ -4,7 +4,7 @@
 //
 // Steps: (1) play the replay with the method up to --frame, without the main view (the draw's
 // lookups stood in, as `ambience run --no-frames` does); (2) render that frame shaded, and as the
-// ambient irradiance the draw applies, the world normal and the albedo (app/Renderer.h,
+// ambient irradiance the draw applies, the world normal and the albedo (app/render/Renderer.h,
 // RenderOutput); (3) on a grid of pixels every --grid pixels, a reference capture of the full
 // scene (lighting/ReferenceOracle.h) 0.25 m along the surface normal gives E_ref(n) there, and
 // the relative error of the applied irradiance against it; (4) between grid pixels the ratio

@@ -29,7 +29,7 @@
 #include "lighting/Baselines.h"
 #include "world/Error.h"
 #include "world/World.h"
-// GLFW after glad (app/Gl.h).
+// GLFW after glad (app/render/Gl.h).
 #include <GLFW/glfw3.h>
 
 namespace amb {
