@@ -160,6 +160,9 @@ void AmbienceVolume::predictStage(const glm::dvec3& cameraPosition_m,
     // every capturing method shares (CaptureCore.h). A jump shortens every anchor's life.
     const FrameEvents events = core_.beginFrame(cameraPosition_m, cameraVelocity_mps, timeOfDay_h, dt_s);
     if (events.timeJump) store_.expireAllWithin(settings_.store.blendTime_s);
+    // Before this frame's inserts: a new anchor starts from what the store shows at its point,
+    // and in the first frame that must already be the sky, not zero.
+    if (core_.fallbackChanged()) store_.setFallback(core_.fallback());
     if (std::isfinite(dt_s) && dt_s > 0.0) frameTime_s_ = std::clamp(dt_s, 1.0 / 240.0, 0.25);
     probesPerSecond_ = double(settings_.capture.facesPerFrame) / double(kCubeFaces) / frameTime_s_;
 
@@ -198,7 +201,6 @@ void AmbienceVolume::storeStage() {
             store_.insert(latticeKey(c.job.key), c.sh, c.job.position_m, lifetime, timeOfDay_h);
         if (result == AnchorStore::InsertResult::Rejected) core_.countRejected();
     }
-    if (core_.fallbackChanged()) store_.setFallback(core_.fallback());
     if (settings_.relightBySkyLevel) {
         // Stale anchors follow the sky's overall level since their capture (see the header).
         const double now = skyLevel(timeOfDay_h);

@@ -199,6 +199,23 @@ TEST(AmbienceVolume, FallbackWhereNoAnchorIs) {
     EXPECT_LT(night.volume.shAt(5000.0, 5000.0).c[0].x, 0.1f * far.c[0].x);
 }
 
+TEST(AmbienceVolume, AnchorsOfTheFirstFrameStartFromTheSky) {
+    // At six faces a frame a probe completes in the very first frame. A new anchor starts from
+    // what the store shows at its point: the fallback of that frame, not zero (starting from
+    // black made the first second of such a run pop by 0.17 of the irradiance).
+    AmbienceVolumeSettings s;
+    s.capture.facesPerFrame = 6;
+    Rig rig(s);
+    rig.volume.update({0, 1.7, 0}, {0, 0, 0}, 12.0, kDt);
+    ASSERT_EQ(rig.volume.store().size(), 1u);
+    const ShRgb fallback = rig.volume.shAt(5000.0, 5000.0);
+    ASSERT_GT(fallback.c[0].x, 1.0f);
+    rig.volume.store().forEach([&](const Anchor& a) {
+        EXPECT_LT(maxDiff(a.blendFrom, fallback), 1e-4 * fallback.c[0].x);
+        EXPECT_EQ(a.presence, 0.0f);
+    });
+}
+
 TEST(AmbienceVolume, SaveAndWarmStart) {
     Rig rig;
     rig.run(60, {0.0, 1.7, 0.0});
