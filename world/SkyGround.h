@@ -7,7 +7,7 @@
 // direction with y >= 0 sees the sky, y < 0 the ground.
 //
 // The one implementation behind the fallback scene (lighting/ProbeEnvironment.h, a cube map) and
-// the renderer's sky texture and hemisphere ambient (app/RendererCore.h, an equirect texture).
+// the renderer's sky texture and fixed ambients (app/frame/SkyLighting.h, an equirect texture).
 #pragma once
 
 #include <vector>

@@ -9,6 +9,7 @@
 #include "world/Conventions.h"
 #include "world/Error.h"
 #include "world/Sky.h"
+#include "world/SkyGround.h"
 
 namespace amb {
 
@@ -31,37 +32,28 @@ SkyLighting evaluateSky(const Sky& sky, double timeOfDay_h) {
     s.horizonToward = sky.radiance(glm::dvec3(az.x * across, up, az.z * across), state);
     s.horizonAway = sky.radiance(glm::dvec3(-az.x * across, up, -az.z * across), state);
 
-    // Upper hemisphere: the sky model, texel by texel, with sin(theta) dtheta dphi weights.
+    // The texture's texels as directions with their solid angles (sin(theta) dtheta dphi): the
+    // sky model above the horizon, the flat ground of kGroundAlbedo below it (world/SkyGround.h,
+    // the scene the probes' fallback shows too).
     const int w = SkyLighting::kWidth, h = SkyLighting::kHeight;
-    s.texture.assign(size_t(w) * h * 3, 0.0f);
-    glm::dvec3 skySum(0.0), irrUp(0.0);
-    double skyWeight = 0.0;
+    std::vector<glm::dvec3> dirs;
+    std::vector<double> omegas;
+    dirs.reserve(std::size_t(w) * h);
+    omegas.reserve(std::size_t(w) * h);
     const double dTheta = kPi / h, dPhi = 2.0 * kPi / w;
-    for (int r = 0; r < h / 2; ++r) {
+    for (int r = 0; r < h; ++r) {
         const double theta = (r + 0.5) * dTheta;
         for (int c = 0; c < w; ++c) {
             const double phi = ((c + 0.5) / w - 0.5) * 2.0 * kPi;
-            const glm::dvec3 d(std::sin(theta) * std::sin(phi), std::cos(theta),
-                               -std::sin(theta) * std::cos(phi));
-            const glm::vec3 L = sky.radiance(d, state);
-            std::copy(&L.x, &L.x + 3, &s.texture[(size_t(r) * w + c) * 3]);
-            const double dw = std::sin(theta) * dTheta * dPhi;
-            skySum += glm::dvec3(L) * dw;
-            skyWeight += dw;
-            irrUp += glm::dvec3(L) * d.y * dw;
+            dirs.emplace_back(std::sin(theta) * std::sin(phi), std::cos(theta),
+                              -std::sin(theta) * std::cos(phi));
+            omegas.push_back(std::sin(theta) * dTheta * dPhi);
         }
     }
-    s.skyMean = glm::vec3(skySum / skyWeight);
-    s.skyIrradianceUp = glm::vec3(irrUp);
-    // Lower hemisphere: distant ground, Lambertian, lit by the sky and the main light.
-    const glm::vec3 groundIrr =
-        s.skyIrradianceUp + s.lightIrradiance * std::max(0.0f, s.lightDir.y);
-    s.groundMean = SkyLighting::kDistantGroundAlbedo / float(kPi) * groundIrr;
-    for (int r = h / 2; r < h; ++r) {
-        for (int c = 0; c < w; ++c) {
-            std::copy(&s.groundMean.x, &s.groundMean.x + 3, &s.texture[(size_t(r) * w + c) * 3]);
-        }
-    }
+    const SkyGround ground = evaluateSkyGround(sky, timeOfDay_h, dirs, omegas, s.texture);
+    s.skyMean = glm::vec3(ground.skyMean);
+    s.skyIrradianceUp = glm::vec3(ground.skyIrradianceUp);
+    s.groundMean = glm::vec3(ground.ground);
     return s;
 }
 

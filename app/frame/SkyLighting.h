@@ -17,8 +17,9 @@ namespace amb {
 class Sky;
 
 // ---- SkyLighting -----------------------------------------------------------------------------
-// The sky model evaluated for one time of day: an equirect texture of the sky (and, below the
-// horizon, of distant ground) and the numbers the ambient and exposure derive from.
+// The sky model evaluated for one time of day: an equirect texture of the sky and, below the
+// horizon, of the flat ground of world/SkyGround.h (albedo kGroundAlbedo, lit by the sky, the
+// sun and the moon), and the numbers the ambient and exposure derive from.
 struct SkyLighting {
     double timeOfDay_h = -1.0;
     glm::vec3 lightDir{0, 1, 0};  // towards the main light (sun, or the moon at night)
@@ -32,8 +33,6 @@ struct SkyLighting {
     glm::vec3 horizonToward{0.0f}, horizonAway{0.0f};  // sky 2 degrees up, towards / away
     std::vector<float> texture;                        // kWidth x kHeight RGB, row 0 = zenith
     static constexpr int kWidth = 64, kHeight = 32;
-    // Albedo assumed for the distant ground below the horizon.
-    static constexpr float kDistantGroundAlbedo = 0.18f;
 };
 SkyLighting evaluateSky(const Sky& sky, double timeOfDay_h);
 
