@@ -204,29 +204,58 @@ void AnchorField::coarserData(int L, double x, double z, double* out) const {
     }
 }
 
-// The cells of one level (the coarser levels are built): every cell with a corner in reach of
-// an anchor of this level.
-void AnchorField::buildLevel(int L, const std::vector<FieldAnchor>& anchors) {
-    const double fine = lattice_.fineSpacing_m;
-    const std::int64_t sc = lattice_.scale[L];
-    auto xOf = [&](const CellKey& c) { return double(c.i * sc) * fine; };
-    auto zOf = [&](const CellKey& c) { return double(c.k * sc) * fine; };
-    // F_{L-1}'s data at level-L points, each computed once (node-based: references stay valid).
+// F_{L-1}'s data at level-L points, each computed once (node-based: references stay valid).
+struct AnchorField::CoarserCache {
+    static_assert(kN == kFloats, "a coefficient set");
+    const AnchorField& field;
+    int L;
     std::unordered_map<CellKey, std::array<double, 4 * kN>, CellKeyHash> coarse;
-    auto coarserAt = [&](const CellKey& c) -> const std::array<double, 4 * kN>& {
+
+    const std::array<double, 4 * kN>& operator()(const CellKey& c) {
+        const double fine = field.lattice_.fineSpacing_m;
+        const std::int64_t sc = field.lattice_.scale[L];
+        auto xOf = [&](const CellKey& p) { return double(p.i * sc) * fine; };
+        auto zOf = [&](const CellKey& p) { return double(p.k * sc) * fine; };
         auto it = coarse.find(c);
         if (it == coarse.end()) {
             std::array<double, 4 * kN> d;
-            coarserData(L, xOf(c), zOf(c), d.data());
+            field.coarserData(L, xOf(c), zOf(c), d.data());
             it = coarse.emplace(c, d).first;
         }
         return it->second;
-    };
-    // Reach: per lattice point within R cells of this level's anchors, sum K p and sum K p r,
-    // r = v - F_{L-1} at the anchor (its residual against the coarser levels).
+    }
+};
+
+// A lattice point in reach of the level's anchors: C_L as float (what the lookup shows), D_L
+// and the level's coverage there.
+struct AnchorField::ReachPoint {
+    std::array<float, kN> value;
+    std::array<double, kN> d;
+    double coverage;
+};
+
+// The cells of one level (the coarser levels are built): every cell with a corner in reach of
+// an anchor of this level.
+void AnchorField::buildLevel(int L, const std::vector<FieldAnchor>& anchors) {
+    CoarserCache coarserAt{*this, L, {}};
     reach_.clear();
     residuals_.clear();
     const int R = std::max(0, L == 0 ? lattice_.coarseReachCells : lattice_.reachCells);
+    addLevelAnchors(L, R, anchors, coarserAt);
+    addFinerAnchors(L, R, anchors);
+    if (reach_.empty()) return;
+
+    const ReachPoints inReach = valuesInReach(L, coarserAt);
+    std::vector<CellKey> cellList, cornerList;
+    cellsAroundReach(cellList, cornerList);
+    const std::vector<float> values = cornerData(cornerList, inReach, coarserAt);
+    writeCells(L, cellList, cornerList, values);
+}
+
+// Reach: per lattice point within R cells of this level's anchors, sum K p and sum K p r,
+// r = v - F_{L-1} at the anchor (its residual against the coarser levels).
+void AnchorField::addLevelAnchors(int L, int R, const std::vector<FieldAnchor>& anchors,
+                                  CoarserCache& coarserAt) {
     std::array<float, kN> v;
     for (std::uint32_t n = 0; n < anchors.size(); ++n) {
         const FieldAnchor& a = anchors[n];
@@ -248,8 +277,13 @@ void AnchorField::buildLevel(int L, const std::vector<FieldAnchor>& anchors) {
             }
         }
     }
-    // The finer levels' anchors inform this level's missing points too (weight finerWeight
-    // each): r = v - F_{L-1} at the anchor's own position, the kernel over its true distance.
+}
+
+// The finer levels' anchors inform this level's missing points too (weight finerWeight
+// each): r = v - F_{L-1} at the anchor's own position, the kernel over its true distance.
+void AnchorField::addFinerAnchors(int L, int R, const std::vector<FieldAnchor>& anchors) {
+    const double fine = lattice_.fineSpacing_m;
+    std::array<float, kN> v;
     const double finer = lattice_.finerWeight;
     for (std::uint32_t n = 0; finer > 0.0 && R > 0 && n < anchors.size(); ++n) {
         const FieldAnchor& a = anchors[n];
@@ -283,21 +317,18 @@ void AnchorField::buildLevel(int L, const std::vector<FieldAnchor>& anchors) {
             }
         }
     }
-    if (reach_.empty()) return;
+}
 
-    // C_L (as float, what the lookup shows) and D_L at every point in reach (AnchorField.h).
-    struct Level {
-        std::array<float, kN> value;
-        std::array<double, kN> d;
-        double coverage;
-    };
-    tsl::hopscotch_map<CellKey, Level, CellKeyHash> inReach;
+// C_L (as float, what the lookup shows) and D_L at every point in reach (AnchorField.h).
+AnchorField::ReachPoints AnchorField::valuesInReach(int L, CoarserCache& coarserAt) const {
+    std::array<float, kN> v;
+    ReachPoints inReach;
     inReach.reserve(reach_.size());
     for (const auto& entry : reach_) {
         const CellKey& c = entry.first;
         const auto& sum = entry.second;
         const auto& base = coarserAt(c);
-        Level lv;
+        ReachPoint lv;
         lv.coverage = std::min(1.0, sum[0]);
         float* out = lv.value.data();
         const FieldAnchor* anchor = anchorAt(L, c);
@@ -328,33 +359,35 @@ void AnchorField::buildLevel(int L, const std::vector<FieldAnchor>& anchors) {
         for (int j = 0; j < kN; ++j) lv.d[j] = double(out[j]) - base[j];
         inReach.emplace(c, lv);
     }
+    return inReach;
+}
 
-    // The cells around the points in reach and their corners, in rows sorted by (k, i).
-    std::vector<CellKey> cellList, cornerList;
-    {
-        tsl::hopscotch_map<CellKey, bool, CellKeyHash> seen;
-        for (const auto& entry : reach_)
-            for (std::int64_t dk = -1; dk <= 0; ++dk)
-                for (std::int64_t di = -1; di <= 0; ++di) {
-                    const CellKey c{entry.first.i + di, entry.first.k + dk};
-                    if (seen.emplace(c, true).second) cellList.push_back(c);
-                }
-        for (const CellKey& c : cellList)
-            for (int q = 0; q < 4; ++q) cornerList.push_back({c.i + (q & 1), c.k + (q >> 1)});
-    }
-    auto rowOrder = [](const CellKey& a, const CellKey& b) {
-        return a.k != b.k ? a.k < b.k : a.i < b.i;
-    };
+// The order of corner rows: by k, then by i.
+bool AnchorField::rowOrder(const CellKey& a, const CellKey& b) {
+    return a.k != b.k ? a.k < b.k : a.i < b.i;
+}
+
+// The cells around the points in reach and their corners, in rows sorted by (k, i).
+void AnchorField::cellsAroundReach(std::vector<CellKey>& cellList,
+                                   std::vector<CellKey>& cornerList) const {
+    tsl::hopscotch_map<CellKey, bool, CellKeyHash> seen;
+    for (const auto& entry : reach_)
+        for (std::int64_t dk = -1; dk <= 0; ++dk)
+            for (std::int64_t di = -1; di <= 0; ++di) {
+                const CellKey c{entry.first.i + di, entry.first.k + dk};
+                if (seen.emplace(c, true).second) cellList.push_back(c);
+            }
+    for (const CellKey& c : cellList)
+        for (int q = 0; q < 4; ++q) cornerList.push_back({c.i + (q & 1), c.k + (q >> 1)});
     std::sort(cornerList.begin(), cornerList.end(), rowOrder);
     cornerList.erase(std::unique(cornerList.begin(), cornerList.end()), cornerList.end());
+}
 
-    // H_L at each corner: value, s d/dx, s d/dz, s^2 d2/dxdz.
+// H_L at each corner: value, s d/dx, s d/dz, s^2 d2/dxdz.
+std::vector<float> AnchorField::cornerData(const std::vector<CellKey>& cornerList,
+                                           const ReachPoints& inReach,
+                                           CoarserCache& coarserAt) const {
     std::vector<float> values(cornerList.size() * pointFloats_, 0.0f);
-    static const std::array<double, kN> zero{};
-    auto dAt = [&](std::int64_t i, std::int64_t k) -> const std::array<double, kN>& {
-        const auto it = inReach.find(CellKey{i, k});
-        return it == inReach.end() ? zero : it->second.d;
-    };
     for (std::size_t n = 0; n < cornerList.size(); ++n) {
         const CellKey& c = cornerList[n];
         float* out = values.data() + n * pointFloats_;
@@ -372,52 +405,71 @@ void AnchorField::buildLevel(int L, const std::vector<FieldAnchor>& anchors) {
                 for (int j = 0; j < kN; ++j) out[m * kStride + j] = float(base[m * kN + j]);
             continue;
         }
-        std::copy(own->second.value.begin(), own->second.value.end(), out);
-        const double k = own->second.coverage;
-        const auto &e = dAt(c.i + 1, c.k), &wst = dAt(c.i - 1, c.k);
-        const auto &nth = dAt(c.i, c.k + 1), &sth = dAt(c.i, c.k - 1);
-        const auto &ne = dAt(c.i + 1, c.k + 1), &nw = dAt(c.i - 1, c.k + 1);
-        const auto &se = dAt(c.i + 1, c.k - 1), &sw = dAt(c.i - 1, c.k - 1);
-        // With coverage k > 0, the lattice's own slopes stand in for F_{L-1}'s in part: from
-        // the values C = F_{L-1} + D_L at the neighbours, limited so that a cubic never
-        // overshoots its samples (harmonic mean of the one-sided differences, 0 at an extremum;
-        // the twist the smallest of the four one-sided cross differences, 0 if they disagree).
-        // Both are exact for a bilinear field.
-        std::array<double, kN> lx{}, lz{}, lxz{};
-        if (k > 0.0) {
-            const double* C[3][3];  // C[dk + 1][di + 1] at (c.i + di, c.k + dk)
-            std::array<std::array<std::array<double, kN>, 3>, 3> cv;
-            for (int dk = -1; dk <= 1; ++dk)
-                for (int di = -1; di <= 1; ++di) {
-                    const auto& f = coarserAt({c.i + di, c.k + dk});
-                    const auto& d = dAt(c.i + di, c.k + dk);
-                    auto& out3 = cv[dk + 1][di + 1];
-                    for (int j = 0; j < kN; ++j) out3[j] = f[j] + d[j];
-                    C[dk + 1][di + 1] = out3.data();
-                }
-            for (int j = 0; j < kN; ++j) {
-                const double c0 = C[1][1][j];
-                lx[j] = harmonicSlope(c0 - C[1][0][j], C[1][2][j] - c0);
-                lz[j] = harmonicSlope(c0 - C[0][1][j], C[2][1][j] - c0);
-                const double q[4] = {C[2][2][j] - C[2][1][j] - C[1][2][j] + c0,
-                                     -(C[2][0][j] - C[2][1][j] - C[1][0][j] + c0),
-                                     -(C[0][2][j] - C[0][1][j] - C[1][2][j] + c0),
-                                     C[0][0][j] - C[0][1][j] - C[1][0][j] + c0};
-                lxz[j] = minMod4(q);
+        cornerInReach(c, own->second, base, inReach, coarserAt, out);
+    }
+    return values;
+}
+
+// H_L at a corner in reach: its value C_L, and slopes and twist blended by the coverage between
+// F_{L-1}'s own plus D_L's central differences and the lattice's limited ones.
+void AnchorField::cornerInReach(const CellKey& c, const ReachPoint& own,
+                                const std::array<double, 4 * kFloats>& base,
+                                const ReachPoints& inReach, CoarserCache& coarserAt,
+                                float* out) const {
+    static const std::array<double, kN> zero{};
+    auto dAt = [&](std::int64_t i, std::int64_t k) -> const std::array<double, kN>& {
+        const auto it = inReach.find(CellKey{i, k});
+        return it == inReach.end() ? zero : it->second.d;
+    };
+    std::copy(own.value.begin(), own.value.end(), out);
+    const double k = own.coverage;
+    const auto &e = dAt(c.i + 1, c.k), &wst = dAt(c.i - 1, c.k);
+    const auto &nth = dAt(c.i, c.k + 1), &sth = dAt(c.i, c.k - 1);
+    const auto &ne = dAt(c.i + 1, c.k + 1), &nw = dAt(c.i - 1, c.k + 1);
+    const auto &se = dAt(c.i + 1, c.k - 1), &sw = dAt(c.i - 1, c.k - 1);
+    // With coverage k > 0, the lattice's own slopes stand in for F_{L-1}'s in part: from
+    // the values C = F_{L-1} + D_L at the neighbours, limited so that a cubic never
+    // overshoots its samples (harmonic mean of the one-sided differences, 0 at an extremum;
+    // the twist the smallest of the four one-sided cross differences, 0 if they disagree).
+    // Both are exact for a bilinear field.
+    std::array<double, kN> lx{}, lz{}, lxz{};
+    if (k > 0.0) {
+        const double* C[3][3];  // C[dk + 1][di + 1] at (c.i + di, c.k + dk)
+        std::array<std::array<std::array<double, kN>, 3>, 3> cv;
+        for (int dk = -1; dk <= 1; ++dk)
+            for (int di = -1; di <= 1; ++di) {
+                const auto& f = coarserAt({c.i + di, c.k + dk});
+                const auto& d = dAt(c.i + di, c.k + dk);
+                auto& out3 = cv[dk + 1][di + 1];
+                for (int j = 0; j < kN; ++j) out3[j] = f[j] + d[j];
+                C[dk + 1][di + 1] = out3.data();
             }
-        }
         for (int j = 0; j < kN; ++j) {
-            const double gx = base[kN + j], gz = base[2 * kN + j], gxz = base[3 * kN + j];
-            const double ox = gx + 0.5 * (e[j] - wst[j]);
-            const double oz = gz + 0.5 * (nth[j] - sth[j]);
-            const double oxz = gxz + 0.25 * (ne[j] - nw[j] - se[j] + sw[j]);
-            out[kStride + j] = float(ox + k * (lx[j] - ox));
-            out[2 * kStride + j] = float(oz + k * (lz[j] - oz));
-            out[3 * kStride + j] = float(oxz + k * (lxz[j] - oxz));
+            const double c0 = C[1][1][j];
+            lx[j] = harmonicSlope(c0 - C[1][0][j], C[1][2][j] - c0);
+            lz[j] = harmonicSlope(c0 - C[0][1][j], C[2][1][j] - c0);
+            const double q[4] = {C[2][2][j] - C[2][1][j] - C[1][2][j] + c0,
+                                 -(C[2][0][j] - C[2][1][j] - C[1][0][j] + c0),
+                                 -(C[0][2][j] - C[0][1][j] - C[1][2][j] + c0),
+                                 C[0][0][j] - C[0][1][j] - C[1][0][j] + c0};
+            lxz[j] = minMod4(q);
         }
     }
+    for (int j = 0; j < kN; ++j) {
+        const double gx = base[kN + j], gz = base[2 * kN + j], gxz = base[3 * kN + j];
+        const double ox = gx + 0.5 * (e[j] - wst[j]);
+        const double oz = gz + 0.5 * (nth[j] - sth[j]);
+        const double oxz = gxz + 0.25 * (ne[j] - nw[j] - se[j] + sw[j]);
+        out[kStride + j] = float(ox + k * (lx[j] - ox));
+        out[2 * kStride + j] = float(oz + k * (lz[j] - oz));
+        out[3 * kStride + j] = float(oxz + k * (lxz[j] - oxz));
+    }
+}
 
-    // Cells point at their corner rows: (i, k) and (i, k + 1); (i + 1, .) follow them.
+// Cells point at their corner rows: (i, k) and (i, k + 1); (i + 1, .) follow them.
+void AnchorField::writeCells(int L, const std::vector<CellKey>& cellList,
+                             const std::vector<CellKey>& cornerList,
+                             const std::vector<float>& values) {
     const std::uint32_t first = std::uint32_t(points_.size() / pointFloats_);
     points_.insert(points_.end(), values.begin(), values.end());
     auto indexOf = [&](const CellKey& c) {
@@ -436,8 +488,10 @@ void AnchorField::buildLevel(int L, const std::vector<FieldAnchor>& anchors) {
                              points_.data() + std::size_t(ref.row1 + 1) * pointFloats_};
         for (int j = 0; j < kN; ++j) {
             double dvx = 0, dvz = 0, gx = 0, gz = 0, gxz = 0;
-            dvx = std::max(std::fabs(double(p[1][j]) - p[0][j]), std::fabs(double(p[3][j]) - p[2][j]));
-            dvz = std::max(std::fabs(double(p[2][j]) - p[0][j]), std::fabs(double(p[3][j]) - p[1][j]));
+            dvx = std::max(std::fabs(double(p[1][j]) - p[0][j]),
+                           std::fabs(double(p[3][j]) - p[2][j]));
+            dvz = std::max(std::fabs(double(p[2][j]) - p[0][j]),
+                           std::fabs(double(p[3][j]) - p[1][j]));
             if (!lattice_.smooth) {  // bilinear: the larger edge difference per axis
                 slope[j] = std::max(slope[j], std::max(dvx, dvz) * inverseSpacing_[L]);
                 continue;

@@ -190,6 +190,23 @@ class AnchorField {
     void coarserData(int level, double x, double z, double* out) const;
 
     void buildLevel(int level, const std::vector<FieldAnchor>& anchors);
+    // buildLevel's steps, in order (AnchorField.cpp).
+    struct CoarserCache;  // F_{L-1}'s data at level-L points, each computed once
+    struct ReachPoint;    // C_L, D_L and the level's coverage at a lattice point in reach
+    using ReachPoints = tsl::hopscotch_map<CellKey, ReachPoint, CellKeyHash>;
+    void addLevelAnchors(int level, int reachCells, const std::vector<FieldAnchor>& anchors,
+                         CoarserCache& coarserAt);
+    void addFinerAnchors(int level, int reachCells, const std::vector<FieldAnchor>& anchors);
+    ReachPoints valuesInReach(int level, CoarserCache& coarserAt) const;
+    static bool rowOrder(const CellKey& a, const CellKey& b);
+    void cellsAroundReach(std::vector<CellKey>& cellList, std::vector<CellKey>& cornerList) const;
+    std::vector<float> cornerData(const std::vector<CellKey>& cornerList,
+                                  const ReachPoints& inReach, CoarserCache& coarserAt) const;
+    void cornerInReach(const CellKey& c, const ReachPoint& own,
+                       const std::array<double, 4 * kFloats>& base, const ReachPoints& inReach,
+                       CoarserCache& coarserAt, float* out) const;
+    void writeCells(int level, const std::vector<CellKey>& cellList,
+                    const std::vector<CellKey>& cornerList, const std::vector<float>& values);
 
     // The cell of level L holding (x, z) and its exact bounds (from the finest lattice, so
     // x - x0 is exact near and far from the origin).
