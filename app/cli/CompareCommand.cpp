@@ -69,14 +69,28 @@ unsigned char byte(float v) {
     return (unsigned char)std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f);
 }
 
-void runCompare(const CompareOptions& o) {
-    // (1) inputs
+// The options checked and resolved: the replay, the methods' settings, the frame to compare and
+// the output folder.
+struct CompareInputs {
+    std::string replayPath;
+    Replay replay;
+    AmbienceVolumeSettings volumeSettings;
+    BaselineSettings baselines;
+    Size size;
+    int target = 0;    // the frame to compare
+    std::string stem;  // the replay's name as a file name
+    std::string out;   // output folder, created
+};
+
+// (1) inputs: reads the replay and the settings, checks every option, creates the output folder
+// and checks that the inputs can be read and the outputs written before anything is played.
+CompareInputs checkInputs(const CompareOptions& o) {
     const std::string replayPath =
         o.replay.empty() ? (shippedReplayDir().empty() ? std::string("replays")
                                                        : shippedReplayDir()) +
                                "/highway-drive.json"
                          : o.replay;
-    const Replay replay = readReplay(replayPath);
+    Replay replay = readReplay(replayPath);
     checkAmbienceMethod(o.ambient, "--ambient");
     AmbienceVolumeSettings volumeSettings;
     if (!o.config.empty())
@@ -111,56 +125,83 @@ void runCompare(const CompareOptions& o) {
             files.output("--out", (fs::path(out) / name).string());
         files.check();
     }
+    return {replayPath, std::move(replay), std::move(volumeSettings), baselines, size, target,
+            stem, out};
+}
 
-    auto platform = createOffscreenPlatform(parseBackend(o.backend, "--backend"), size.width,
-                                            size.height);
-    const World world(replay.world);
-    RenderSettings rs;
-    rs.width = size.width;
-    rs.height = size.height;
-    rs.drawVehicle = replay.mode == ReplayMode::Drive;
-    Renderer renderer(world, rs);
-    const auto stagesOwner = makeMethodStages(renderer, o.ambient, volumeSettings, baselines);
-    MethodAmbienceStages& stages = *stagesOwner;
-    FrameLoop loop(replay, renderer, stages, o.stride, 1);
-    loop.setDrawMainView(false);
-    stages.setLookupStandIn(true);
+// The target frame as the loop played it: its record (clock, time of day) and its camera.
+struct TargetFrame {
     FrameRecord rec;
     CameraSample camera;
-    std::fprintf(stderr, "compare: playing %d frames of %s with %s\n", target + 1, stem.c_str(),
-                 o.ambient.c_str());
-    // The frames before the target as a run without the main view plays them; the target's
-    // own stand-in lookups only feed a next frame that never comes.
+};
+
+// (1) the frames up to and including the target, as a run without the main view plays them; the
+// target's own stand-in lookups only feed a next frame that never comes.
+TargetFrame playToTarget(FrameLoop& loop, const Replay& replay, int target) {
+    TargetFrame frame;
     for (int i = 0; i <= target; ++i) {
-        rec = loop.step();
-        camera = replay.sampleAt(rec.replayTime_s);
+        frame.rec = loop.step();
+        frame.camera = replay.sampleAt(frame.rec.replayTime_s);
     }
+    return frame;
+}
 
-    // (2) the frame and its outputs
-    const AmbientSource& ambient = stages.ambient();
+// What the renderer gives of the target frame: shaded (linear and tone mapped), and the ambient
+// irradiance the draw applies, the world normal and the albedo per pixel.
+struct FrameImages {
+    std::vector<float> hdr;
+    std::vector<unsigned char> methodLdr;
+    SurfaceImage applied, normals, albedo;
+};
+
+// (2) the frame and its outputs.
+FrameImages renderFrame(Renderer& renderer, const CameraSample& camera,
+                        const AmbientSource& ambient) {
+    FrameImages images;
     renderer.render(camera, ambient);
-    std::vector<float> hdr = renderer.readHdr();
-    const std::vector<unsigned char> methodLdr = renderer.readRgb8();
+    images.hdr = renderer.readHdr();
+    images.methodLdr = renderer.readRgb8();
     renderer.render(camera, ambient, RenderOutput::AmbientIrradiance);
-    const SurfaceImage applied = renderer.readSurface(camera);
+    images.applied = renderer.readSurface(camera);
     renderer.render(camera, ambient, RenderOutput::Normal);
-    const SurfaceImage normals = renderer.readSurface(camera);
+    images.normals = renderer.readSurface(camera);
     renderer.render(camera, ambient, RenderOutput::Albedo);
-    const SurfaceImage albedo = renderer.readSurface(camera);
+    images.albedo = renderer.readSurface(camera);
+    return images;
+}
 
-    // (3) reference samples on the grid
-    const int w = size.width, h = size.height, g = o.grid;
-    const int gw = (w + g - 1) / g, gh = (h + g - 1) / g;
-    struct Sample {
-        bool surface = false;
-        glm::dvec3 ratio{1.0};
-        double error = 0.0;
-    };
-    std::vector<Sample> samples(std::size_t(gw) * gh);
-    CubeCaptureGl reference(world, o.referenceSize, CaptureScene::Full);
+// A grid pixel: whether it shows a surface, and there E_ref / E_applied per channel and the
+// relative error.
+struct GridSample {
+    bool surface = false;
+    glm::dvec3 ratio{1.0};
+    double error = 0.0;
+};
+
+// The reference samples on the grid (gw x gh, by rows) and their errors summed, over all of
+// them and by surface kind.
+struct ReferenceGrid {
+    int gw = 0, gh = 0;
+    std::vector<GridSample> samples;
     double sum = 0.0;
     std::array<double, kSurfaceKinds + 1> kindSum{}, kindCount{};
     int count = 0;
+};
+
+// (3) a reference capture of the full scene above the surface at the centre of every grid cell.
+ReferenceGrid sampleReference(const CompareOptions& o, const Size& size, const World& world,
+                              CubeCaptureGl& reference, const TargetFrame& frame,
+                              const FrameImages& images) {
+    const CameraSample& camera = frame.camera;
+    const SurfaceImage& applied = images.applied;
+    const SurfaceImage& normals = images.normals;
+    const int w = size.width, h = size.height, g = o.grid;
+    ReferenceGrid grid;
+    grid.gw = (w + g - 1) / g;
+    grid.gh = (h + g - 1) / g;
+    const int gw = grid.gw, gh = grid.gh;
+    std::vector<GridSample>& samples = grid.samples;
+    samples.resize(std::size_t(gw) * gh);
     for (int gy = 0; gy < gh; ++gy)
         for (int gx = 0; gx < gw; ++gx) {
             const int x = std::min(w - 1, gx * g + g / 2), y = std::min(h - 1, gy * g + g / 2);
@@ -174,22 +215,38 @@ void runCompare(const CompareOptions& o) {
             if (kind == int(SurfaceKind::Terrain)) at.y = world.height(at.x, at.z);
             const glm::dvec3 probe = at + ErrorMeter::kScreenProbeOffset_m * n;
             const glm::dvec3 ref = referenceIrradianceAt(
-                o.referenceSize, reference.captureAll(probe, rec.timeOfDay_h),
+                o.referenceSize, reference.captureAll(probe, frame.rec.timeOfDay_h),
                 kSunThreshold_Wpsrm2, n);
             const glm::dvec3 a(applied.rgba[4 * p], applied.rgba[4 * p + 1],
                                applied.rgba[4 * p + 2]);
-            Sample& s = samples[std::size_t(gy) * gw + gx];
+            GridSample& s = samples[std::size_t(gy) * gw + gx];
             s.surface = true;
             s.error = irradianceRelativeError(a, ref);
             for (int c = 0; c < 3; ++c) s.ratio[c] = ref[c] / std::max(a[c], 1e-6);
-            sum += s.error;
-            ++count;
-            kindSum[std::size_t(kind)] += s.error;
-            kindCount[std::size_t(kind)] += 1.0;
+            grid.sum += s.error;
+            ++grid.count;
+            grid.kindSum[std::size_t(kind)] += s.error;
+            grid.kindCount[std::size_t(kind)] += 1.0;
         }
+    return grid;
+}
 
-    // (4) + (5) per pixel
-    std::vector<float> refHdr = hdr;
+// The reference frame (tone mapped) and the error map, both of the view's size.
+struct ComposedImages {
+    std::vector<unsigned char> refLdr;
+    std::vector<unsigned char> errorRgb;
+};
+
+// (4) + (5) per pixel: the ratio and the error interpolated from the grid samples around, the
+// error as a heat colour and the shaded frame's ambient term scaled by the ratio.
+ComposedImages composeImages(const CompareOptions& o, const Size& size, Renderer& renderer,
+                             const FrameImages& images, const ReferenceGrid& grid) {
+    const SurfaceImage& applied = images.applied;
+    const SurfaceImage& albedo = images.albedo;
+    const int w = size.width, h = size.height, g = o.grid;
+    const int gw = grid.gw, gh = grid.gh;
+    const std::vector<GridSample>& samples = grid.samples;
+    std::vector<float> refHdr = images.hdr;
     std::vector<unsigned char> errorRgb(std::size_t(w) * h * 3);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
@@ -206,9 +263,10 @@ void runCompare(const CompareOptions& o) {
             for (int dy = 0; dy < 2; ++dy)
                 for (int dx = 0; dx < 2; ++dx) {
                     const int sx = std::min(gw - 1, x0 + dx), sy = std::min(gh - 1, y0 + dy);
-                    const Sample& s = samples[std::size_t(sy) * gw + sx];
+                    const GridSample& s = samples[std::size_t(sy) * gw + sx];
                     if (!s.surface) continue;
-                    const double wgt = (dx ? u - x0 : 1.0 - (u - x0)) * (dy ? v - y0 : 1.0 - (v - y0)) + 1e-6;
+                    const double wgt =
+                        (dx ? u - x0 : 1.0 - (u - x0)) * (dy ? v - y0 : 1.0 - (v - y0)) + 1e-6;
                     ratio += wgt * s.ratio;
                     error += wgt * s.error;
                     weight += wgt;
@@ -228,8 +286,26 @@ void runCompare(const CompareOptions& o) {
             }
         }
     const std::vector<unsigned char> refLdr = renderer.tonemap(refHdr);
+    return {refLdr, std::move(errorRgb)};
+}
 
-    // Outputs.
+// Outputs: the three images alone and side by side, compare.json with the mean errors, and a
+// summary on stdout.
+void writeOutputs(const CompareOptions& o, const CompareInputs& in, const TargetFrame& frame,
+                  const FrameImages& images, const ReferenceGrid& grid,
+                  const ComposedImages& composed) {
+    const std::string& out = in.out;
+    const std::string& stem = in.stem;
+    const int target = in.target;
+    const FrameRecord& rec = frame.rec;
+    const std::vector<unsigned char>& methodLdr = images.methodLdr;
+    const std::vector<unsigned char>& refLdr = composed.refLdr;
+    const std::vector<unsigned char>& errorRgb = composed.errorRgb;
+    const int w = in.size.width, h = in.size.height, g = o.grid;
+    const double sum = grid.sum;
+    const int count = grid.count;
+    const auto& kindSum = grid.kindSum;
+    const auto& kindCount = grid.kindCount;
     writeImageRgb8((fs::path(out) / "method.png").string(), w, h, methodLdr);
     writeImageRgb8((fs::path(out) / "reference.png").string(), w, h, refLdr);
     writeImageRgb8((fs::path(out) / "error.png").string(), w, h, errorRgb);
@@ -262,6 +338,36 @@ void runCompare(const CompareOptions& o) {
                 j["objectMeanError"].get<double>());
     std::printf("  %s (method | reference | error 0 to 0.5)\n",
                 (fs::path(out) / "compare.png").string().c_str());
+}
+
+// The whole comparison. The platform (GL context), renderer, method and reference capture live
+// here, in this order, until the outputs are written.
+void runCompare(const CompareOptions& o) {
+    const CompareInputs in = checkInputs(o);
+
+    auto platform = createOffscreenPlatform(parseBackend(o.backend, "--backend"),
+                                            in.size.width, in.size.height);
+    const World world(in.replay.world);
+    RenderSettings rs;
+    rs.width = in.size.width;
+    rs.height = in.size.height;
+    rs.drawVehicle = in.replay.mode == ReplayMode::Drive;
+    Renderer renderer(world, rs);
+    const auto stagesOwner =
+        makeMethodStages(renderer, o.ambient, in.volumeSettings, in.baselines);
+    MethodAmbienceStages& stages = *stagesOwner;
+    FrameLoop loop(in.replay, renderer, stages, o.stride, 1);
+    loop.setDrawMainView(false);
+    stages.setLookupStandIn(true);
+    std::fprintf(stderr, "compare: playing %d frames of %s with %s\n", in.target + 1,
+                 in.stem.c_str(), o.ambient.c_str());
+    const TargetFrame frame = playToTarget(loop, in.replay, in.target);
+
+    const FrameImages images = renderFrame(renderer, frame.camera, stages.ambient());
+    CubeCaptureGl reference(world, o.referenceSize, CaptureScene::Full);
+    const ReferenceGrid grid = sampleReference(o, in.size, world, reference, frame, images);
+    const ComposedImages composed = composeImages(o, in.size, renderer, images, grid);
+    writeOutputs(o, in, frame, images, grid, composed);
 }
 
 }  // namespace
