@@ -36,8 +36,8 @@ class CubeMapProjector {
     static constexpr int kTableMaxFaceSize = 64;  // tables hold 9 floats per texel
 
     struct Options {
-        // Luminance radiance above which a texel is taken into the directional sun light;
-        // infinity = no extraction.
+        // Luminance radiance [W sr^-1 m^-2] above which a texel is taken into the directional
+        // sun light; infinity = no extraction (the methods pass CaptureSettings::sunThreshold).
         double sunThreshold = std::numeric_limits<double>::infinity();
         // Use the AVX2 + FMA table kernels when the CPU has them (false: the portable loops,
         // e.g. to compare the two).

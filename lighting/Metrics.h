@@ -96,8 +96,10 @@ struct MeasureSettings {
     int perRing = 4;                // witnesses per ring
     int popPoints = 3;              // the camera's ground point + popPoints - 1 ring-1 witnesses
     double cornerSpacing_m = 32.0;  // witnesses sit on this lattice (terrain patch corners)
-    double maxAside_m = 4.0;        // oracle probe placement, as the volume's probes
-    double sunThreshold = kSunThreshold_Wpsrm2;  // as AmbienceVolumeSettings::sunThreshold
+    double maxAside_m = 4.0;        // oracle probe placement, as CaptureSettings::maxAside_m
+    // Luminance radiance [W sr^-1 m^-2] above which a texel is the sun disc, left out of the
+    // oracle as the methods leave it out (CaptureSettings::sunThreshold).
+    double sunThreshold = kSunThreshold_Wpsrm2;
     int rings() const { return int(ringRadii.size()); }  // ring 0 + ringRadii.size() - 1 bands
 };
 

@@ -1000,31 +1000,8 @@ void tune(const BenchOptions& o, const Runner& runner, int workers) {
 
 // ---- The command -----------------------------------------------------------------------------
 
-void runBench(const BenchOptions& o, const std::string& commandLine) {
-    if (o.jobs < 0 || o.jobs > 64) throw InputError("--jobs", "expected 0 (cores) to 64");
-    if (o.measureEvery < 1) throw InputError("--measure-every", "must be at least 1");
-    if (o.maxFrames < 0) throw InputError("--max-frames", "must be >= 0");
-    if (o.stride < 1) throw InputError("--stride", "must be at least 1");
-    if (o.frames && o.noFrames) throw InputError("--frames", "conflicts with --no-frames");
-    if (o.tuneRounds < 1 || o.tuneRounds > 5) throw InputError("--tune-rounds", "expected 1 to 5");
-    if (o.tuneBudget < 1 || o.tuneBudget > 6) throw InputError("--tune-budget", "expected 1 to 6");
-    if (!(o.tuneMinGain >= 0.0 && o.tuneMinGain < 1.0))
-        throw InputError("--tune-min-gain", "expected 0 to 1");
-    std::vector<std::string> methods =
-        o.methods.empty() ? ambienceMethodNames() : splitList(o.methods);
-    if (methods.empty()) throw InputError("--methods", "no method named in '" + o.methods + "'");
-    for (const auto& m : methods) checkAmbienceMethod(m, "--methods");
-    if (parseBackend(o.backend, "--backend") == Backend::Glfw)
-        throw InputError("--backend", "bench runs headless: auto, egl or osmesa");
-    auto points = readSweep(o.sweep, ambienceMethodNames());
-    if (!o.budgets.empty())
-        points = withBudgets(points, parseBudgets(o.budgets, "--budgets"), "--budgets");
-    const int workers = o.jobs > 0 ? o.jobs : std::max(1, int(std::thread::hardware_concurrency()));
-    std::error_code ec;
-    fs::create_directories(fs::path(o.out) / "oracle", ec);
-    if (ec || access(o.out.c_str(), W_OK) != 0)
-        throw InputError("--out", "cannot create or write the folder '" + o.out + "'");
-
+// How each run is started (the options every child gets), after checking those options.
+Runner benchRunner(const BenchOptions& o, const std::vector<Point>& points) {
     Runner runner;
     runner.exe = selfExecutable();
     runner.out = o.out;
@@ -1048,15 +1025,14 @@ void runBench(const BenchOptions& o, const std::string& commandLine) {
     runner.screenWitnesses = o.screenWitnesses;
     runner.idealBudget = points.empty() ? 1 : points.front().facesPerFrame;
     for (const Point& p : points) runner.idealBudget = std::min(runner.idealBudget, p.facesPerFrame);
-    const auto start = std::chrono::steady_clock::now();
-    if (o.tune) {
-        tune(o, runner, workers);
-        return;
-    }
-    const auto replays = resolveReplays(o.replays);
+    return runner;
+}
 
-    // Jobs: per replay the cheapest method first (it captures the oracle unless a saved one
-    // matches), then the rest.
+// The runs: replays x methods x points, per replay the cheapest method first (it captures the
+// oracle unless a saved one matches), every replay's oracle run at the front.
+std::vector<Job> benchJobs(const std::vector<ReplayRef>& replays,
+                           const std::vector<std::string>& methods,
+                           const std::vector<Point>& points) {
     std::vector<Job> jobs;
     const std::vector<std::string> cheapFirst = {"constant", "hemisphere"};
     for (const auto& r : replays) {
@@ -1084,19 +1060,60 @@ void runBench(const BenchOptions& o, const std::string& commandLine) {
     }
     // Put every replay's oracle job at the front, so the replays' oracles are made in parallel.
     std::stable_partition(jobs.begin(), jobs.end(), [](const Job& j) { return j.makesOracle; });
-    if (o.fromRuns) {
-        // Nothing runs: each job's report is read back from its folder.
-        for (Job& j : jobs) {
-            const fs::path report = fs::path(o.out) / j.runDir / "report.json";
-            std::ifstream in(report);
-            try {
-                j.report = json::parse(in);
-                j.ok = in.good() || in.eof();
-            } catch (const json::exception&) {
-                j.ok = false;
-                j.error = "no readable report in " + report.string();
-            }
+    return jobs;
+}
+
+// --from-runs: nothing runs; each job's report is read back from its folder.
+void readRuns(std::vector<Job>& jobs, const std::string& out) {
+    for (Job& j : jobs) {
+        const fs::path report = fs::path(out) / j.runDir / "report.json";
+        std::ifstream in(report);
+        try {
+            j.report = json::parse(in);
+            j.ok = in.good() || in.eof();
+        } catch (const json::exception&) {
+            j.ok = false;
+            j.error = "no readable report in " + report.string();
         }
+    }
+}
+
+void runBench(const BenchOptions& o, const std::string& commandLine) {
+    if (o.jobs < 0 || o.jobs > 64) throw InputError("--jobs", "expected 0 (cores) to 64");
+    if (o.measureEvery < 1) throw InputError("--measure-every", "must be at least 1");
+    if (o.maxFrames < 0) throw InputError("--max-frames", "must be >= 0");
+    if (o.stride < 1) throw InputError("--stride", "must be at least 1");
+    if (o.frames && o.noFrames) throw InputError("--frames", "conflicts with --no-frames");
+    if (o.tuneRounds < 1 || o.tuneRounds > 5) throw InputError("--tune-rounds", "expected 1 to 5");
+    if (o.tuneBudget < 1 || o.tuneBudget > 6) throw InputError("--tune-budget", "expected 1 to 6");
+    if (!(o.tuneMinGain >= 0.0 && o.tuneMinGain < 1.0))
+        throw InputError("--tune-min-gain", "expected 0 to 1");
+    std::vector<std::string> methods =
+        o.methods.empty() ? ambienceMethodNames() : splitList(o.methods);
+    if (methods.empty()) throw InputError("--methods", "no method named in '" + o.methods + "'");
+    for (const auto& m : methods) checkAmbienceMethod(m, "--methods");
+    if (parseBackend(o.backend, "--backend") == Backend::Glfw)
+        throw InputError("--backend", "bench runs headless: auto, egl or osmesa");
+    auto points = readSweep(o.sweep, ambienceMethodNames());
+    if (!o.budgets.empty())
+        points = withBudgets(points, parseBudgets(o.budgets, "--budgets"), "--budgets");
+    const int workers = o.jobs > 0 ? o.jobs : std::max(1, int(std::thread::hardware_concurrency()));
+    std::error_code ec;
+    fs::create_directories(fs::path(o.out) / "oracle", ec);
+    if (ec || access(o.out.c_str(), W_OK) != 0)
+        throw InputError("--out", "cannot create or write the folder '" + o.out + "'");
+
+    Runner runner = benchRunner(o, points);
+    const auto start = std::chrono::steady_clock::now();
+    if (o.tune) {
+        tune(o, runner, workers);
+        return;
+    }
+    const auto replays = resolveReplays(o.replays);
+
+    std::vector<Job> jobs = benchJobs(replays, methods, points);
+    if (o.fromRuns) {
+        readRuns(jobs, o.out);
     } else {
         runJobs(jobs, runner, workers, "bench");
     }

@@ -23,8 +23,8 @@ struct AmbientSet {
 // ---- AmbientSource ---------------------------------------------------------------------------
 // What the draw needs from the ambient term (docs/ARCHITECTURE.md "The frame", stage 5): the
 // irradiance at each terrain-patch corner and road vertex for its normal, and one set of R&H
-// matrices per object.
-// Constant and hemisphere ambient implement it now; the ambience volume implements it next.
+// matrices per object. MethodAmbient (app/frame/MethodStages.h) answers it from any method's
+// SH; FixedAmbient (app/frame/SkyLighting.h) is the constant and hemisphere ambient.
 class AmbientSource {
   public:
     virtual ~AmbientSource() = default;
