@@ -1,24 +1,25 @@
 // AmbienceVolume.h — the dynamic ambience volume: predict, capture, project, store, blend, and
 // answer "what ambience at this ground point" (thesis 5, 7-9; docs/ARCHITECTURE.md "The frame", 2-4).
 //
-// Per frame the renderer calls update(camera, time of day, dt), which runs, in order:
-//   1. time     simulation clock += dt; the rate of the time of day (hours per second, wrap at
-//               24 h handled) sets the anchor lifetime; a jump of the time of day (more than
-//               timeJump_h in one update) shortens every anchor's life to blendTime_s;
-//   2. predict  the scheduler observes the camera (teleports reset it and abort the probe in
-//               progress) and, when no probe is in progress, picks the next lattice point; the
-//               environment places the probe (out of terrain and trees);
-//   3. capture  facesPerFrame faces of the probe's cube map from the CubeCapture (a probe spans
-//               several frames: 6 frames at the default one face per frame), each projected to
-//               SH as it arrives (CubeMapProjector, sun disc extracted, not kept);
+// Per frame the frame loop calls the three stages (or update(), which runs them in order). The
+// clock, teleports, the face budget, rejection and the fallback are the rules every capturing
+// method shares (lighting/CaptureCore.h); what is the volume's own:
+//   1. time     a jump of the time of day shortens every anchor's life to blendTime_s; the
+//               fallback, when it changed, goes to the store before this frame's inserts (a new
+//               anchor starts from what the store shows at its point);
+//   2. predict  the scheduler observes the camera (after a teleport it starts over) and, when no
+//               probe is in progress, picks the next lattice point; the environment places the
+//               probe (out of terrain and trees), at most asideFraction x the level's spacing
+//               aside;
+//   3. capture  capture.facesPerFrame faces of the probe's cube map (a probe spans several
+//               frames: 6 at the default one face per frame), each projected to SH as it
+//               arrives (sun disc extracted, not kept);
 //   4. store    the clock advances (blending, fades, regeneration requests, expiry, pruning),
 //               then a completed probe is inserted or refreshes its anchor — after the advance,
-//               so it starts at presence 0 and changes nothing this frame. A probe with any
-//               texel that is NaN, infinite or negative, or with non-finite coefficients, never
-//               enters the store (counted in rejectedProbes).
+//               so it starts at presence 0 and changes nothing this frame; then stale anchors
+//               are relit by the sky level.
 // shAt(x, z) then gives the interpolated SH at any ground point (AnchorStore::interpolate).
-// Where no anchor is in reach it is the fallback: the SH of ProbeEnvironment::fallbackCubeMap
-// (sky model over a flat ground), refreshed when the time of day moves by fallbackRefresh_h.
+// Where no anchor is in reach it is the fallback (sky model over a flat ground).
 #pragma once
 
 #include <array>
@@ -39,7 +40,6 @@
 namespace amb {
 
 class CubeCapture;
-class CubeMapProjector;
 class ProbeEnvironment;
 class RoadNetwork;
 

@@ -42,7 +42,6 @@
 namespace amb {
 
 class CubeCapture;
-class CubeMapProjector;
 class ProbeEnvironment;
 class RoadNetwork;
 
