@@ -228,17 +228,9 @@ void AmbienceVolume::syncStatistics() {
 }
 
 MethodStatistics AmbienceVolume::methodStatistics() const {
-    MethodStatistics m;
+    MethodStatistics m = core_.statistics();
     m.probes = stats_.store.anchors;
     m.bytes = stats_.store.bytes();
-    m.facesThisFrame = stats_.facesThisFrame;
-    m.facesCaptured = stats_.facesCaptured;
-    m.rejectedProbes = stats_.rejectedProbes;
-    m.teleports = stats_.teleports;
-    m.predict_s = stats_.predict_s;
-    m.capture_s = stats_.capture_s;
-    m.project_s = stats_.project_s;
-    m.store_s = stats_.store_s;
     return m;
 }
 
