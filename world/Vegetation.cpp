@@ -7,6 +7,7 @@
 #include "world/Vegetation.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include <glm/geometric.hpp>
@@ -435,6 +436,26 @@ const WorldMesh& Vegetation::proxyMesh(PlantKind kind) {
         buildMesh(PlantKind::Conifer, true), buildMesh(PlantKind::Broadleaf, true),
         buildMesh(PlantKind::Bush, true), buildMesh(PlantKind::Rock, true)};
     return meshes[static_cast<int>(kind)];
+}
+
+const std::vector<PlantSphere>& Vegetation::spheres(PlantKind kind) {
+    const auto bark = glm::dvec3(kBark), needles = glm::dvec3(kNeedles);
+    const auto leaves = glm::dvec3(kLeaves);
+    // The conifer's cones (1.5 to 12 m, 2.6 m at the base) as three spheres narrowing upwards;
+    // the broadleaf's 3.2 x 2.8 ellipsoid as one sphere; trunks up to where the crown starts.
+    static const std::array<std::vector<PlantSphere>, kPlantKinds> s = {
+        std::vector<PlantSphere>{{{0, 3.4, 0}, 2.2, needles},
+                                 {{0, 6.4, 0}, 1.6, needles},
+                                 {{0, 9.0, 0}, 1.0, needles},
+                                 {{0, 0.5, 0}, 0.3, bark},
+                                 {{0, 1.2, 0}, 0.3, bark}},
+        std::vector<PlantSphere>{{{0, 6.0, 0}, 3.05, leaves},
+                                 {{0, 0.6, 0}, 0.35, bark},
+                                 {{0, 1.6, 0}, 0.35, bark},
+                                 {{0, 2.6, 0}, 0.35, bark}},
+        std::vector<PlantSphere>{{{0, 0.6, 0}, 0.95, glm::dvec3(kBushLeaves)}},
+        std::vector<PlantSphere>{{{0, 0.25, 0}, 0.72, glm::dvec3(kStone)}}};
+    return s[static_cast<int>(kind)];
 }
 
 double Vegetation::footprintRadius_m(PlantKind kind) {

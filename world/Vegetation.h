@@ -27,6 +27,15 @@ enum class PlantKind : int { Conifer = 0, Broadleaf = 1, Bush = 2, Rock = 3 };
 inline constexpr int kPlantKinds = 4;
 const char* toString(PlantKind kind);
 
+// A sphere standing in for part of a plant (crown, trunk, rock) at scale 1, origin at the base of
+// the trunk, +Y up [m], with the albedo of what it stands for: the near field's occluders
+// (lighting/NearField.h).
+struct PlantSphere {
+    glm::dvec3 centre_m{0.0};
+    double radius_m = 0.0;
+    glm::dvec3 albedo{0.0};
+};
+
 struct Plant {
     glm::dvec3 position_m{0.0};  // base of the trunk on the ground (world, y = World::height)
     PlantKind kind = PlantKind::Conifer;
@@ -65,6 +74,9 @@ class Vegetation {
     // probe capture (a few dozen). Origin at the base of the trunk, +Y up, metres.
     static const WorldMesh& mesh(PlantKind kind);
     static const WorldMesh& proxyMesh(PlantKind kind);
+    // The kind's shape as a few spheres (crown, trunk, rock) of about the full mesh's extent: a
+    // crown of one or three spheres, a trunk of thin spheres stacked up to the crown.
+    static const std::vector<PlantSphere>& spheres(PlantKind kind);
     // Radius of the kind's footprint at scale 1 (crown or rock) [m].
     static double footprintRadius_m(PlantKind kind);
 

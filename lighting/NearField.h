@@ -1,0 +1,176 @@
+// NearField.h — the two-scale ambience: probes capture the far field, and the occluders near a
+// shading point are applied to it there, in closed form (docs/ARCHITECTURE.md "Two scales").
+//
+// [SECTION] Why
+//   A probe 27 m away cannot know that a point sits under a canopy or beside a trunk, and the
+//   interpolation smears whatever its corners saw over the whole cell. The world knows every
+//   plant exactly, so the plants within radius_m of a probe are left out of its capture (the far
+//   field, smooth enough to interpolate) and the plants within radius_m of each shading point are
+//   put back at that point.
+// [SECTION] Caps
+//   An occluder is a sphere (world/Vegetation.h: crowns, trunks, rocks as spheres). Seen from a
+//   point p it is a cap of half-angle theta (sin theta = r / |c - p|) around d = (c - p) / |c - p|.
+//   The cap's indicator projects onto a zonal function about d (Sloan, "Stupid SH tricks"):
+//       z_0 = sqrt(pi) (1 - cos t),  z_1 = sqrt(3 pi) / 2 sin^2 t,  z_2 = sqrt(5 pi) / 2 cos t sin^2 t
+//   and, turned to d, C_k = sqrt(4 pi / (2l + 1)) z_l Y_k(d). Its solid angle is
+//   Omega = 2 pi (1 - cos t) = sqrt(4 pi) z_0.
+// [SECTION] What a cap does to the far field F (order-2 SH L)
+//   It hides the far radiance behind it and shows its own:  L' = L + sum_i w_i (R_i - A_i) C_i,
+//     A_i = (C_i . L) / Omega_i    the far field's mean over the cap (exact for the order-2 part);
+//     R_i = rho_i / pi (E_amb,i + 2/3 Phi(alpha_i) E_sun)   the sphere's mean outgoing radiance
+//                                  towards p: a Lambertian sphere of albedo rho_i;
+//     E_amb,i = sum_k Ahat_l f_l L_k Y_k(-d_i), f = (1, 2/3, 1/4): the far field's irradiance
+//                                  averaged over the sphere's visible disc (projected-area weights
+//                                  of the normals n . (-d) = mu: integral 2 mu P_l(mu) over [0, 1]);
+//     Phi(a) = (sin a + (pi - a) cos a) / pi: the Lambert sphere's phase law, alpha_i the angle
+//                                  between the main light and -d_i, 2/3 its disc mean at full
+//                                  phase. The main light is the one the renderer draws apart.
+//   So L' = (I + T) L + S E_sun with T (9 x 9 per channel) and S (9 per channel) fixed by the
+//   geometry: both are cached per point (the points the draw asks for do not move).
+// [SECTION] Overlap (occluders must not darken twice)
+//   Caps are taken largest first; cap i keeps the weight w_i = prod_{j<i} (1 - O_ij / Omega_i),
+//   O_ij the solid angle it shares with an earlier cap j (the smoothstep approximation of two
+//   caps' intersection of Oat and Sander, "Ambient aperture lighting", 2007). A cap inside an
+//   earlier one gets weight 0; caps apart keep 1.
+// [SECTION] Guard
+//   What the caps hide must not take the irradiance below zero for any normal (below the far
+//   field's own minimum if that is negative): if a cheap lower bound of the minimum
+//   (E_00 - |E_1| - ||E_2||) of the far field less what is hidden is negative, the exact minimum
+//   (shMinIrradiance) is taken and the hidden part scaled down until it holds. What the caps
+//   show is radiance >= 0 added, as a capture of a lit object adds it.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <unordered_map>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "lighting/SH.h"
+#include "world/DirectionalLight.h"
+
+namespace amb {
+
+class JsonFields;
+class World;
+
+struct NearFieldSettings {
+    bool enabled = false;    // apply the near field at shading points (a method's switch)
+    double radius_m = 16.0;  // r_near: occluders this close (horizontally) to a point are near
+    bool plants = true;      // trees, bushes and rocks as spheres
+    // Points the draw asks for (terrain corners, objects) are cached with their transfer; the
+    // cache is emptied when it holds more than this.
+    int cacheEntries = 65536;
+};
+// Reads {"enabled", "radius_m", "plants", "cacheEntries"} (JsonFields, lighting/JsonFields.h).
+void readNearFieldSettings(JsonFields& fields, NearFieldSettings& settings);
+
+struct SphereOccluder {
+    glm::dvec3 centre_m{0.0};
+    double radius_m = 0.0;
+    glm::dvec3 albedo{0.0};
+};
+
+// ---- Closed forms ------------------------------------------------------------------------------
+// Zonal coefficients z_l of a cap of half-angle t (given cos t) about +Y.
+std::array<double, 3> capZonal(double cosHalfAngle);
+// The cap's SH about unit direction d: C_k = sqrt(4 pi / (2l + 1)) z_l Y_k(d).
+std::array<double, kShCoefficients> capSh(const glm::dvec3& direction, double cosHalfAngle);
+// Solid angle shared by two caps (half-angles a, b, centres `separation` apart) [sr].
+double capOverlap(double halfAngleA, double halfAngleB, double separation_rad);
+// Lambert sphere phase law Phi(alpha), 1 at full phase, 0 at new.
+double lambertSpherePhase(double alpha_rad);
+
+// One occluder as seen from a point.
+struct OccluderCap {
+    glm::dvec3 direction{0.0, 1.0, 0.0};
+    double cosHalfAngle = 1.0;
+    double weight = 1.0;  // after overlap (see above)
+    glm::dvec3 albedo{0.0};
+};
+// The caps of `occluders` seen from `point`, with their overlap weights (largest first).
+// Occluders that hold the point are clamped to a 80-degree cap.
+std::vector<OccluderCap> occluderCaps(const glm::dvec3& point_m,
+                                      const std::vector<SphereOccluder>& occluders);
+
+// L' = (I + T) L + S E_light, per channel (see above), T split into what the caps hide (the same
+// for every channel) and what they show.
+struct NearFieldTransfer {
+    std::array<float, kShCoefficients * kShCoefficients> hide{};               // row-major
+    std::array<std::array<float, kShCoefficients * kShCoefficients>, 3> show{};  // per channel
+    std::array<std::array<float, kShCoefficients>, 3> s{};                    // S_c
+    glm::dvec3 lightDirection{0.0};  // the light S was made for
+    std::vector<OccluderCap> caps;
+    bool empty() const { return caps.empty(); }
+};
+NearFieldTransfer nearFieldTransfer(std::vector<OccluderCap> caps);
+// Remakes S for the light direction.
+void updateLightTerm(NearFieldTransfer& transfer, const glm::dvec3& lightDirection);
+// The far field with the near field applied, guarded (see above).
+ShRgbD applyTransfer(const NearFieldTransfer& transfer, const ShRgbD& far,
+                     const DirectionalLight& light);
+// Everything at once, uncached: the caps of `occluders` at `point` applied to `far`.
+ShRgbD applyNearField(const ShRgbD& far, const glm::dvec3& point_m,
+                      const std::vector<SphereOccluder>& occluders, const DirectionalLight& light);
+
+// ---- The scene's occluders ---------------------------------------------------------------------
+class NearFieldScene {
+  public:
+    virtual ~NearFieldScene() = default;
+    // Occluders whose base lies within radius_m (horizontally) of `point_m`, appended to `out`.
+    virtual void occludersNear(const glm::dvec3& point_m, double radius_m,
+                               std::vector<SphereOccluder>& out) const = 0;
+    // The light drawn apart from the ambience at a time of day (the sun, the moon at night).
+    virtual DirectionalLight mainLight(double timeOfDay_h) const = 0;
+    // The terrain's height at (x, z) [m] (where a ground point's shading point sits).
+    virtual double groundHeight(double x_m, double z_m) const = 0;
+};
+
+// The generated world's plants (Vegetation::spheres, scaled and placed).
+class WorldNearFieldScene final : public NearFieldScene {
+  public:
+    explicit WorldNearFieldScene(const World& world) : world_(world) {}
+    void occludersNear(const glm::dvec3& point_m, double radius_m,
+                       std::vector<SphereOccluder>& out) const override;
+    DirectionalLight mainLight(double timeOfDay_h) const override;
+    double groundHeight(double x_m, double z_m) const override;
+
+  private:
+    const World& world_;
+};
+
+// The near field at points, with the per-point cache: what a method's decorator asks.
+class NearField {
+  public:
+    NearField(const NearFieldScene& scene, const NearFieldSettings& settings);
+    const NearFieldSettings& settings() const { return settings_; }
+    void setTimeOfDay(double timeOfDay_h);
+    // The far field at `point_m` with the near field applied (cached by the point).
+    ShRgb apply(const ShRgb& far, const glm::dvec3& point_m) const;
+    // Leaves out `self` (an object's own spheres: those whose base is within selfRadius_m
+    // horizontally of the point); not cached.
+    ShRgb applyUncached(const ShRgb& far, const glm::dvec3& point_m, double selfRadius_m) const;
+    std::size_t cachedPoints() const;
+    double cacheBytes() const;
+
+  private:
+    // Null when nothing is near the point.
+    const NearFieldTransfer* transferAt(const glm::dvec3& point_m) const;
+    std::vector<SphereOccluder> occluders(const glm::dvec3& point_m, double selfRadius_m) const;
+
+    const NearFieldScene& scene_;
+    NearFieldSettings settings_;
+    DirectionalLight light_;
+    struct KeyHash {
+        std::size_t operator()(const std::array<float, 3>& k) const;
+    };
+    mutable std::mutex mutex_;
+    mutable std::unordered_map<std::array<float, 3>, std::unique_ptr<NearFieldTransfer>, KeyHash>
+        cache_;
+};
+
+}  // namespace amb

@@ -1,0 +1,235 @@
+// NearField_test.cpp — the near field's closed forms (lighting/NearField.h) against quadrature and
+// against a captured cube: a cap's SH, one sphere in a constant sky (its SH and its light term),
+// a sphere ray-traced into a cube map and projected as captures are, and overlapping caps
+// (never darker twice, never negative irradiance).
+#include "lighting/NearField.h"
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include "lighting/CubeMapProjector.h"
+#include "lighting/Metrics.h"
+#include "world/Conventions.h"
+
+namespace amb {
+namespace {
+
+// Midpoint quadrature over (cos theta, phi) about +Y: equal-area cells, `n` x 2n of them.
+template <class F>
+std::array<glm::dvec3, kShCoefficients> project(int n, F radiance) {
+    std::array<glm::dvec3, kShCoefficients> sh{};
+    const double cellArea = (2.0 / n) * (kPi / n);
+    for (int a = 0; a < n; ++a) {
+        const double y = -1.0 + (a + 0.5) * 2.0 / n;
+        const double r = std::sqrt(1.0 - y * y);
+        for (int b = 0; b < 2 * n; ++b) {
+            const double phi = (b + 0.5) * kPi / n;
+            const glm::dvec3 dir(r * std::cos(phi), y, r * std::sin(phi));
+            const glm::dvec3 L = radiance(dir);
+            const auto basis = shBasis(dir);
+            for (int k = 0; k < kShCoefficients; ++k) sh[k] += L * basis[k] * cellArea;
+        }
+    }
+    return sh;
+}
+
+ShRgbD constantSky(const glm::dvec3& radiance) {
+    ShRgbD sh;
+    sh.c[0] = radiance * (2.0 * std::sqrt(kPi));
+    return sh;
+}
+
+// The unit vector from spherical angles.
+glm::dvec3 unit(double theta, double phi) {
+    return {std::sin(theta) * std::cos(phi), std::cos(theta), std::sin(theta) * std::sin(phi)};
+}
+
+TEST(NearField, CapShMatchesQuadratureOfTheIndicator) {
+    for (double t : {0.05, 0.4, 1.0, 1.5, 2.5}) {
+        const glm::dvec3 d = unit(0.7, 2.1);
+        const auto closed = capSh(d, std::cos(t));
+        const auto q = project(800, [&](const glm::dvec3& w) {
+            return glm::dvec3(glm::dot(w, d) >= std::cos(t) ? 1.0 : 0.0);
+        });
+        for (int k = 0; k < kShCoefficients; ++k)
+            EXPECT_NEAR(closed[k], q[k].x, 2e-3) << "half-angle " << t << ", k " << k;
+        // Solid angle: C_0 / Y_00.
+        EXPECT_NEAR(closed[0] / kShY00, 2.0 * kPi * (1.0 - std::cos(t)), 1e-12);
+    }
+}
+
+TEST(NearField, OneSphereInAConstantSkyMatchesQuadrature) {
+    // A grey sphere of albedo rho in a constant sky L_s: by the model it shows rho L_s (its
+    // visible disc's mean irradiance is pi L_s) where it hides L_s.
+    const glm::dvec3 sky(1.0, 0.8, 0.6), rho(0.3, 0.2, 0.1);
+    const glm::dvec3 point(0.0), centre(3.0, 4.0, -2.0);
+    const double radius = 2.0;
+    const SphereOccluder sphere{centre, radius, rho};
+    DirectionalLight dark;
+    dark.irradiance = glm::dvec3(0.0);
+    const ShRgbD got = applyNearField(constantSky(sky), point, {sphere}, dark);
+
+    const glm::dvec3 d = glm::normalize(centre - point);
+    const double cosT = std::sqrt(1.0 - radius * radius / glm::dot(centre, centre));
+    const auto q = project(1000, [&](const glm::dvec3& w) {
+        return glm::dot(w, d) >= cosT ? rho * sky : sky;
+    });
+    ShRgbD expected;
+    for (int k = 0; k < kShCoefficients; ++k) expected.c[k] = q[k];
+    for (int k = 0; k < kShCoefficients; ++k)
+        for (int ch = 0; ch < 3; ++ch)
+            EXPECT_NEAR(got.c[k][ch], expected.c[k][ch], 2e-3) << "k " << k << " ch " << ch;
+    // And as irradiance over the sphere of normals.
+    EXPECT_LT(irradianceDistance(toFloat(got), toFloat(expected)) / irradianceNorm(toFloat(expected)),
+              1e-3);
+}
+
+TEST(NearField, TheLightTermIsALambertSpheresMeanRadiance) {
+    // A small far sphere lit by a light at phase angle alpha: the mean of rho/pi E max(0, n.l)
+    // over its visible disc (by quadrature over the disc) is what the model shows.
+    const glm::dvec3 rho(0.5);
+    for (double alpha : {0.0, 0.6, 1.4, 2.2, 3.0}) {
+        const glm::dvec3 d(0.0, 0.0, 1.0);  // point -> sphere
+        const glm::dvec3 toViewer = -d;
+        const glm::dvec3 light = glm::normalize(std::cos(alpha) * toViewer +
+                                                std::sin(alpha) * glm::dvec3(1.0, 0.0, 0.0));
+        // Disc quadrature: normals n = (x, y, -sqrt(1 - x^2 - y^2)) facing the viewer.
+        double sum = 0.0, count = 0.0;
+        const int n = 600;
+        for (int a = 0; a < n; ++a)
+            for (int b = 0; b < n; ++b) {
+                const double x = -1.0 + (a + 0.5) * 2.0 / n, y = -1.0 + (b + 0.5) * 2.0 / n;
+                if (x * x + y * y >= 1.0) continue;
+                const glm::dvec3 normal(x, y, -std::sqrt(1.0 - x * x - y * y));
+                sum += std::max(0.0, glm::dot(normal, light));
+                count += 1.0;
+            }
+        const double discMean = 0.5 / kPi * sum / count;  // rho / pi x E=1 x mean cos
+        DirectionalLight sun;
+        sun.direction = light;
+        sun.irradiance = glm::dvec3(1.0);
+        const ShRgbD none;  // a black far field: only the light term remains
+        const ShRgbD got = applyNearField(none, glm::dvec3(0.0), {{d * 1000.0, 5.0, rho}}, sun);
+        const double omega = 2.0 * kPi * (1.0 - std::sqrt(1.0 - 25.0 / 1e6));
+        EXPECT_NEAR(got.c[0].x / kShY00 / omega, discMean, 2e-3 * 0.5 / kPi + 1e-4)
+            << "phase " << alpha;
+    }
+}
+
+TEST(NearField, ACapturedCubeWithOneSphereMatchesTheAnalyticResult) {
+    // A cube map as a capture sees it: a constant sky and one Lambertian sphere lit by that sky
+    // and a light, every texel ray-traced; projected as captures are.
+    const glm::dvec3 sky(0.6, 0.7, 1.0), rho(0.35, 0.3, 0.2);
+    const glm::dvec3 centre(2.0, 3.0, 1.5);
+    const double radius = 1.8;
+    DirectionalLight sun;
+    sun.direction = glm::normalize(glm::dvec3(0.3, 0.8, -0.5));
+    sun.irradiance = glm::dvec3(4.0, 3.8, 3.5);
+    const int n = 96;
+    std::vector<float> cube(6 * n * n * 3);
+    for (int f = 0; f < 6; ++f)
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                const glm::dvec3 w = glm::normalize(cubeTexelDirection(f, i, j, n));
+                glm::dvec3 L = sky;
+                // Ray from the origin: |t w - c|^2 = r^2.
+                const double b = glm::dot(w, centre);
+                const double disc = b * b - glm::dot(centre, centre) + radius * radius;
+                if (disc >= 0.0 && b > 0.0) {
+                    const glm::dvec3 hit = (b - std::sqrt(disc)) * w;
+                    const glm::dvec3 normal = glm::normalize(hit - centre);
+                    // Lit by the whole constant sky (E = pi L_s) and the light.
+                    L = rho / kPi *
+                        (kPi * sky + sun.irradiance * std::max(0.0, glm::dot(normal, sun.direction)));
+                }
+                for (int c = 0; c < 3; ++c) cube[(size_t(f) * n * n + size_t(j) * n + i) * 3 + c] = float(L[c]);
+            }
+    CubeMapProjector::Options keepAll;
+    keepAll.sunThreshold = std::numeric_limits<double>::infinity();
+    const ShRgb captured = toFloat(projectCubeMap(n, cube, keepAll).sh);
+    const ShRgb analytic =
+        toFloat(applyNearField(constantSky(sky), glm::dvec3(0.0), {{centre, radius, rho}}, sun));
+    const double rel = irradianceDistance(analytic, captured) / irradianceNorm(captured);
+    EXPECT_LT(rel, 0.01);
+    // The sphere matters: the sky alone is further off than the tolerance.
+    EXPECT_GT(irradianceDistance(toFloat(constantSky(sky)), captured) / irradianceNorm(captured),
+              5.0 * rel);
+}
+
+TEST(NearField, CoincidentOccludersDarkenOnce) {
+    const ShRgbD far = constantSky(glm::dvec3(1.0));
+    DirectionalLight sun;
+    sun.irradiance = glm::dvec3(2.0);
+    const SphereOccluder s{{0.0, 3.0, 1.0}, 1.5, glm::dvec3(0.1)};
+    const ShRgbD one = applyNearField(far, glm::dvec3(0.0), {s}, sun);
+    const ShRgbD three = applyNearField(far, glm::dvec3(0.0), {s, s, s}, sun);
+    for (int k = 0; k < kShCoefficients; ++k)
+        EXPECT_NEAR(glm::length(one.c[k] - three.c[k]), 0.0, 1e-9) << "k " << k;
+    // A small sphere inside a large one's cap adds nothing.
+    const SphereOccluder inner{{0.0, 3.0, 1.0}, 0.4, glm::dvec3(0.9)};
+    const ShRgbD both = applyNearField(far, glm::dvec3(0.0), {s, inner}, sun);
+    for (int k = 0; k < kShCoefficients; ++k)
+        EXPECT_NEAR(glm::length(one.c[k] - both.c[k]), 0.0, 1e-9) << "k " << k;
+}
+
+TEST(NearField, OverlappingCapsNeverGiveNegativeIrradiance) {
+    // Dense clusters of black and bright spheres around the point, some holding it, over a
+    // constant sky and over a sky-and-ground field: the irradiance stays >= 0 for every normal
+    // (the far fields' own minima are >= 0), and a black cluster never brightens the mean.
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    ShRgbD skyGround;  // bright above, dim below: L = 1 + 0.8 y
+    skyGround.c[0] = glm::dvec3(2.0 * std::sqrt(kPi));
+    skyGround.c[2] = glm::dvec3(0.8 * std::sqrt(4.0 * kPi / 3.0));
+    const ShRgbD skies[2] = {constantSky(glm::dvec3(1.0)), skyGround};
+    int guardedCases = 0;
+    for (int trial = 0; trial < 300; ++trial) {
+        const ShRgbD& far = skies[trial % 2];
+        ASSERT_GE(shMinIrradiance(far).x, -1e-12);
+        std::vector<SphereOccluder> occ;
+        const int count = 2 + int(u(rng) * 40);
+        const glm::dvec3 clusterAt = unit(u(rng) * kPi, u(rng) * 2 * kPi) * (0.5 + 4.0 * u(rng));
+        const bool black = trial % 3 == 0;
+        for (int i = 0; i < count; ++i) {
+            const glm::dvec3 jitter(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5);
+            occ.push_back({clusterAt + 4.0 * jitter, 0.3 + 2.5 * u(rng),
+                           black ? glm::dvec3(0.0) : glm::dvec3(u(rng), u(rng), u(rng))});
+        }
+        DirectionalLight sun;
+        sun.direction = unit(u(rng) * kPi, u(rng) * 2 * kPi);
+        sun.irradiance = glm::dvec3(black ? 0.0 : 5.0 * u(rng));
+        const ShRgbD got = applyNearField(far, glm::dvec3(0.0), occ, sun);
+        const glm::dvec3 m = shMinIrradiance(got);
+        EXPECT_GE(std::min({m.x, m.y, m.z}), -1e-9) << "trial " << trial;
+        if (black) {
+            EXPECT_LE(got.c[0].x, far.c[0].x + 1e-12) << "trial " << trial;
+        }
+        // Count the cases the guard had to scale (what the caps hide alone would go negative).
+        const NearFieldTransfer t = nearFieldTransfer(occluderCaps(glm::dvec3(0.0), occ));
+        ShRgbD raw = far;
+        for (int j = 0; j < kShCoefficients; ++j)
+            for (int k = 0; k < kShCoefficients; ++k)
+                raw.c[j] += double(t.hide[j * kShCoefficients + k]) * far.c[k];
+        const glm::dvec3 rawMin = shMinIrradiance(raw);
+        if (std::min({rawMin.x, rawMin.y, rawMin.z}) < -1e-9) ++guardedCases;
+    }
+    ::testing::Test::RecordProperty("guarded", guardedCases);
+}
+
+TEST(NearField, CapOverlapClosedCases) {
+    EXPECT_EQ(capOverlap(0.2, 0.3, 0.6), 0.0);
+    EXPECT_NEAR(capOverlap(0.2, 0.5, 0.1), 2.0 * kPi * (1.0 - std::cos(0.2)), 1e-12);
+    const double mid = capOverlap(0.3, 0.3, 0.3);
+    EXPECT_GT(mid, 0.0);
+    EXPECT_LT(mid, 2.0 * kPi * (1.0 - std::cos(0.3)));
+    EXPECT_NEAR(lambertSpherePhase(0.0), 1.0, 1e-12);
+    EXPECT_NEAR(lambertSpherePhase(kPi), 0.0, 1e-12);
+    EXPECT_NEAR(lambertSpherePhase(kPi / 2), 1.0 / kPi, 1e-12);
+}
+
+}  // namespace
+}  // namespace amb
