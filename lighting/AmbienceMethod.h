@@ -11,12 +11,17 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include <glm/vec3.hpp>
 
 #include "lighting/SH.h"
 
 namespace amb {
+
+// The height above the ground at which terrain corners and objects take their ambience: the
+// height of the probes and of the witnesses that measure them (ProbeEnvironment.h).
+inline constexpr double kShadingHeight_m = 2.0;
 
 // The capture budget's upper end, cube faces per frame (the settings readers and the command
 // line): about 11 probes a frame, where a GPU with 16 x 16 faces is still far from busy.
@@ -29,6 +34,10 @@ struct MethodStatistics {
     std::int64_t facesCaptured = 0;
     std::int64_t rejectedProbes = 0;  // captures refused (NaN, Inf, negative)
     std::int64_t teleports = 0;
+    // The near field (lighting/NearField.h): wall time since the last predictStage, points it
+    // answered, points it holds and the memory they take (0 without one).
+    double nearField_s = 0.0;
+    std::size_t nearFieldPoints = 0, nearFieldCached = 0, nearFieldBytes = 0;
     // Wall time of this frame's stages [s] (project = SH projection of captured faces).
     double predict_s = 0.0, capture_s = 0.0, project_s = 0.0, store_s = 0.0;
 };
@@ -71,6 +80,18 @@ class AmbienceMethod {
     virtual void cornerShAt(std::size_t count, const double* x_m, const double* z_m,
                             ShRgb* out) const {
         shAt(count, x_m, z_m, out);
+    }
+
+    // cornerShAt at shading points in space: a terrain corner's point kShadingHeight_m above
+    // the ground, a witness' probe position. The near field (lighting/NearField.h) needs the
+    // point; a method without one reads its ground point.
+    virtual ShRgb cornerShAtPoint(const glm::dvec3& point_m) const {
+        return cornerShAt(point_m.x, point_m.z);
+    }
+    virtual void cornerShAtPoints(std::size_t count, const glm::dvec3* points_m, ShRgb* out) const {
+        std::vector<double> x(count), z(count);
+        for (std::size_t i = 0; i < count; ++i) x[i] = points_m[i].x, z[i] = points_m[i].z;
+        cornerShAt(count, x.data(), z.data(), out);
     }
 
     // Where the draw looked up ambience this frame (terrain corners, objects). Only methods that

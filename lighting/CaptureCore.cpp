@@ -50,7 +50,8 @@ struct FacesResult {
 };
 FacesResult captureProbeFaces(CubeCapture& capture, CubeMapProjector& projector,
                               std::vector<float>& cube, const glm::dvec3& position_m,
-                              double timeOfDay_h, int facesDone, int budget, bool& bad) {
+                              double timeOfDay_h, int facesDone, int budget, double nearRadius_m,
+                              bool& bad) {
     FacesResult result;
     const int count = std::min(budget, kCubeFaces - facesDone);
     if (count <= 0) return result;
@@ -58,7 +59,7 @@ FacesResult captureProbeFaces(CubeCapture& capture, CubeMapProjector& projector,
     for (int f = facesDone; f < facesDone + count; ++f) mask |= cubeFaceBit(f);
 
     auto t0 = Clock::now();
-    capture.capture(position_m, timeOfDay_h, mask, cube);
+    capture.captureFar(position_m, timeOfDay_h, mask, cube, nearRadius_m);
     result.capture_s = secondsSince(t0);
     const std::size_t faceFloats = 3 * std::size_t(capture.faceSize()) * capture.faceSize();
     AMB_CHECK(cube.size() == faceFloats * kCubeFaces);
@@ -96,6 +97,7 @@ void readCaptureSettings(JsonFields& f, CaptureSettings& s) {
     f.number("teleportDistance_m", s.teleportDistance_m, 0.0, 1e9);
     f.integer("fallbackFaceSize", s.fallbackFaceSize, 1, 256);
     f.number("fallbackRefresh_h", s.fallbackRefresh_h, 0.0, 24.0);
+    f.object("nearField", [&](JsonFields& inner) { readNearFieldSettings(inner, s.nearField); });
 }
 
 // ---- Clock --------------------------------------------------------------------------------------
@@ -206,7 +208,8 @@ void CaptureCore::captureFaces(const NextProbe& next) {
             if (!job_) break;  // nothing worth capturing: the budget stays unused
         }
         const FacesResult r = captureProbeFaces(capture_, *projector_, cube_, job_->position_m,
-                                                timeOfDay_h_, job_->facesDone, budget, job_->bad);
+                                                timeOfDay_h_, job_->facesDone, budget,
+                                                settings_.nearRadius_m(), job_->bad);
         stats_.capture_s += r.capture_s;
         stats_.project_s += r.project_s;
         job_->facesDone += r.faces;

@@ -41,6 +41,7 @@
 #include <glm/vec3.hpp>
 
 #include "lighting/AmbienceMethod.h"
+#include "lighting/NearField.h"
 #include "lighting/SH.h"
 #include "world/Conventions.h"
 
@@ -65,6 +66,11 @@ struct CaptureSettings {
     double teleportDistance_m = 100.0;  // a camera step longer than this + 3 x speed x dt [m]
     int fallbackFaceSize = 16;          // cube map size of the fallback SH
     double fallbackRefresh_h = 1.0 / 60.0;  // recompute the fallback after this much day time
+    // The two-scale ambience (lighting/NearField.h; JSON key "nearField"): when enabled, probes
+    // leave the plants within nearField.radius_m out and the method's decorator puts them back
+    // at each shading point.
+    NearFieldSettings nearField;
+    double nearRadius_m() const { return nearField.enabled ? nearField.radius_m : 0.0; }
 };
 
 // Reads the keys above from a settings object (JsonFields, lighting/JsonFields.h).

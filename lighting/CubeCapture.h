@@ -46,6 +46,16 @@ class CubeCapture {
     virtual CubeCaptureStats capture(const glm::dvec3& position_m, double timeOfDay_h,
                                      CubeFaceMask faces, std::vector<float>& cube) = 0;
 
+    // The same with the plants whose base lies within nearRadius_m (horizontally) of
+    // `position_m` left out: the far field of the two-scale ambience (lighting/NearField.h).
+    // A capture that has no plants to leave out (a test's analytic scene) renders as capture().
+    virtual CubeCaptureStats captureFar(const glm::dvec3& position_m, double timeOfDay_h,
+                                        CubeFaceMask faces, std::vector<float>& cube,
+                                        double nearRadius_m) {
+        (void)nearRadius_m;
+        return capture(position_m, timeOfDay_h, faces, cube);
+    }
+
     // Triangles per face of the latest capture (the capture scene's size; 0 if not known).
     virtual std::size_t lastTriangles() const { return 0; }
 

@@ -252,7 +252,8 @@ void ErrorMeter::referenceFrame(int index, double timeOfDay_h, const glm::dvec3&
         r.ring = w.ring;
         r.position_m = environment_.placeProbe(w.x_m, w.z_m, settings_.maxAside_m);
         const ReferenceSample& ref = reference(index, r.position_m, timeOfDay_h);
-        r.terms = budgetTerms(ref, oracles[i], ideal(w.x_m, w.z_m), appliedAt(method, w), rule_);
+        r.terms = budgetTerms(ref, oracles[i], ideal(w.x_m, w.z_m),
+                              appliedAt(method, w, r.position_m), rule_);
         referenceWitnesses_.push_back(r);
     }
     const ReferenceSettings& rs = referenceSettings_;
@@ -331,8 +332,12 @@ std::vector<BudgetTerms> ErrorMeter::objectBudget(ObjectKind kind) const {
 
 // What the draw applies at a witness: the object path at the camera's ground point (ring 0: the
 // car on drives), the terrain-corner path at the rings' patch corners.
-ShRgb appliedAt(const AmbienceMethod& method, const Witness& w) {
-    return w.ring == 0 ? method.shAt(w.x_m, w.z_m) : method.cornerShAt(w.x_m, w.z_m);
+ShRgb appliedAt(const AmbienceMethod& method, const Witness& w, const glm::dvec3& point_m) {
+    return w.ring == 0 ? method.shAt(w.x_m, w.z_m) : method.cornerShAtPoint(point_m);
+}
+
+glm::dvec3 ErrorMeter::witnessPoint(const Witness& w) const {
+    return environment_.placeProbe(w.x_m, w.z_m, settings_.maxAside_m);
 }
 
 void ErrorMeter::frame(int index, double time_s, double timeOfDay_h, const glm::dvec3& camera_m,
@@ -342,7 +347,7 @@ void ErrorMeter::frame(int index, double time_s, double timeOfDay_h, const glm::
     // Pop: this frame's change at the held points.
     if (!popPoints_.empty()) {
         for (std::size_t i = 0; i < popPoints_.size(); ++i) {
-            const ShRgb now = appliedAt(method, popPoints_[i]);
+            const ShRgb now = appliedAt(method, popPoints_[i], witnessPoint(popPoints_[i]));
             pending_.push_back({i, now - popPrevious_[i]});
             popPrevious_[i] = now;
         }
@@ -377,7 +382,7 @@ void ErrorMeter::frame(int index, double time_s, double timeOfDay_h, const glm::
     for (const Witness& w : mf.witnesses) {
         const ShRgb o = oracle(index, w.x_m, w.z_m, timeOfDay_h);
         oracles.push_back(o);
-        mf.errors.push_back(relativeIrradianceError(appliedAt(method, w), o));
+        mf.errors.push_back(relativeIrradianceError(appliedAt(method, w, witnessPoint(w)), o));
     }
     referenceNow_ = reference_ && measuredIndex % referenceSettings_.every == 0;
     if (referenceNow_)
@@ -391,7 +396,7 @@ void ErrorMeter::frame(int index, double time_s, double timeOfDay_h, const glm::
         if (mf.witnesses[i].ring > 1) break;
         popPoints_.push_back(mf.witnesses[i]);
         popOracleStart_.push_back(oracles[i]);
-        popPrevious_.push_back(appliedAt(method, mf.witnesses[i]));
+        popPrevious_.push_back(appliedAt(method, mf.witnesses[i], witnessPoint(mf.witnesses[i])));
     }
     measured_.push_back(std::move(mf));
 }

@@ -112,8 +112,9 @@ std::vector<Witness> witnessPoints(const MeasureSettings& settings, double camer
                                    double cameraZ_m, int measuredIndex);
 
 // What the method applies at a witness, as the draw reads it: shAt at the camera's ground point
-// (ring 0, an object), cornerShAt at terrain patch corners (rings >= 1).
-ShRgb appliedAt(const AmbienceMethod& method, const Witness& w);
+// (ring 0, an object), cornerShAtPoint at terrain patch corners (rings >= 1), at `point_m`,
+// where the oracle looks from (the near field, lighting/NearField.h, needs the point).
+ShRgb appliedAt(const AmbienceMethod& method, const Witness& w, const glm::dvec3& point_m);
 
 // The oracle SH at ground point (x, z) at `timeOfDay_h` (see above).
 ShRgb oracleSh(CubeCapture& capture, const ProbeEnvironment& environment,
@@ -241,6 +242,8 @@ class ErrorMeter {
     void saveOracle(const std::string& path, const std::string& signature) const;
 
   private:
+    // Where the oracle looks from for a terrain witness (the probe placement).
+    glm::dvec3 witnessPoint(const Witness& w) const;
     ShRgb oracle(int frameIndex, double x_m, double z_m, double timeOfDay_h);
     void movingPop(const glm::dvec3& camera_m, const AmbienceMethod& method);
     void parseOracle(const nlohmann::json& j, const std::string& where,

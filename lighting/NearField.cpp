@@ -2,8 +2,10 @@
 #include "lighting/NearField.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 #include <glm/geometric.hpp>
 
@@ -32,6 +34,8 @@ constexpr double kAhatBand[3] = {kShA0, kShA1, kShA2};
 constexpr double kDiscMean[3] = {1.0, 2.0 / 3.0, 0.25};
 // An occluder that holds the point counts as a cap of this half-angle.
 const double kMaxCosHalfAngle = std::cos(80.0 * kPi / 180.0);
+// Caps narrower than this (a 0.3 m trunk 20 m away) are left out: 2e-4 of the sphere each.
+constexpr double kMinSinHalfAngle = 0.015;
 
 double capSolidAngle(double cosHalfAngle) {
     return 2.0 * kPi * (1.0 - cosHalfAngle);
@@ -81,6 +85,7 @@ std::vector<OccluderCap> occluderCaps(const glm::dvec3& point_m,
         const double d = glm::length(to);
         if (!(o.radius_m > 0.0) || !std::isfinite(d) || d <= 0.0) continue;
         const double sinT = std::min(1.0, o.radius_m / d);
+        if (sinT < kMinSinHalfAngle) continue;  // too small to matter (see NearField.h)
         OccluderCap c;
         c.direction = to / d;
         c.cosHalfAngle = std::max(kMaxCosHalfAngle, std::sqrt(1.0 - sinT * sinT));
@@ -91,16 +96,22 @@ std::vector<OccluderCap> occluderCaps(const glm::dvec3& point_m,
     std::sort(caps.begin(), caps.end(), [](const OccluderCap& a, const OccluderCap& b) {
         return a.cosHalfAngle < b.cosHalfAngle;
     });
-    std::vector<double> halfAngle(caps.size());
-    for (std::size_t i = 0; i < caps.size(); ++i) halfAngle[i] = std::acos(caps[i].cosHalfAngle);
+    std::vector<double> halfAngle(caps.size()), sinHalf(caps.size());
+    for (std::size_t i = 0; i < caps.size(); ++i) {
+        halfAngle[i] = std::acos(caps[i].cosHalfAngle);
+        sinHalf[i] = std::sin(halfAngle[i]);
+    }
     for (std::size_t i = 0; i < caps.size(); ++i) {
         const double omega = capSolidAngle(caps[i].cosHalfAngle);
         double w = 1.0;
         for (std::size_t j = 0; j < i && w > 0.0; ++j) {
             const double cosD = std::clamp(glm::dot(caps[i].direction, caps[j].direction), -1.0, 1.0);
-            const double d = std::acos(cosD);
-            if (d >= halfAngle[i] + halfAngle[j]) continue;
-            w *= std::max(0.0, 1.0 - capOverlap(halfAngle[i], halfAngle[j], d) / omega);
+            // Apart when the separation is at least a_i + a_j: cos d <= cos(a_i + a_j).
+            const double sumA = halfAngle[i] + halfAngle[j];
+            if (sumA < kPi && cosD <= caps[i].cosHalfAngle * caps[j].cosHalfAngle -
+                                          sinHalf[i] * sinHalf[j])
+                continue;
+            w *= std::max(0.0, 1.0 - capOverlap(halfAngle[i], halfAngle[j], std::acos(cosD)) / omega);
         }
         caps[i].weight = w;
     }
@@ -129,6 +140,8 @@ NearFieldTransfer nearFieldTransfer(std::vector<OccluderCap> caps) {
                     t.show[ch][j * kShCoefficients + k] += float(cap.weight * c[j] * own * g[k]);
         }
     }
+    for (int ch = 0; ch < 3; ++ch)
+        for (int i = 0; i < kShCoefficients * kShCoefficients; ++i) t.show[ch][i] += t.hide[i];
     t.caps = std::move(caps);
     return t;
 }
@@ -149,31 +162,82 @@ void updateLightTerm(NearFieldTransfer& t, const glm::dvec3& lightDirection) {
 
 namespace {
 
-// A lower bound of min_n E(n) per channel: E_00 - |E_1| - |E_2| by the addition theorem.
-double irradianceLowerBound(const ShRgbD& sh, int ch) {
-    double b1 = 0.0, b2 = 0.0;
-    for (int k = 1; k < 4; ++k) b1 += sh.c[k][ch] * sh.c[k][ch];
-    for (int k = 4; k < 9; ++k) b2 += sh.c[k][ch] * sh.c[k][ch];
-    return kShA0 * kShY00 * sh.c[0][ch] - kShA1 * kShY1 * std::sqrt(b1) -
-           kShA2 * std::sqrt(5.0 / (4.0 * kPi)) * std::sqrt(b2);
+// A sampled lower bound of min_n E(n): the minimum over a Fibonacci set of normals less
+// (1/2) M2 delta^2, delta the set's covering radius and M2 a bound of E's second derivative along
+// any great circle (Bernstein: l^2 max|E_l| per band, max|E_l| <= Ahat_l sqrt((2l+1)/4pi) |L_l|).
+// At the true minimum the gradient vanishes, so the nearest sample is at most that much above it.
+struct GuardSamples {
+    std::vector<std::array<double, kShCoefficients>> ahatY;  // Ahat_l Y_k(n) per sample
+    double halfDelta2 = 0.0;                                 // (1/2) delta^2
+};
+
+const GuardSamples& guardSamples() {
+    static const GuardSamples g = [] {
+        GuardSamples out;
+        const auto fibonacci = [](int n) {
+            std::vector<glm::dvec3> d;
+            const double golden = kPi * (3.0 - std::sqrt(5.0));
+            for (int i = 0; i < n; ++i) {
+                const double y = 1.0 - (i + 0.5) * 2.0 / n, r = std::sqrt(1.0 - y * y);
+                d.push_back({r * std::cos(golden * i), y, r * std::sin(golden * i)});
+            }
+            return d;
+        };
+        const std::vector<glm::dvec3> samples = fibonacci(160);
+        for (const glm::dvec3& n : samples) {
+            const auto y = shBasis(n);
+            std::array<double, kShCoefficients> a{};
+            for (int k = 0; k < kShCoefficients; ++k) a[k] = kAhatBand[shBand(k)] * y[k];
+            out.ahatY.push_back(a);
+        }
+        // The covering radius, measured on a much denser set, with a margin.
+        double cover = 0.0;
+        for (const glm::dvec3& p : fibonacci(20000)) {
+            double best = -1.0;
+            for (const glm::dvec3& n : samples) best = std::max(best, glm::dot(p, n));
+            cover = std::max(cover, std::acos(std::min(1.0, best)));
+        }
+        cover *= 1.1;
+        out.halfDelta2 = 0.5 * cover * cover;
+        return out;
+    }();
+    return g;
 }
 
-// far + s (near - far) with the largest s in [0, 1] whose irradiance is nowhere below min(0, the
-// far field's minimum), per channel.
-ShRgbD guarded(const ShRgbD& far, const ShRgbD& near) {
-    bool safe = true;
-    for (int ch = 0; ch < 3; ++ch) safe = safe && irradianceLowerBound(near, ch) >= 0.0;
-    if (safe) return near;
-    const glm::dvec3 nearMin = shMinIrradiance(near);
-    if (nearMin.x >= 0.0 && nearMin.y >= 0.0 && nearMin.z >= 0.0) return near;
-    const glm::dvec3 floor = glm::min(shMinIrradiance(far), glm::dvec3(0.0));
-    ShRgbD out = near;
+// Per channel, the sampled lower bound of min_n E(n) (see above).
+glm::dvec3 sampledLowerBound(const ShRgbD& sh) {
+    const GuardSamples& g = guardSamples();
+    glm::dvec3 bound;
     for (int ch = 0; ch < 3; ++ch) {
-        if (nearMin[ch] >= floor[ch]) continue;
+        double b1 = 0.0, b2 = 0.0;
+        for (int k = 1; k < 4; ++k) b1 += sh.c[k][ch] * sh.c[k][ch];
+        for (int k = 4; k < 9; ++k) b2 += sh.c[k][ch] * sh.c[k][ch];
+        const double m2 = kShA1 * std::sqrt(3.0 / (4.0 * kPi)) * std::sqrt(b1) +
+                          4.0 * kShA2 * std::sqrt(5.0 / (4.0 * kPi)) * std::sqrt(b2);
+        double least = std::numeric_limits<double>::infinity();
+        for (const auto& a : g.ahatY) {
+            double e = 0.0;
+            for (int k = 0; k < kShCoefficients; ++k) e += a[k] * sh.c[k][ch];
+            least = std::min(least, e);
+        }
+        bound[ch] = least - g.halfDelta2 * m2;
+    }
+    return bound;
+}
+
+glm::dvec3 guardScale(const ShRgbD& far, const ShRgbD& hidden) {
+    glm::dvec3 scale(1.0);
+    const glm::dvec3 sampled = sampledLowerBound(hidden);
+    if (sampled.x >= 0.0 && sampled.y >= 0.0 && sampled.z >= 0.0) return scale;
+    const glm::dvec3 hiddenMin = shMinIrradiance(hidden);
+    if (hiddenMin.x >= 0.0 && hiddenMin.y >= 0.0 && hiddenMin.z >= 0.0) return scale;
+    const glm::dvec3 floor = glm::min(shMinIrradiance(far), glm::dvec3(0.0));
+    for (int ch = 0; ch < 3; ++ch) {
+        if (hiddenMin[ch] >= floor[ch]) continue;
         const auto mix = [&](double s) {
             ShRgbD m = far;
             for (int k = 0; k < kShCoefficients; ++k)
-                m.c[k][ch] = far.c[k][ch] + s * (near.c[k][ch] - far.c[k][ch]);
+                m.c[k][ch] = far.c[k][ch] + s * (hidden.c[k][ch] - far.c[k][ch]);
             return m;
         };
         double lo = 0.0, hi = 1.0;
@@ -181,30 +245,54 @@ ShRgbD guarded(const ShRgbD& far, const ShRgbD& near) {
             const double mid = 0.5 * (lo + hi);
             (shMinIrradiance(mix(mid))[ch] >= floor[ch] ? lo : hi) = mid;
         }
-        const ShRgbD m = mix(lo);
-        for (int k = 0; k < kShCoefficients; ++k) out.c[k][ch] = m.c[k][ch];
+        scale[ch] = lo;
     }
-    return out;
+    return scale;
+}
+
+// Whether the guard found for t.guardFar is kept for `far`: while the far field stays within
+// 5 % of it (coefficients, all channels). The irradiance moves by at most 1.44 times that change
+// (the norm of Ahat_l Y_k(n) over k), small against the margin the check usually finds; the
+// draw clamps what is left.
+bool stillGuarded(const NearFieldTransfer& t, const ShRgbD& far) {
+    double d = 0.0, norm = 0.0;
+    for (int k = 0; k < kShCoefficients; ++k) {
+        const glm::dvec3 x = far.c[k] - t.guardFar.c[k];
+        d += glm::dot(x, x);
+        norm += glm::dot(t.guardFar.c[k], t.guardFar.c[k]);
+    }
+    return d <= 0.05 * 0.05 * norm;
 }
 
 }  // namespace
 
-ShRgbD applyTransfer(const NearFieldTransfer& t, const ShRgbD& far, const DirectionalLight& light) {
+ShRgb applyTransfer(const NearFieldTransfer& t, const ShRgb& far, const DirectionalLight& light) {
     if (t.empty()) return far;
-    ShRgbD hidden = far;
-    for (int j = 0; j < kShCoefficients; ++j) {
-        glm::dvec3 sum(0.0);
-        for (int k = 0; k < kShCoefficients; ++k)
-            sum += double(t.hide[j * kShCoefficients + k]) * far.c[k];
-        hidden.c[j] += sum;
+    constexpr int K = kShCoefficients;
+    // The guard's scale is kept with the far field it was found for, and reused while the far
+    // field stays within 1 % of it (a point's far field changes slowly: blends, the sun).
+    const ShRgbD farD = toDouble(far);
+    if (!t.guardValid || !stillGuarded(t, farD)) {
+        ShRgbD hidden = farD;
+        for (int j = 0; j < K; ++j)
+            for (int k = 0; k < K; ++k) hidden.c[j] += double(t.hide[j * K + k]) * farD.c[k];
+        t.guardScale = guardScale(farD, hidden);
+        t.guardFar = farD;
+        t.guardValid = true;
     }
-    ShRgbD out = guarded(far, hidden);
+    ShRgb out;
     for (int ch = 0; ch < 3; ++ch) {
-        const auto& m = t.show[ch];
-        for (int j = 0; j < kShCoefficients; ++j) {
-            double sum = 0.0;
-            for (int k = 0; k < kShCoefficients; ++k) sum += m[j * kShCoefficients + k] * far.c[k][ch];
-            out.c[j][ch] += sum + double(t.s[ch][j]) * light.irradiance[ch];
+        float f[K];
+        for (int k = 0; k < K; ++k) f[k] = far.c[k][ch];
+        const float e = float(light.irradiance[ch]);
+        const float unhide = float(1.0 - t.guardScale[ch]);  // 0 unless the guard scaled
+        const float* m = t.show[ch].data();
+        for (int j = 0; j < K; ++j) {
+            float sum = f[j] + t.s[ch][j] * e;
+            for (int k = 0; k < K; ++k) sum += m[j * K + k] * f[k];
+            if (unhide > 0.0f)
+                for (int k = 0; k < K; ++k) sum -= unhide * t.hide[j * K + k] * f[k];
+            out.c[j][ch] = sum;
         }
     }
     return out;
@@ -214,7 +302,7 @@ ShRgbD applyNearField(const ShRgbD& far, const glm::dvec3& point_m,
                       const std::vector<SphereOccluder>& occluders, const DirectionalLight& light) {
     NearFieldTransfer t = nearFieldTransfer(occluderCaps(point_m, occluders));
     updateLightTerm(t, light.direction);
-    return applyTransfer(t, far, light);
+    return toDouble(applyTransfer(t, toFloat(far), light));
 }
 
 // ---- [SECTION] The world's occluders -----------------------------------------------------------
@@ -239,11 +327,16 @@ double WorldNearFieldScene::groundHeight(double x_m, double z_m) const {
 
 // ---- [SECTION] Cache ---------------------------------------------------------------------------
 
-std::size_t NearField::KeyHash::operator()(const std::array<float, 3>& k) const {
-    std::uint32_t b[3];
+std::size_t NearField::KeyHash::operator()(const Key& k) const {
+    std::uint32_t b[4];
     std::memcpy(b, k.data(), sizeof b);
     std::uint64_t h = 1469598103934665603ull;
     for (std::uint32_t v : b) h = (h ^ v) * 1099511628211ull;
+    // Mix the high bits down: lattice coordinates share their low mantissa bits, and the map
+    // takes the low bits of the hash.
+    h ^= h >> 33;
+    h *= 0xff51afd7ed558ccdull;
+    h ^= h >> 33;
     return std::size_t(h);
 }
 
@@ -253,7 +346,9 @@ NearField::NearField(const NearFieldScene& scene, const NearFieldSettings& setti
 void NearField::setTimeOfDay(double timeOfDay_h) {
     const DirectionalLight l = scene_.mainLight(timeOfDay_h);
     std::lock_guard<std::mutex> lock(mutex_);
-    light_ = l;
+    if (std::isfinite(l.direction.x + l.direction.y + l.direction.z) &&
+        std::isfinite(l.irradiance.x + l.irradiance.y + l.irradiance.z))
+        light_ = l;
 }
 
 std::vector<SphereOccluder> NearField::occluders(const glm::dvec3& p, double selfRadius_m) const {
@@ -261,7 +356,6 @@ std::vector<SphereOccluder> NearField::occluders(const glm::dvec3& p, double sel
     if (!settings_.plants) return out;
     scene_.occludersNear(p, settings_.radius_m, out);
     if (selfRadius_m > 0.0) {
-        // An object's own spheres sit on its axis, straight above its base.
         out.erase(std::remove_if(out.begin(), out.end(),
                                  [&](const SphereOccluder& o) {
                                      return std::hypot(o.centre_m.x - p.x, o.centre_m.z - p.z) <
@@ -272,15 +366,18 @@ std::vector<SphereOccluder> NearField::occluders(const glm::dvec3& p, double sel
     return out;
 }
 
-const NearFieldTransfer* NearField::transferAt(const glm::dvec3& p) const {
-    const std::array<float, 3> key{float(p.x), float(p.y), float(p.z)};
+const NearFieldTransfer* NearField::transferAt(const Key& key, const glm::dvec3& p,
+                                               double selfRadius_m) const {
     auto it = cache_.find(key);
     if (it == cache_.end()) {
-        if (cache_.size() >= std::size_t(settings_.cacheEntries)) cache_.clear();
-        std::vector<OccluderCap> caps = occluderCaps(p, occluders(p, 0.0));
+        if (cache_.size() >= std::size_t(settings_.cacheEntries)) cache_.clear(), bytes_ = 0;
+        std::vector<OccluderCap> caps = occluderCaps(p, occluders(p, selfRadius_m));
         std::unique_ptr<NearFieldTransfer> t;
-        if (!caps.empty())
+        bytes_ += sizeof(Key) + sizeof(t) + 2 * sizeof(void*);  // key, pointer, node links
+        if (!caps.empty()) {
+            bytes_ += sizeof(NearFieldTransfer) + caps.size() * sizeof(OccluderCap);
             t = std::make_unique<NearFieldTransfer>(nearFieldTransfer(std::move(caps)));
+        }
         it = cache_.emplace(key, std::move(t)).first;
     }
     NearFieldTransfer* t = it->second.get();
@@ -290,23 +387,47 @@ const NearFieldTransfer* NearField::transferAt(const glm::dvec3& p) const {
     return t;
 }
 
-ShRgb NearField::apply(const ShRgb& far, const glm::dvec3& point_m) const {
-    if (!settings_.enabled) return far;
-    std::lock_guard<std::mutex> lock(mutex_);
-    const NearFieldTransfer* t = transferAt(point_m);
-    if (!t) return far;
-    return toFloat(applyTransfer(*t, toDouble(far), light_));
+ShRgb NearField::apply(const ShRgb& far, const glm::dvec3& point_m, double selfRadius_m) const {
+    const Key key{float(point_m.x), float(point_m.y), float(point_m.z), float(selfRadius_m)};
+    return applyKeyed(far, key, [&] { return point_m; }, selfRadius_m);
 }
 
-ShRgb NearField::applyUncached(const ShRgb& far, const glm::dvec3& point_m,
-                               double selfRadius_m) const {
+ShRgb NearField::applyAbove(const ShRgb& far, double x_m, double z_m, double height_m,
+                            double selfRadius_m) const {
+    // A key no explicit point has (a height of -1e30): one NearField uses one lift.
+    const Key key{float(x_m), -1e30f, float(z_m), float(selfRadius_m)};
+    return applyKeyed(
+        far, key, [&] { return glm::dvec3(x_m, scene_.groundHeight(x_m, z_m) + height_m, z_m); },
+        selfRadius_m);
+}
+
+ShRgb NearField::applyKeyed(const ShRgb& far, const Key& key,
+                            const std::function<glm::dvec3()>& point, double selfRadius_m) const {
     if (!settings_.enabled) return far;
-    DirectionalLight light;
-    {
-        std::lock_guard<std::mutex> lock(mutex_);
-        light = light_;
+    const auto t0 = std::chrono::steady_clock::now();
+    std::lock_guard<std::mutex> lock(mutex_);
+    ShRgb out = far;
+    if (std::isfinite(double(key[0]) + double(key[2]))) {
+        const NearFieldTransfer* t = nullptr;
+        if (auto it = cache_.find(key); it != cache_.end()) {
+            t = it->second.get();
+            if (t && glm::dot(t->lightDirection, light_.direction) < 0.99996)
+                updateLightTerm(*it->second, light_.direction);
+        } else {
+            const glm::dvec3 p = point();
+            if (std::isfinite(p.x + p.y + p.z)) t = transferAt(key, p, selfRadius_m);
+        }
+        if (t) {
+            const ShRgb near = applyTransfer(*t, far, light_);
+            // Never NaN: a far field that overflows keeps its own value.
+            bool finite = true;
+            for (const auto& c : near.c) finite = finite && std::isfinite(c.x + c.y + c.z);
+            if (finite) out = near;
+        }
     }
-    return toFloat(applyNearField(toDouble(far), point_m, occluders(point_m, selfRadius_m), light));
+    ++points_;
+    seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return out;
 }
 
 std::size_t NearField::cachedPoints() const {
@@ -314,14 +435,82 @@ std::size_t NearField::cachedPoints() const {
     return cache_.size();
 }
 
-double NearField::cacheBytes() const {
+std::size_t NearField::cacheBytes() const {
     std::lock_guard<std::mutex> lock(mutex_);
-    double bytes = 0.0;
-    for (const auto& [k, t] : cache_) {
-        bytes += sizeof(k) + sizeof(t) + 2 * sizeof(void*);  // key, pointer, node links
-        if (t) bytes += sizeof(*t) + double(t->caps.capacity()) * sizeof(OccluderCap);
-    }
-    return bytes;
+    return bytes_;
+}
+
+double NearField::seconds() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return seconds_;
+}
+
+std::size_t NearField::points() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return points_;
+}
+
+void NearField::resetCounters() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    seconds_ = 0.0;
+    points_ = 0;
+}
+
+// ---- [SECTION] The decorator -------------------------------------------------------------------
+
+NearFieldMethod::NearFieldMethod(std::unique_ptr<AmbienceMethod> far,
+                                 std::unique_ptr<NearFieldScene> scene,
+                                 const NearFieldSettings& settings)
+    : far_(std::move(far)),
+      scene_(std::move(scene)),
+      near_(std::make_unique<NearField>(*scene_, settings)) {
+    AMB_CHECK(far_ && scene_);
+}
+
+NearFieldMethod::~NearFieldMethod() = default;
+
+void NearFieldMethod::predictStage(const glm::dvec3& cameraPosition_m,
+                                   const glm::dvec3& cameraVelocity_mps, double timeOfDay_h,
+                                   double dt_s) {
+    near_->resetCounters();
+    if (std::isfinite(timeOfDay_h)) near_->setTimeOfDay(timeOfDay_h);
+    far_->predictStage(cameraPosition_m, cameraVelocity_mps, timeOfDay_h, dt_s);
+}
+
+ShRgb NearFieldMethod::shAt(double x_m, double z_m) const {
+    return near_->applyAbove(far_->shAt(x_m, z_m), x_m, z_m, kShadingHeight_m, kSelfRadius_m);
+}
+
+ShRgb NearFieldMethod::cornerShAt(double x_m, double z_m) const {
+    return near_->applyAbove(far_->cornerShAt(x_m, z_m), x_m, z_m, kShadingHeight_m);
+}
+
+void NearFieldMethod::cornerShAt(std::size_t count, const double* x_m, const double* z_m,
+                                 ShRgb* out) const {
+    far_->cornerShAt(count, x_m, z_m, out);
+    for (std::size_t i = 0; i < count; ++i)
+        out[i] = near_->applyAbove(out[i], x_m[i], z_m[i], kShadingHeight_m);
+}
+
+ShRgb NearFieldMethod::cornerShAtPoint(const glm::dvec3& point_m) const {
+    return near_->apply(far_->cornerShAt(point_m.x, point_m.z), point_m);
+}
+
+void NearFieldMethod::cornerShAtPoints(std::size_t count, const glm::dvec3* points_m,
+                                       ShRgb* out) const {
+    std::vector<double> x(count), z(count);
+    for (std::size_t i = 0; i < count; ++i) x[i] = points_m[i].x, z[i] = points_m[i].z;
+    far_->cornerShAt(count, x.data(), z.data(), out);
+    for (std::size_t i = 0; i < count; ++i) out[i] = near_->apply(out[i], points_m[i]);
+}
+
+MethodStatistics NearFieldMethod::methodStatistics() const {
+    MethodStatistics s = far_->methodStatistics();
+    s.nearField_s = near_->seconds();
+    s.nearFieldPoints = near_->points();
+    s.nearFieldCached = near_->cachedPoints();
+    s.nearFieldBytes = near_->cacheBytes();
+    return s;
 }
 
 }  // namespace amb

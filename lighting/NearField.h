@@ -34,22 +34,29 @@
 //   earlier one gets weight 0; caps apart keep 1.
 // [SECTION] Guard
 //   What the caps hide must not take the irradiance below zero for any normal (below the far
-//   field's own minimum if that is negative): if a cheap lower bound of the minimum
-//   (E_00 - |E_1| - ||E_2||) of the far field less what is hidden is negative, the exact minimum
-//   (shMinIrradiance) is taken and the hidden part scaled down until it holds. What the caps
-//   show is radiance >= 0 added, as a capture of a lit object adds it.
+//   field's own minimum if that is negative). A sampled lower bound of the minimum of the far
+//   field less what is hidden comes first: the minimum over 160 normals less half a bound of the
+//   second derivative along great circles times the squared covering radius (at the true
+//   minimum the gradient vanishes). Only if it is negative is the exact minimum
+//   (shMinIrradiance) taken and the hidden part scaled down until it holds. A point keeps its
+//   scale while its far field stays within 5 % of the one it was checked for (far fields change
+//   slowly: blends, the sun), so checks are rare. What the caps show is radiance >= 0 added, as a
+//   capture of a lit object adds it. Caps narrower than asin(0.015) (a trunk 20 m away) are left
+//   out.
 #pragma once
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
-#include <unordered_map>
+#include <tsl/hopscotch_map.h>
 #include <vector>
 
 #include <glm/vec3.hpp>
 
+#include "lighting/AmbienceMethod.h"
 #include "lighting/SH.h"
 #include "world/DirectionalLight.h"
 
@@ -100,19 +107,24 @@ std::vector<OccluderCap> occluderCaps(const glm::dvec3& point_m,
 // L' = (I + T) L + S E_light, per channel (see above), T split into what the caps hide (the same
 // for every channel) and what they show.
 struct NearFieldTransfer {
-    std::array<float, kShCoefficients * kShCoefficients> hide{};               // row-major
-    std::array<std::array<float, kShCoefficients * kShCoefficients>, 3> show{};  // per channel
+    std::array<float, kShCoefficients * kShCoefficients> hide{};  // row-major
+    // Per channel, hide + what the caps show: T_c, applied in one pass.
+    std::array<std::array<float, kShCoefficients * kShCoefficients>, 3> show{};
     std::array<std::array<float, kShCoefficients>, 3> s{};                    // S_c
     glm::dvec3 lightDirection{0.0};  // the light S was made for
     std::vector<OccluderCap> caps;
+    // The guard's last scale per channel and the far field it was found for (see Guard).
+    mutable bool guardValid = false;
+    mutable glm::dvec3 guardScale{1.0};
+    mutable ShRgbD guardFar;
     bool empty() const { return caps.empty(); }
 };
 NearFieldTransfer nearFieldTransfer(std::vector<OccluderCap> caps);
 // Remakes S for the light direction.
 void updateLightTerm(NearFieldTransfer& transfer, const glm::dvec3& lightDirection);
 // The far field with the near field applied, guarded (see above).
-ShRgbD applyTransfer(const NearFieldTransfer& transfer, const ShRgbD& far,
-                     const DirectionalLight& light);
+ShRgb applyTransfer(const NearFieldTransfer& transfer, const ShRgb& far,
+                    const DirectionalLight& light);
 // Everything at once, uncached: the caps of `occluders` at `point` applied to `far`.
 ShRgbD applyNearField(const ShRgbD& far, const glm::dvec3& point_m,
                       const std::vector<SphereOccluder>& occluders, const DirectionalLight& light);
@@ -149,28 +161,81 @@ class NearField {
     NearField(const NearFieldScene& scene, const NearFieldSettings& settings);
     const NearFieldSettings& settings() const { return settings_; }
     void setTimeOfDay(double timeOfDay_h);
-    // The far field at `point_m` with the near field applied (cached by the point).
-    ShRgb apply(const ShRgb& far, const glm::dvec3& point_m) const;
-    // Leaves out `self` (an object's own spheres: those whose base is within selfRadius_m
-    // horizontally of the point); not cached.
-    ShRgb applyUncached(const ShRgb& far, const glm::dvec3& point_m, double selfRadius_m) const;
+    // The far field at `point_m` with the near field applied, cached by the point. With
+    // selfRadius_m > 0 an object's own spheres (on its axis: centres within selfRadius_m
+    // horizontally of the point) are left out.
+    ShRgb apply(const ShRgb& far, const glm::dvec3& point_m, double selfRadius_m = 0.0) const;
+    // The same at height_m above the ground at (x, z), cached by (x, z): the ground's height is
+    // looked up only the first time (so every call on one NearField passes the same height_m).
+    ShRgb applyAbove(const ShRgb& far, double x_m, double z_m, double height_m,
+                     double selfRadius_m = 0.0) const;
     std::size_t cachedPoints() const;
-    double cacheBytes() const;
+    std::size_t cacheBytes() const;
+    // Wall time spent in apply and the points it answered since the last resetCounters.
+    double seconds() const;
+    std::size_t points() const;
+    void resetCounters();
 
   private:
     // Null when nothing is near the point.
-    const NearFieldTransfer* transferAt(const glm::dvec3& point_m) const;
+    const NearFieldTransfer* transferAt(const std::array<float, 4>& key, const glm::dvec3& point_m,
+                                        double selfRadius_m) const;
+    ShRgb applyKeyed(const ShRgb& far, const std::array<float, 4>& key,
+                     const std::function<glm::dvec3()>& point, double selfRadius_m) const;
     std::vector<SphereOccluder> occluders(const glm::dvec3& point_m, double selfRadius_m) const;
 
     const NearFieldScene& scene_;
     NearFieldSettings settings_;
     DirectionalLight light_;
+    using Key = std::array<float, 4>;  // point, self radius
     struct KeyHash {
-        std::size_t operator()(const std::array<float, 3>& k) const;
+        std::size_t operator()(const Key& k) const;
     };
     mutable std::mutex mutex_;
-    mutable std::unordered_map<std::array<float, 3>, std::unique_ptr<NearFieldTransfer>, KeyHash>
-        cache_;
+    mutable tsl::hopscotch_map<Key, std::unique_ptr<NearFieldTransfer>, KeyHash> cache_;
+    mutable double seconds_ = 0.0;
+    mutable std::size_t points_ = 0;
+    mutable std::size_t bytes_ = 0;  // the cache's, structure included
+};
+
+// A capturing method with the near field: its captures leave the near plants out
+// (CaptureSettings::nearField, CubeCapture::captureFar) and every shading point gets them back.
+// Objects (shAt) take theirs at kShadingHeight_m above their ground point without their own
+// spheres; terrain corners (cornerShAt) at kShadingHeight_m above the corner.
+class NearFieldMethod final : public AmbienceMethod {
+  public:
+    NearFieldMethod(std::unique_ptr<AmbienceMethod> far, std::unique_ptr<NearFieldScene> scene,
+                    const NearFieldSettings& settings);
+    ~NearFieldMethod() override;
+    const AmbienceMethod& farMethod() const { return *far_; }
+    const NearField& nearField() const { return *near_; }
+
+    std::string methodName() const override { return far_->methodName(); }
+    void predictStage(const glm::dvec3& cameraPosition_m, const glm::dvec3& cameraVelocity_mps,
+                      double timeOfDay_h, double dt_s) override;
+    void captureStage() override { far_->captureStage(); }
+    void storeStage() override { far_->storeStage(); }
+    ShRgb shAt(double x_m, double z_m) const override;
+    ShRgb cornerShAt(double x_m, double z_m) const override;
+    void cornerShAt(std::size_t count, const double* x_m, const double* z_m,
+                    ShRgb* out) const override;
+    ShRgb cornerShAtPoint(const glm::dvec3& point_m) const override;
+    void cornerShAtPoints(std::size_t count, const glm::dvec3* points_m, ShRgb* out) const override;
+    void noteLookups(std::size_t count, const double* x_m, const double* z_m) override {
+        far_->noteLookups(count, x_m, z_m);
+    }
+    bool wantsLookups() const override { return far_->wantsLookups(); }
+    MethodStatistics methodStatistics() const override;
+    IdealSupport idealSupport(double x_m, double z_m) const override {
+        return far_->idealSupport(x_m, z_m);
+    }
+    // An object's own spheres sit within this of its ground point (horizontally).
+    static constexpr double kSelfRadius_m = 0.5;
+
+  private:
+    std::unique_ptr<AmbienceMethod> far_;
+    std::unique_ptr<NearFieldScene> scene_;
+    std::unique_ptr<NearField> near_;
 };
 
 }  // namespace amb

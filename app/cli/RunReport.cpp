@@ -290,7 +290,8 @@ json ambienceJson(const RunReport& report) {
     // The ambience's share of frame time: stages 2-5 plus the lookups the draw makes
     // (terrain corners and objects ask the volume while the draw list is built).
     double ambience_ms = 0.0, capture_ms = 0.0, total_ms = 0.0;
-    std::vector<double> anchors, bytes, lookup_ms, perFrameAmbience_ms;
+    std::vector<double> anchors, bytes, lookup_ms, perFrameAmbience_ms, nearField_ms;
+    std::size_t nearFieldBytesMax = 0;
     std::int64_t faces = 0;
     std::size_t maxAnchors = 0, maxBytes = 0;
     for (const FrameRecord& f : frames) {
@@ -307,6 +308,8 @@ json ambienceJson(const RunReport& report) {
         anchors.push_back(double(f.ambience.anchors));
         bytes.push_back(double(f.ambience.bytes));
         lookup_ms.push_back(f.ambience.lookup_ms);
+        nearField_ms.push_back(f.ambience.nearField_ms);
+        nearFieldBytesMax = std::max(nearFieldBytesMax, f.ambience.nearFieldBytes);
         maxAnchors = std::max(maxAnchors, f.ambience.anchors);
         maxBytes = std::max(maxBytes, f.ambience.bytes);
     }
@@ -333,6 +336,9 @@ json ambienceJson(const RunReport& report) {
         {"storeScans", t.storeScans},
         {"nonFiniteAnchorsMax", t.nonFiniteAnchorsMax},
         {"lookup_ms", statsJson(lookup_ms)},
+        // The near field's share of the lookups (0 without it), and its cache's memory.
+        {"nearField_ms", statsJson(nearField_ms)},
+        {"nearFieldBytesMax", nearFieldBytesMax},
         // Stages 2-5 and the draw's lookups, per frame.
         {"ambience_ms", statsJson(perFrameAmbience_ms)},
         {"facesPerSecond", frames.size() > 1 && frameStep_s > 0

@@ -6,6 +6,7 @@
 #include "lighting/Baselines.h"
 #include "lighting/CubeCapture.h"
 #include "lighting/Metrics.h"
+#include "lighting/NearField.h"
 #include "lighting/ProbeEnvironment.h"
 #include "lighting/SH.h"
 #include "world/Error.h"
@@ -55,7 +56,7 @@ glm::vec3 MethodAmbient::cornerIrradiance(const glm::dvec3& position_m,
     const auto t0 = Clock::now();
     // Terrain (thesis 8.6): the colour at a patch corner from the SH interpolated there, with
     // the corner's normal; the renderer interpolates it across the patch.
-    const ShRgb sh = method_.cornerShAt(position_m.x, position_m.z);
+    const ShRgb sh = method_.cornerShAtPoint(position_m + glm::dvec3(0.0, kShadingHeight_m, 0.0));
     const glm::vec3 e = glm::max(shIrradiance(sh, glm::vec3(normal)), glm::vec3(0.0f));
     ++lookups_;
     note(position_m);
@@ -66,12 +67,10 @@ glm::vec3 MethodAmbient::cornerIrradiance(const glm::dvec3& position_m,
 void MethodAmbient::cornerIrradianceBatch(std::size_t count, const glm::dvec3* positions_m,
                                           const glm::dvec3* normals, glm::vec3* out) const {
     const auto t0 = Clock::now();
-    batchX_.resize(count), batchZ_.resize(count), batchSh_.resize(count);
-    for (std::size_t i = 0; i < count; ++i) {
-        batchX_[i] = positions_m[i].x;
-        batchZ_[i] = positions_m[i].z;
-    }
-    method_.cornerShAt(count, batchX_.data(), batchZ_.data(), batchSh_.data());
+    batchAt_.resize(count), batchSh_.resize(count);
+    for (std::size_t i = 0; i < count; ++i)
+        batchAt_[i] = positions_m[i] + glm::dvec3(0.0, kShadingHeight_m, 0.0);
+    method_.cornerShAtPoints(count, batchAt_.data(), batchSh_.data());
     for (std::size_t i = 0; i < count; ++i) {
         out[i] = glm::max(shIrradiance(batchSh_[i], glm::vec3(normals[i])), glm::vec3(0.0f));
         note(positions_m[i]);
@@ -114,6 +113,16 @@ MethodAmbienceStages::MethodAmbienceStages(std::unique_ptr<CubeCapture> capture,
     } else {
         method_ = makeCapturingMethod(method, *capture_, *environment_, settings, baselines,
                                       &world.roads());
+        volume_ = dynamic_cast<AmbienceVolume*>(method_.get());
+        // The two-scale ambience: the method's own settings say whether its captures leave the
+        // near plants out; then every shading point gets them back (lighting/NearField.h).
+        const bool ours = method == "volume" || method == "nearest";
+        const NearFieldSettings& near =
+            ours ? settings.capture.nearField : baselines.capture.nearField;
+        if (near.enabled) {
+            method_ = std::make_unique<NearFieldMethod>(
+                std::move(method_), std::make_unique<WorldNearFieldScene>(world), near);
+        }
     }
     ambient_ = std::make_unique<MethodAmbient>(*method_);
 }
@@ -174,6 +183,9 @@ void MethodAmbienceStages::measure(const FrameState& frame, FrameRecord& rec) {
     a.predict_ms = st.predict_s * 1e3;
     a.project_ms = st.project_s * 1e3;
     a.store_ms = st.store_s * 1e3;
+    a.nearField_ms = st.nearField_s * 1e3;
+    a.nearFieldPoints = st.nearFieldPoints;
+    a.nearFieldBytes = st.nearFieldBytes;
     if (const AmbienceVolume* v = volume()) {
         const AmbienceStatistics& vs = v->statistics();
         a.finestLevel = vs.finestLevel;

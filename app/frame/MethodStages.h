@@ -55,7 +55,7 @@ class MethodAmbient final : public AmbientSource {
     mutable std::size_t lookups_ = 0;
     mutable double lookup_ms_ = 0.0;
     mutable std::vector<double> x_, z_;
-    mutable std::vector<double> batchX_, batchZ_;  // scratch of the batch
+    mutable std::vector<glm::dvec3> batchAt_;  // scratch of the batch: the shading points
     mutable std::vector<ShRgb> batchSh_;
 };
 
@@ -104,7 +104,7 @@ class MethodAmbienceStages final : public AmbienceStages {
     AmbienceMethod& method() { return *method_; }
     const AmbienceMethod& method() const { return *method_; }
     // Ours, or null for a baseline.
-    AmbienceVolume* volume() { return dynamic_cast<AmbienceVolume*>(method_.get()); }
+    AmbienceVolume* volume() { return volume_; }
     const MethodAmbient& ambient() const { return *ambient_; }
     CubeCapture& cubeCapture() { return *capture_; }
     const ProbeEnvironment& environment() const;
@@ -117,7 +117,8 @@ class MethodAmbienceStages final : public AmbienceStages {
   private:
     std::unique_ptr<CubeCapture> capture_;
     std::unique_ptr<WorldProbeEnvironment> environment_;
-    std::unique_ptr<AmbienceMethod> method_;
+    std::unique_ptr<AmbienceMethod> method_;  // with the near field around it when enabled
+    AmbienceVolume* volume_ = nullptr;        // the method when it is ours
     std::unique_ptr<MethodAmbient> ambient_;
     std::vector<double> extraX_, extraZ_;
     bool havePrevious_ = false;

@@ -110,6 +110,12 @@ void CubeCaptureGl::init() {
 
 CubeCaptureStats CubeCaptureGl::capture(const glm::dvec3& position_m, double timeOfDay_h,
                                         CubeFaceMask faces, std::vector<float>& cube) {
+    return captureFar(position_m, timeOfDay_h, faces, cube, 0.0);
+}
+
+CubeCaptureStats CubeCaptureGl::captureFar(const glm::dvec3& position_m, double timeOfDay_h,
+                                           CubeFaceMask faces, std::vector<float>& cube,
+                                           double nearRadius_m) {
     using Clock = std::chrono::steady_clock;
     const auto t0 = Clock::now();
     const size_t faceFloats = size_t(n_) * n_ * 3;
@@ -125,7 +131,7 @@ CubeCaptureStats CubeCaptureGl::capture(const glm::dvec3& position_m, double tim
     // Static coarse scene, first bounce only: surfaces lit by the main light and the
     // sky/ground hemisphere ambient.
     const FixedAmbient ambient(AmbientMode::Hemisphere, sky_);
-    if (kind_ == CaptureScene::Coarse) scene_->buildCapture(position_m, ambient, list_);
+    if (kind_ == CaptureScene::Coarse) scene_->buildCapture(position_m, ambient, list_, nearRadius_m);
 
     glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
     glBindFramebuffer(GL_FRAMEBUFFER, fbo_.id());

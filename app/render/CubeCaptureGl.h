@@ -56,6 +56,11 @@ class CubeCaptureGl final : public CubeCapture {
     CaptureScene scene() const { return kind_; }
     CubeCaptureStats capture(const glm::dvec3& position_m, double timeOfDay_h, CubeFaceMask faces,
                              std::vector<float>& cube) override;
+    // The coarse scene without the plants within nearRadius_m (the full scene ignores it: the
+    // reference always sees everything).
+    CubeCaptureStats captureFar(const glm::dvec3& position_m, double timeOfDay_h,
+                                CubeFaceMask faces, std::vector<float>& cube,
+                                double nearRadius_m) override;
 
     // Statistics of the last capture() call that rendered faces (triangles per face, time).
     const CubeCaptureStats& lastStats() const { return lastStats_; }

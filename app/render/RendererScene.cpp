@@ -279,7 +279,8 @@ void RendererScene::addRoads(const glm::dvec3& eye_m, const glm::mat4* viewProj,
 // ---- [SECTION] Plants ------------------------------------------------------------------------
 
 void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewProj, bool capture,
-                              const AmbientSource& ambient, DrawList& out, std::size_t* drawn) {
+                              const AmbientSource& ambient, DrawList& out, std::size_t* drawn,
+                              double nearRadius_m) {
     const Vegetation& veg = world_.vegetation();
     const double range = capture ? settings_.captureTreeRange_m : settings_.plantRange_m;
     Frustum frustum{};
@@ -327,6 +328,8 @@ void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewP
                 if (capture && small) continue;  // the capture scene keeps only trees
                 const double d = glm::length(p.position_m - centre_m);
                 if (d > range) continue;
+                if (nearRadius_m > 0.0 && horizontalDistance(p.position_m, centre_m) < nearRadius_m)
+                    continue;  // the near field's (lighting/NearField.h)
                 int lod = 1;  // 0 full, 1 proxy, 2 far; a capture uses proxies
                 if (!capture) {
                     // Projected height in pixels (small-angle: size / distance radians).
@@ -372,7 +375,7 @@ void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewP
 // ---- [SECTION] Capture -----------------------------------------------------------------------
 
 void RendererScene::buildCapture(const glm::dvec3& probe_m, const AmbientSource& ambient,
-                                 DrawList& out) {
+                                 DrawList& out, double nearRadius_m) {
     out.clear();
     // The proxy grid is finest at its centre, so it is rebuilt when the probe moves off it.
     if (horizontalDistance(probe_m, captureCentre_) > 1e-3 || captureTerrain_.indexCount == 0) {
@@ -394,7 +397,7 @@ void RendererScene::buildCapture(const glm::dvec3& probe_m, const AmbientSource&
     d.cornerIrradiance = {cornerAt(-r, -r), cornerAt(r, -r), cornerAt(-r, r), cornerAt(r, r)};
     out.terrain.push_back(d);
     addRoads(probe_m, nullptr, settings_.captureTerrainRadius_m, ambient, out);
-    addPlants(probe_m, nullptr, true, ambient, out, nullptr);
+    addPlants(probe_m, nullptr, true, ambient, out, nullptr, nearRadius_m);
 }
 
 }  // namespace amb

@@ -61,8 +61,9 @@ class RendererScene {
     // The car drawn by the next buildView calls (lit like any object: its own SH set), or none.
     void setVehicle(const std::optional<VehiclePose>& pose) { vehicle_ = pose; }
     // Capture scene around a probe (no culling: all six faces share it). Positions relative to
-    // `probe_m`.
-    void buildCapture(const glm::dvec3& probe_m, const AmbientSource& ambient, DrawList& out);
+    // `probe_m`. Plants whose base lies within nearRadius_m (horizontally) are left out.
+    void buildCapture(const glm::dvec3& probe_m, const AmbientSource& ambient, DrawList& out,
+                      double nearRadius_m = 0.0);
 
     const World& world() const { return world_; }
 
@@ -72,7 +73,8 @@ class RendererScene {
     void addRoads(const glm::dvec3& eye_m, const glm::mat4* viewProj, double range_m,
                   const AmbientSource& ambient, DrawList& out);
     void addPlants(const glm::dvec3& centre_m, const glm::mat4* viewProj, bool capture,
-                   const AmbientSource& ambient, DrawList& out, std::size_t* drawn);
+                   const AmbientSource& ambient, DrawList& out, std::size_t* drawn,
+                   double nearRadius_m = 0.0);
 
     const World& world_;
     RendererSceneSettings settings_;

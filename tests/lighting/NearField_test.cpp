@@ -113,8 +113,8 @@ TEST(NearField, TheLightTermIsALambertSpheresMeanRadiance) {
         sun.direction = light;
         sun.irradiance = glm::dvec3(1.0);
         const ShRgbD none;  // a black far field: only the light term remains
-        const ShRgbD got = applyNearField(none, glm::dvec3(0.0), {{d * 1000.0, 5.0, rho}}, sun);
-        const double omega = 2.0 * kPi * (1.0 - std::sqrt(1.0 - 25.0 / 1e6));
+        const ShRgbD got = applyNearField(none, glm::dvec3(0.0), {{d * 1000.0, 20.0, rho}}, sun);
+        const double omega = 2.0 * kPi * (1.0 - std::sqrt(1.0 - 400.0 / 1e6));
         EXPECT_NEAR(got.c[0].x / kShY00 / omega, discMean, 2e-3 * 0.5 / kPi + 1e-4)
             << "phase " << alpha;
     }
