@@ -22,6 +22,8 @@ void readNearFieldSettings(JsonFields& f, NearFieldSettings& s) {
     f.boolean("enabled", s.enabled);
     f.number("radius_m", s.radius_m, 0.0, 200.0);
     f.boolean("plants", s.plants);
+    f.boolean("terrain", s.terrain);
+    f.number("terrainRadius_m", s.terrainRadius_m, 1.0, 500.0);
     f.integer("cacheEntries", s.cacheEntries, 1, 1 << 24);
 }
 
@@ -36,6 +38,8 @@ constexpr double kDiscMean[3] = {1.0, 2.0 / 3.0, 0.25};
 const double kMaxCosHalfAngle = std::cos(80.0 * kPi / 180.0);
 // Caps narrower than this (a 0.3 m trunk 20 m away) are left out: 2e-4 of the sphere each.
 constexpr double kMinSinHalfAngle = 0.015;
+// Terrain bands thinner than this (about a degree) are left out.
+constexpr double kMinBand_rad = 0.02;
 
 double capSolidAngle(double cosHalfAngle) {
     return 2.0 * kPi * (1.0 - cosHalfAngle);
@@ -118,30 +122,182 @@ std::vector<OccluderCap> occluderCaps(const glm::dvec3& point_m,
     caps.erase(std::remove_if(caps.begin(), caps.end(),
                               [](const OccluderCap& c) { return c.weight <= 0.0; }),
                caps.end());
+    for (OccluderCap& c : caps) {
+        c.sh = capSh(c.direction, c.cosHalfAngle);
+        c.solidAngle = capSolidAngle(c.cosHalfAngle);
+    }
     return caps;
 }
 
+std::vector<OccluderCap> nearOccluders(const glm::dvec3& point_m,
+                                       const std::vector<SphereOccluder>& occluders,
+                                       const std::vector<HorizonWedge>& horizon) {
+    std::vector<OccluderCap> all = terrainBands(horizon);
+    const std::size_t bands = all.size();
+    for (OccluderCap& c : occluderCaps(point_m, occluders)) {
+        // A plant whose centre is seen against a raised band hides that band, not the far field.
+        const double phi = std::atan2(c.direction.z, c.direction.x);
+        const double e = std::asin(std::clamp(c.direction.y, -1.0, 1.0));
+        for (std::size_t b = 0; b < bands; ++b) {
+            const OccluderCap& band = all[b];
+            double rel = phi - band.azimuth0;
+            rel -= 2.0 * kPi * std::floor(rel / (2.0 * kPi));
+            if (rel <= band.azimuth1 - band.azimuth0 && e >= band.lower && e <= band.upper) {
+                c.behind = int(b);
+                break;
+            }
+        }
+        all.push_back(c);
+    }
+    return all;
+}
+
+// ---- [SECTION] Terrain bands ------------------------------------------------------------------
+
+namespace {
+
+// Integrals over the band of the nine functions 1, x, y, z, xy, yz, xz, x^2 - z^2, 3y^2 - 1,
+// direction (cos e cos phi, sin e, cos e sin phi), d omega = cos e de dphi: each splits into an
+// azimuth and an elevation integral of sines and cosines.
+std::array<double, 9> monomialIntegrals(double phi0, double phi1, double e1, double e2) {
+    const double P0 = phi1 - phi0;
+    const double Pc = std::sin(phi1) - std::sin(phi0), Ps = std::cos(phi0) - std::cos(phi1);
+    const double P2 = (std::sin(2.0 * phi1) - std::sin(2.0 * phi0)) / 4.0;
+    const double Pcc = P0 / 2.0 + P2, Pss = P0 / 2.0 - P2;
+    const double Pcs = (std::sin(phi1) * std::sin(phi1) - std::sin(phi0) * std::sin(phi0)) / 2.0;
+    const auto at = [&](auto f) { return f(e2) - f(e1); };
+    const double c1 = at([](double e) { return std::sin(e); });                          // cos
+    const double c2 = at([](double e) { return e / 2.0 + std::sin(2.0 * e) / 4.0; });    // cos^2
+    const double cs = at([](double e) { return std::sin(e) * std::sin(e) / 2.0; });      // cos sin
+    const double c2s = at([](double e) { return -std::pow(std::cos(e), 3) / 3.0; });     // cos^2 sin
+    const double c3 = at([](double e) { return std::sin(e) - std::pow(std::sin(e), 3) / 3.0; });
+    const double cs2 = at([](double e) { return std::pow(std::sin(e), 3) / 3.0; });      // cos sin^2
+    return {P0 * c1,           c2 * Pc,         cs * P0,        c2 * Ps,
+            c2s * Pc,          c2s * Ps,        c3 * Pcs,       c3 * (Pcc - Pss),
+            3.0 * cs2 * P0 - P0 * c1};
+}
+
+// Y_k as combinations of the nine functions above, found once from shBasis (exact: they span
+// the harmonics of degree <= 2, so the basis' own conventions carry over).
+const std::array<std::array<double, 9>, kShCoefficients>& basisInMonomials() {
+    static const auto table = [] {
+        const auto f = [](const glm::dvec3& d) {
+            return std::array<double, 9>{1.0,       d.x,       d.y,       d.z,
+                                         d.x * d.y, d.y * d.z, d.x * d.z, d.x * d.x - d.z * d.z,
+                                         3.0 * d.y * d.y - 1.0};
+        };
+        // Nine generic directions; solve F a_k = Y_k by Gaussian elimination.
+        std::array<glm::dvec3, 9> dirs;
+        for (int i = 0; i < 9; ++i)
+            dirs[i] = glm::normalize(glm::dvec3(std::sin(1.3 * i + 0.4), std::cos(2.1 * i + 0.3),
+                                                std::sin(0.7 * i + 1.9) + 0.1 * i));
+        std::array<std::array<double, kShCoefficients>, kShCoefficients> out{};
+        for (int k = 0; k < kShCoefficients; ++k) {
+            double m[9][10];
+            for (int i = 0; i < 9; ++i) {
+                const auto row = f(dirs[i]);
+                for (int j = 0; j < 9; ++j) m[i][j] = row[j];
+                m[i][9] = shBasis(dirs[i])[k];
+            }
+            for (int c = 0; c < 9; ++c) {
+                int pivot = c;
+                for (int r = c + 1; r < 9; ++r)
+                    if (std::fabs(m[r][c]) > std::fabs(m[pivot][c])) pivot = r;
+                for (int j = 0; j < 10; ++j) std::swap(m[c][j], m[pivot][j]);
+                for (int r = 0; r < 9; ++r) {
+                    if (r == c) continue;
+                    const double q = m[r][c] / m[c][c];
+                    for (int j = c; j < 10; ++j) m[r][j] -= q * m[c][j];
+                }
+            }
+            for (int j = 0; j < 9; ++j) out[k][j] = m[j][9] / m[j][j];
+        }
+        return out;
+    }();
+    return table;
+}
+
+}  // namespace
+
+std::array<double, kShCoefficients> bandSh(double azimuth0, double azimuth1, double lower,
+                                           double upper) {
+    const auto m = monomialIntegrals(azimuth0, azimuth1, lower, upper);
+    const auto& a = basisInMonomials();
+    std::array<double, kShCoefficients> out{};
+    for (int k = 0; k < kShCoefficients; ++k)
+        for (int j = 0; j < 9; ++j) out[k] += a[k][j] * m[j];
+    return out;
+}
+
+std::vector<OccluderCap> terrainBands(const std::vector<HorizonWedge>& wedges) {
+    std::vector<OccluderCap> out;
+    for (const HorizonWedge& w : wedges) {
+        if (!(w.upper > w.lower + kMinBand_rad)) continue;
+        OccluderCap b;
+        b.band = true;
+        b.azimuth0 = w.azimuth0, b.azimuth1 = w.azimuth1;
+        b.lower = std::max(w.lower, -0.5 * kPi), b.upper = std::min(w.upper, 0.5 * kPi);
+        const double phi = 0.5 * (w.azimuth0 + w.azimuth1), e = 0.5 * (b.lower + b.upper);
+        b.direction = {std::cos(e) * std::cos(phi), std::sin(e), std::cos(e) * std::sin(phi)};
+        b.sh = bandSh(w.azimuth0, w.azimuth1, b.lower, b.upper);
+        b.solidAngle = b.sh[0] / kShY00;
+        b.albedo = w.albedo;
+        if (b.solidAngle > 0.0) out.push_back(b);
+    }
+    return out;
+}
+
+// ---- [SECTION] Transfer ------------------------------------------------------------------------
+
+namespace {
+
+// What an entry shows per unit albedo, as a functional of the far field: the irradiance of the
+// surface facing the point (caps: its visible disc's mean, bands: a wall facing the point).
+std::array<double, kShCoefficients> showFunctional(const OccluderCap& e) {
+    const auto y = shBasis(-e.direction);
+    std::array<double, kShCoefficients> g{};
+    for (int k = 0; k < kShCoefficients; ++k)
+        g[k] = kAhatBand[shBand(k)] * (e.band ? 1.0 : kDiscMean[shBand(k)]) * y[k] / kPi;
+    return g;
+}
+
+// The light's term per unit albedo and unit irradiance: the sphere's phase law, or a wall's
+// cosine.
+double lightFactor(const OccluderCap& e, const glm::dvec3& lightDirection) {
+    const double cosA = std::clamp(glm::dot(lightDirection, -e.direction), -1.0, 1.0);
+    if (e.band) return std::max(0.0, cosA) / kPi;
+    return (2.0 / 3.0) * lambertSpherePhase(std::acos(cosA)) / kPi;
+}
+
+}  // namespace
+
 NearFieldTransfer nearFieldTransfer(std::vector<OccluderCap> caps) {
     NearFieldTransfer t;
-    for (const OccluderCap& cap : caps) {
-        const auto c = capSh(cap.direction, cap.cosHalfAngle);
-        const auto y = shBasis(-cap.direction);
-        const double omega = capSolidAngle(cap.cosHalfAngle);
-        std::array<double, kShCoefficients> g{};
-        for (int k = 0; k < kShCoefficients; ++k)
-            g[k] = kAhatBand[shBand(k)] * kDiscMean[shBand(k)] * y[k];
-        for (int j = 0; j < kShCoefficients; ++j)
-            for (int k = 0; k < kShCoefficients; ++k)
-                t.hide[j * kShCoefficients + k] -= float(cap.weight * c[j] * c[k] / omega);
+    constexpr int K = kShCoefficients;
+    for (const OccluderCap& e : caps) {
+        const auto& c = e.sh;
+        const auto g = showFunctional(e);
+        if (e.behind < 0) {
+            // It hides the far field ...
+            for (int j = 0; j < K; ++j)
+                for (int k = 0; k < K; ++k)
+                    t.hide[j * K + k] -= float(e.weight * c[j] * c[k] / e.solidAngle);
+        }
         for (int ch = 0; ch < 3; ++ch) {
-            const double own = cap.albedo[ch] / kPi;
-            for (int j = 0; j < kShCoefficients; ++j)
-                for (int k = 0; k < kShCoefficients; ++k)
-                    t.show[ch][j * kShCoefficients + k] += float(cap.weight * c[j] * own * g[k]);
+            for (int j = 0; j < K; ++j)
+                for (int k = 0; k < K; ++k) {
+                    double v = e.albedo[ch] * g[k];
+                    // ... or, in front of a band, that band's radiance.
+                    if (e.behind >= 0) {
+                        const OccluderCap& b = caps[std::size_t(e.behind)];
+                        v -= b.albedo[ch] * showFunctional(b)[k];
+                    }
+                    t.show[ch][j * K + k] += float(e.weight * c[j] * v);
+                }
         }
     }
     for (int ch = 0; ch < 3; ++ch)
-        for (int i = 0; i < kShCoefficients * kShCoefficients; ++i) t.show[ch][i] += t.hide[i];
+        for (int i = 0; i < K * K; ++i) t.show[ch][i] += t.hide[i];
     t.caps = std::move(caps);
     return t;
 }
@@ -149,14 +305,15 @@ NearFieldTransfer nearFieldTransfer(std::vector<OccluderCap> caps) {
 void updateLightTerm(NearFieldTransfer& t, const glm::dvec3& lightDirection) {
     t.lightDirection = lightDirection;
     for (auto& s : t.s) s.fill(0.0f);
-    for (const OccluderCap& cap : t.caps) {
-        const double cosA = std::clamp(glm::dot(lightDirection, -cap.direction), -1.0, 1.0);
-        const double phase = (2.0 / 3.0) * lambertSpherePhase(std::acos(cosA)) / kPi;
-        if (phase <= 0.0) continue;
-        const auto c = capSh(cap.direction, cap.cosHalfAngle);
-        for (int ch = 0; ch < 3; ++ch)
+    for (const OccluderCap& e : t.caps) {
+        const double f = lightFactor(e, lightDirection);
+        const OccluderCap* b = e.behind >= 0 ? &t.caps[std::size_t(e.behind)] : nullptr;
+        const double fb = b ? lightFactor(*b, lightDirection) : 0.0;
+        for (int ch = 0; ch < 3; ++ch) {
+            const double v = e.albedo[ch] * f - (b ? b->albedo[ch] * fb : 0.0);
             for (int j = 0; j < kShCoefficients; ++j)
-                t.s[ch][j] += float(cap.weight * cap.albedo[ch] * phase * c[j]);
+                t.s[ch][j] += float(e.weight * v * e.sh[j]);
+        }
     }
 }
 
@@ -299,8 +456,9 @@ ShRgb applyTransfer(const NearFieldTransfer& t, const ShRgb& far, const Directio
 }
 
 ShRgbD applyNearField(const ShRgbD& far, const glm::dvec3& point_m,
-                      const std::vector<SphereOccluder>& occluders, const DirectionalLight& light) {
-    NearFieldTransfer t = nearFieldTransfer(occluderCaps(point_m, occluders));
+                      const std::vector<SphereOccluder>& occluders, const DirectionalLight& light,
+                      const std::vector<HorizonWedge>& horizon) {
+    NearFieldTransfer t = nearFieldTransfer(nearOccluders(point_m, occluders, horizon));
     updateLightTerm(t, light.direction);
     return toDouble(applyTransfer(t, toFloat(far), light));
 }
@@ -314,6 +472,36 @@ void WorldNearFieldScene::occludersNear(const glm::dvec3& point_m, double radius
             out.push_back({p.position_m + double(p.scale) * s.centre_m,
                            double(p.scale) * s.radius_m, s.albedo});
         }
+    }
+}
+
+void WorldNearFieldScene::terrainNear(const glm::dvec3& p, double radius_m,
+                                      std::vector<HorizonWedge>& out) const {
+    // The broad slope: the plane through the heights radius_m away.
+    const double gx = (world_.height(p.x + radius_m, p.z) - world_.height(p.x - radius_m, p.z)) /
+                      (2.0 * radius_m);
+    const double gz = (world_.height(p.x, p.z + radius_m) - world_.height(p.x, p.z - radius_m)) /
+                      (2.0 * radius_m);
+    // Samples along each wedge's middle, denser near the point.
+    constexpr int kSteps = 7;
+    for (int w = 0; w < kWedges; ++w) {
+        const double phi0 = 2.0 * kPi * w / kWedges, phi1 = 2.0 * kPi * (w + 1) / kWedges;
+        const double phi = 0.5 * (phi0 + phi1);
+        const glm::dvec2 dir(std::cos(phi), std::sin(phi));
+        double best = -0.5 * kPi, bestX = p.x, bestZ = p.z;
+        for (int i = 1; i <= kSteps; ++i) {
+            const double t = double(i) / kSteps, d = radius_m * t * t;
+            if (d < 1.0) continue;
+            const double x = p.x + d * dir.x, z = p.z + d * dir.y;
+            const double e = std::atan2(world_.height(x, z) - p.y, d);
+            if (e > best) best = e, bestX = x, bestZ = z;
+        }
+        HorizonWedge h;
+        h.azimuth0 = phi0, h.azimuth1 = phi1;
+        h.lower = std::atan(gx * dir.x + gz * dir.y);
+        h.upper = best;
+        h.albedo = glm::dvec3(world_.albedo(bestX, bestZ));
+        if (h.upper > h.lower) out.push_back(h);
     }
 }
 
@@ -356,6 +544,7 @@ std::vector<SphereOccluder> NearField::occluders(const glm::dvec3& p, double sel
     if (!settings_.plants) return out;
     scene_.occludersNear(p, settings_.radius_m, out);
     if (selfRadius_m > 0.0) {
+        // An object's own spheres sit on its axis, above its base.
         out.erase(std::remove_if(out.begin(), out.end(),
                                  [&](const SphereOccluder& o) {
                                      return std::hypot(o.centre_m.x - p.x, o.centre_m.z - p.z) <
@@ -366,24 +555,16 @@ std::vector<SphereOccluder> NearField::occluders(const glm::dvec3& p, double sel
     return out;
 }
 
-const NearFieldTransfer* NearField::transferAt(const Key& key, const glm::dvec3& p,
-                                               double selfRadius_m) const {
-    auto it = cache_.find(key);
-    if (it == cache_.end()) {
-        if (cache_.size() >= std::size_t(settings_.cacheEntries)) cache_.clear(), bytes_ = 0;
-        std::vector<OccluderCap> caps = occluderCaps(p, occluders(p, selfRadius_m));
-        std::unique_ptr<NearFieldTransfer> t;
-        bytes_ += sizeof(Key) + sizeof(t) + 2 * sizeof(void*);  // key, pointer, node links
-        if (!caps.empty()) {
-            bytes_ += sizeof(NearFieldTransfer) + caps.size() * sizeof(OccluderCap);
-            t = std::make_unique<NearFieldTransfer>(nearFieldTransfer(std::move(caps)));
-        }
-        it = cache_.emplace(key, std::move(t)).first;
-    }
-    NearFieldTransfer* t = it->second.get();
-    // The light term follows the light to within half a degree (the phase law is smooth).
-    if (t && glm::dot(t->lightDirection, light_.direction) < 0.99996)
-        updateLightTerm(*t, light_.direction);
+std::unique_ptr<NearFieldTransfer> NearField::build(const glm::dvec3& p,
+                                                    double selfRadius_m) const {
+    std::vector<HorizonWedge> horizon;
+    if (settings_.terrain && selfRadius_m <= 0.0)
+        scene_.terrainNear(p, settings_.terrainRadius_m, horizon);
+    std::vector<OccluderCap> caps = nearOccluders(p, occluders(p, selfRadius_m), horizon);
+    if (caps.empty()) return nullptr;
+    bytes_ += sizeof(NearFieldTransfer) + caps.size() * sizeof(OccluderCap);
+    auto t = std::make_unique<NearFieldTransfer>(nearFieldTransfer(std::move(caps)));
+    updateLightTerm(*t, light_.direction);
     return t;
 }
 
@@ -409,13 +590,19 @@ ShRgb NearField::applyKeyed(const ShRgb& far, const Key& key,
     ShRgb out = far;
     if (std::isfinite(double(key[0]) + double(key[2]))) {
         const NearFieldTransfer* t = nullptr;
-        if (auto it = cache_.find(key); it != cache_.end()) {
+        auto it = cache_.find(key);
+        if (it == cache_.end()) {
+            const glm::dvec3 p = point();
+            if (std::isfinite(p.x + p.y + p.z)) {
+                if (cache_.size() >= std::size_t(settings_.cacheEntries)) cache_.clear(), bytes_ = 0;
+                bytes_ += sizeof(Key) + sizeof(std::unique_ptr<NearFieldTransfer>) +
+                          2 * sizeof(void*);  // the map's slot
+                t = cache_.emplace(key, build(p, selfRadius_m)).first->second.get();
+            }
+        } else {
             t = it->second.get();
             if (t && glm::dot(t->lightDirection, light_.direction) < 0.99996)
-                updateLightTerm(*it->second, light_.direction);
-        } else {
-            const glm::dvec3 p = point();
-            if (std::isfinite(p.x + p.y + p.z)) t = transferAt(key, p, selfRadius_m);
+                updateLightTerm(*it.value(), light_.direction);
         }
         if (t) {
             const ShRgb near = applyTransfer(*t, far, light_);

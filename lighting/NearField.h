@@ -27,6 +27,16 @@
 //                                  phase. The main light is the one the renderer draws apart.
 //   So L' = (I + T) L + S E_sun with T (9 x 9 per channel) and S (9 per channel) fixed by the
 //   geometry: both are cached per point (the points the draw asks for do not move).
+// [SECTION] Terrain
+//   The terrain cannot be left out of a capture (it would leave a hole), so the anchors hold the
+//   terrain their probes saw. What they cannot hold is terrain near a point that rises above the
+//   ground's broad slope there: a gully's walls, a valley floor's rim, a hollow. Around the point
+//   (kShadingHeight_m up) the horizon is searched in 8 wedges out to terrainRadius_m; in each, the
+//   band between the broad slope's elevation (the plane of the heights terrainRadius_m away) and
+//   the nearest terrain's highest elevation is a wall of the terrain's albedo there, lit like a
+//   cap (what it hides, what it shows, the light's cosine on a wall facing the point). Its SH is
+//   closed form: over azimuth phi0..phi1 and elevation e1..e2 every basis function is a sum of
+//   products of cos/sin powers, integrated exactly. A plant seen against a band hides the band.
 // [SECTION] Overlap (occluders must not darken twice)
 //   Caps are taken largest first; cap i keeps the weight w_i = prod_{j<i} (1 - O_ij / Omega_i),
 //   O_ij the solid angle it shares with an earlier cap j (the smoothstep approximation of two
@@ -69,11 +79,14 @@ struct NearFieldSettings {
     bool enabled = false;    // apply the near field at shading points (a method's switch)
     double radius_m = 16.0;  // r_near: occluders this close (horizontally) to a point are near
     bool plants = true;      // trees, bushes and rocks as spheres
+    bool terrain = true;     // the terrain's near horizon (see Terrain)
+    double terrainRadius_m = 32.0;  // how far the near horizon is searched
     // Points the draw asks for (terrain corners, objects) are cached with their transfer; the
     // cache is emptied when it holds more than this.
     int cacheEntries = 65536;
 };
-// Reads {"enabled", "radius_m", "plants", "cacheEntries"} (JsonFields, lighting/JsonFields.h).
+// Reads {"enabled", "radius_m", "plants", "terrain", "terrainRadius_m", "cacheEntries"}
+// (JsonFields, lighting/JsonFields.h).
 void readNearFieldSettings(JsonFields& fields, NearFieldSettings& settings);
 
 struct SphereOccluder {
@@ -92,17 +105,41 @@ double capOverlap(double halfAngleA, double halfAngleB, double separation_rad);
 // Lambert sphere phase law Phi(alpha), 1 at full phase, 0 at new.
 double lambertSpherePhase(double alpha_rad);
 
-// One occluder as seen from a point.
-struct OccluderCap {
-    glm::dvec3 direction{0.0, 1.0, 0.0};
-    double cosHalfAngle = 1.0;
-    double weight = 1.0;  // after overlap (see above)
+// A wedge of the horizon where near terrain rises between two elevations [rad] (see Terrain);
+// azimuth phi about +Y, direction (cos e cos phi, sin e, cos e sin phi).
+struct HorizonWedge {
+    double azimuth0 = 0.0, azimuth1 = 0.0;
+    double lower = 0.0, upper = 0.0;
     glm::dvec3 albedo{0.0};
+};
+
+// One occluder as seen from a point: a plant's cap or a terrain band.
+struct OccluderCap {
+    glm::dvec3 direction{0.0, 1.0, 0.0};  // centre
+    double cosHalfAngle = 1.0;            // caps
+    double weight = 1.0;                  // after overlap (see above)
+    glm::dvec3 albedo{0.0};
+    bool band = false;  // a terrain band: lit as a wall facing the point
+    double azimuth0 = 0.0, azimuth1 = 0.0, lower = 0.0, upper = 0.0;  // bands
+    std::array<double, kShCoefficients> sh{};  // the region's SH
+    double solidAngle = 0.0;
+    int behind = -1;  // the band a cap is seen against: it hides that band, not the far field
 };
 // The caps of `occluders` seen from `point`, with their overlap weights (largest first).
 // Occluders that hold the point are clamped to a 80-degree cap.
 std::vector<OccluderCap> occluderCaps(const glm::dvec3& point_m,
                                       const std::vector<SphereOccluder>& occluders);
+
+// The SH of the band azimuth0..azimuth1 x lower..upper (closed form, see Terrain).
+std::array<double, kShCoefficients> bandSh(double azimuth0, double azimuth1, double lower,
+                                           double upper);
+// The wedges as bands (thinner than about a degree: none).
+std::vector<OccluderCap> terrainBands(const std::vector<HorizonWedge>& wedges);
+// Everything near a point: the terrain's bands, then the plants' caps, each cap seen against a
+// band marked as in front of it.
+std::vector<OccluderCap> nearOccluders(const glm::dvec3& point_m,
+                                       const std::vector<SphereOccluder>& occluders,
+                                       const std::vector<HorizonWedge>& horizon);
 
 // L' = (I + T) L + S E_light, per channel (see above), T split into what the caps hide (the same
 // for every channel) and what they show.
@@ -125,9 +162,11 @@ void updateLightTerm(NearFieldTransfer& transfer, const glm::dvec3& lightDirecti
 // The far field with the near field applied, guarded (see above).
 ShRgb applyTransfer(const NearFieldTransfer& transfer, const ShRgb& far,
                     const DirectionalLight& light);
-// Everything at once, uncached: the caps of `occluders` at `point` applied to `far`.
+// Everything at once, uncached: the caps of `occluders` and the bands of `horizon` at `point`
+// applied to `far`.
 ShRgbD applyNearField(const ShRgbD& far, const glm::dvec3& point_m,
-                      const std::vector<SphereOccluder>& occluders, const DirectionalLight& light);
+                      const std::vector<SphereOccluder>& occluders, const DirectionalLight& light,
+                      const std::vector<HorizonWedge>& horizon = {});
 
 // ---- The scene's occluders ---------------------------------------------------------------------
 class NearFieldScene {
@@ -140,6 +179,12 @@ class NearFieldScene {
     virtual DirectionalLight mainLight(double timeOfDay_h) const = 0;
     // The terrain's height at (x, z) [m] (where a ground point's shading point sits).
     virtual double groundHeight(double x_m, double z_m) const = 0;
+    // The wedges of the horizon where terrain within radius_m rises above what the far field
+    // holds (see Terrain), appended to `out`; none by default.
+    virtual void terrainNear(const glm::dvec3& point_m, double radius_m,
+                             std::vector<HorizonWedge>& out) const {
+        (void)point_m, (void)radius_m, (void)out;
+    }
 };
 
 // The generated world's plants (Vegetation::spheres, scaled and placed).
@@ -150,6 +195,9 @@ class WorldNearFieldScene final : public NearFieldScene {
                        std::vector<SphereOccluder>& out) const override;
     DirectionalLight mainLight(double timeOfDay_h) const override;
     double groundHeight(double x_m, double z_m) const override;
+    void terrainNear(const glm::dvec3& point_m, double radius_m,
+                     std::vector<HorizonWedge>& out) const override;
+    static constexpr int kWedges = 8;
 
   private:
     const World& world_;
@@ -178,8 +226,8 @@ class NearField {
 
   private:
     // Null when nothing is near the point.
-    const NearFieldTransfer* transferAt(const std::array<float, 4>& key, const glm::dvec3& point_m,
-                                        double selfRadius_m) const;
+    // Null when nothing is near the point.
+    std::unique_ptr<NearFieldTransfer> build(const glm::dvec3& point_m, double selfRadius_m) const;
     ShRgb applyKeyed(const ShRgb& far, const std::array<float, 4>& key,
                      const std::function<glm::dvec3()>& point, double selfRadius_m) const;
     std::vector<SphereOccluder> occluders(const glm::dvec3& point_m, double selfRadius_m) const;

@@ -231,5 +231,53 @@ TEST(NearField, CapOverlapClosedCases) {
     EXPECT_NEAR(lambertSpherePhase(kPi / 2), 1.0 / kPi, 1e-12);
 }
 
+
+TEST(NearField, BandShMatchesQuadratureAndTheCaps) {
+    // A wedge of the horizon by quadrature.
+    for (const auto& [p0, p1, e1, e2] : {std::array<double, 4>{0.3, 1.1, -0.2, 0.4},
+                                        std::array<double, 4>{5.0, 6.0, 0.1, 1.2},
+                                        std::array<double, 4>{2.0, 2.785, -1.0, -0.3}}) {
+        const auto closed = bandSh(p0, p1, e1, e2);
+        const auto q = project(1200, [&](const glm::dvec3& w) {
+            double phi = std::atan2(w.z, w.x);
+            if (phi < 0.0) phi += 2.0 * kPi;
+            const double e = std::asin(w.y);
+            return glm::dvec3(phi >= p0 && phi <= p1 && e >= e1 && e <= e2 ? 1.0 : 0.0);
+        });
+        for (int k = 0; k < kShCoefficients; ++k)
+            EXPECT_NEAR(closed[k], q[k].x, 3e-3) << "band " << p0 << ", k " << k;
+    }
+    // The whole ring above elevation e is the cap of half-angle pi/2 - e about +Y.
+    for (double e : {-0.4, 0.0, 0.7}) {
+        const auto ring = bandSh(0.0, 2.0 * kPi, e, 0.5 * kPi);
+        const auto cap = capSh({0.0, 1.0, 0.0}, std::cos(0.5 * kPi - e));
+        for (int k = 0; k < kShCoefficients; ++k) EXPECT_NEAR(ring[k], cap[k], 1e-12) << k;
+    }
+}
+
+TEST(NearField, AGullyDarkensAndTakesTheGroundsColour) {
+    // A point between two walls rising to 30 degrees on the east and west: less sky, and the
+    // walls' colour in its light.
+    ShRgbD sky;  // bright above, dim below
+    sky.c[0] = glm::dvec3(2.0 * std::sqrt(kPi));
+    sky.c[2] = glm::dvec3(0.8 * std::sqrt(4.0 * kPi / 3.0));
+    std::vector<HorizonWedge> walls;
+    const glm::dvec3 red(0.4, 0.1, 0.05);
+    for (double centre : {0.0, kPi}) walls.push_back({centre - 0.6, centre + 0.6, 0.0, 0.52, red});
+    for (HorizonWedge& w : walls)
+        if (w.azimuth0 < 0.0) w.azimuth0 += 2.0 * kPi, w.azimuth1 += 2.0 * kPi;
+    DirectionalLight none;
+    none.irradiance = glm::dvec3(0.0);
+    const ShRgbD got = applyNearField(sky, glm::dvec3(0.0), {}, none, walls);
+    const glm::dvec3 up(0.0, 1.0, 0.0), east(1.0, 0.0, 0.0);
+    EXPECT_LT(shIrradiance(got, east).y, 0.9 * shIrradiance(sky, east).y);
+    EXPECT_LT(shIrradiance(got, up).y, shIrradiance(sky, up).y);
+    // Redder than the sky's grey.
+    const glm::dvec3 e = shIrradiance(got, east);
+    EXPECT_GT(e.x / e.z, 1.05);
+    const glm::dvec3 m = shMinIrradiance(got);
+    EXPECT_GE(std::min({m.x, m.y, m.z}), 0.0);
+}
+
 }  // namespace
 }  // namespace amb
