@@ -67,10 +67,10 @@ struct CaptureSettings {
     int fallbackFaceSize = 16;          // cube map size of the fallback SH
     double fallbackRefresh_h = 1.0 / 60.0;  // recompute the fallback after this much day time
     // The two-scale ambience (lighting/NearField.h; JSON key "nearField"): when enabled, probes
-    // leave the plants within nearField.radius_m out and the method's decorator puts them back
-    // at each shading point.
+    // leave the plants within nearField.captureRadius_m out and the method's decorator puts those
+    // within nearField.radius_m of each shading point back there.
     NearFieldSettings nearField;
-    double nearRadius_m() const { return nearField.enabled ? nearField.radius_m : 0.0; }
+    double nearRadius_m() const { return nearField.enabled ? nearField.captureRadius_m : 0.0; }
 };
 
 // Reads the keys above from a settings object (JsonFields, lighting/JsonFields.h).

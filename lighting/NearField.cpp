@@ -21,6 +21,8 @@ namespace amb {
 void readNearFieldSettings(JsonFields& f, NearFieldSettings& s) {
     f.boolean("enabled", s.enabled);
     f.number("radius_m", s.radius_m, 0.0, 200.0);
+    f.number("captureRadius_m", s.captureRadius_m, 0.0, 200.0);
+    f.number("smallRadius_m", s.smallRadius_m, 0.0, 200.0);
     f.boolean("plants", s.plants);
     f.boolean("terrain", s.terrain);
     f.number("terrainRadius_m", s.terrainRadius_m, 1.0, 500.0);
@@ -261,60 +263,85 @@ std::array<double, kShCoefficients> showFunctional(const OccluderCap& e) {
     return g;
 }
 
-// The light's term per unit albedo and unit irradiance: the sphere's phase law, or a wall's
-// cosine.
-double lightFactor(const OccluderCap& e, const glm::dvec3& lightDirection) {
-    const double cosA = std::clamp(glm::dot(lightDirection, -e.direction), -1.0, 1.0);
-    if (e.band) return std::max(0.0, cosA) / kPi;
-    return (2.0 / 3.0) * lambertSpherePhase(std::acos(cosA)) / kPi;
+// The light's term per unit albedo and unit irradiance, as a function of the light's direction
+// l: the sphere's phase law (2/3) Phi / pi, or a wall's max(0, cos) / pi, of the angle between l
+// and -d. Both are zonal about -d and smooth; kept to order 2 in l (zonal coefficients by
+// quadrature, once), so that a point's light term is a fixed 9 x 9 map of Y(l).
+const std::array<double, 3>& lightZonal(bool wall) {
+    static const auto table = [] {
+        std::array<std::array<double, 3>, 2> z{};
+        const int n = 20000;
+        for (int i = 0; i < n; ++i) {
+            const double t = -1.0 + (i + 0.5) * 2.0 / n;  // cos alpha
+            const double f[2] = {(2.0 / 3.0) * lambertSpherePhase(std::acos(t)) / kPi,
+                                 std::max(0.0, t) / kPi};
+            const double p[3] = {1.0, t, 0.5 * (3.0 * t * t - 1.0)};
+            for (int w = 0; w < 2; ++w)
+                for (int l = 0; l < 3; ++l)
+                    z[w][l] += 2.0 * kPi * std::sqrt((2 * l + 1) / (4.0 * kPi)) * p[l] * f[w] *
+                               (2.0 / n);
+        }
+        return z;
+    }();
+    return table[wall ? 1 : 0];
+}
+
+// Its coefficients in l: a_m = sqrt(4 pi / (2l + 1)) z_l Y_m(-d).
+std::array<double, kShCoefficients> lightFunctional(const OccluderCap& e) {
+    const auto& z = lightZonal(e.band);
+    const auto y = shBasis(-e.direction);
+    std::array<double, kShCoefficients> a{};
+    for (int m = 0; m < kShCoefficients; ++m)
+        a[m] = std::sqrt(4.0 * kPi / (2 * shBand(m) + 1)) * z[shBand(m)] * y[m];
+    return a;
 }
 
 }  // namespace
 
-NearFieldTransfer nearFieldTransfer(std::vector<OccluderCap> caps) {
+NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps) {
     NearFieldTransfer t;
     constexpr int K = kShCoefficients;
     for (const OccluderCap& e : caps) {
         const auto& c = e.sh;
-        const auto g = showFunctional(e);
+        auto g = showFunctional(e);
+        auto a = lightFunctional(e);
         if (e.behind < 0) {
             // It hides the far field ...
             for (int j = 0; j < K; ++j)
                 for (int k = 0; k < K; ++k)
                     t.hide[j * K + k] -= float(e.weight * c[j] * c[k] / e.solidAngle);
         }
+        // ... or, in front of a band, that band's radiance.
+        const OccluderCap* b = e.behind >= 0 ? &caps[std::size_t(e.behind)] : nullptr;
+        const auto gb = b ? showFunctional(*b) : std::array<double, K>{};
+        const auto ab = b ? lightFunctional(*b) : std::array<double, K>{};
         for (int ch = 0; ch < 3; ++ch) {
+            const double rb = b ? b->albedo[ch] : 0.0;
             for (int j = 0; j < K; ++j)
                 for (int k = 0; k < K; ++k) {
-                    double v = e.albedo[ch] * g[k];
-                    // ... or, in front of a band, that band's radiance.
-                    if (e.behind >= 0) {
-                        const OccluderCap& b = caps[std::size_t(e.behind)];
-                        v -= b.albedo[ch] * showFunctional(b)[k];
-                    }
-                    t.show[ch][j * K + k] += float(e.weight * c[j] * v);
+                    t.show[ch][j * K + k] +=
+                        float(e.weight * c[j] * (e.albedo[ch] * g[k] - rb * gb[k]));
+                    t.light[ch][j * K + k] +=
+                        float(e.weight * c[j] * (e.albedo[ch] * a[k] - rb * ab[k]));
                 }
         }
     }
     for (int ch = 0; ch < 3; ++ch)
         for (int i = 0; i < K * K; ++i) t.show[ch][i] += t.hide[i];
-    t.caps = std::move(caps);
+    t.any = !caps.empty();
     return t;
 }
 
 void updateLightTerm(NearFieldTransfer& t, const glm::dvec3& lightDirection) {
     t.lightDirection = lightDirection;
-    for (auto& s : t.s) s.fill(0.0f);
-    for (const OccluderCap& e : t.caps) {
-        const double f = lightFactor(e, lightDirection);
-        const OccluderCap* b = e.behind >= 0 ? &t.caps[std::size_t(e.behind)] : nullptr;
-        const double fb = b ? lightFactor(*b, lightDirection) : 0.0;
-        for (int ch = 0; ch < 3; ++ch) {
-            const double v = e.albedo[ch] * f - (b ? b->albedo[ch] * fb : 0.0);
-            for (int j = 0; j < kShCoefficients; ++j)
-                t.s[ch][j] += float(e.weight * v * e.sh[j]);
+    const auto y = shBasis(lightDirection);
+    for (int ch = 0; ch < 3; ++ch)
+        for (int j = 0; j < kShCoefficients; ++j) {
+            double v = 0.0;
+            for (int m = 0; m < kShCoefficients; ++m)
+                v += t.light[ch][j * kShCoefficients + m] * y[m];
+            t.s[ch][j] = float(v);
         }
-    }
 }
 
 namespace {
@@ -466,8 +493,13 @@ ShRgbD applyNearField(const ShRgbD& far, const glm::dvec3& point_m,
 // ---- [SECTION] The world's occluders -----------------------------------------------------------
 
 void WorldNearFieldScene::occludersNear(const glm::dvec3& point_m, double radius_m,
+                                        double smallRadius_m,
                                         std::vector<SphereOccluder>& out) const {
-    for (const Plant& p : world_.vegetation().inDisc(point_m.x, point_m.z, radius_m)) {
+    const double reach = std::max(radius_m, smallRadius_m);
+    for (const Plant& p : world_.vegetation().inDisc(point_m.x, point_m.z, reach)) {
+        const bool small = p.kind == PlantKind::Bush || p.kind == PlantKind::Rock;
+        const double d = std::hypot(p.position_m.x - point_m.x, p.position_m.z - point_m.z);
+        if (d >= (small ? smallRadius_m : radius_m)) continue;
         for (const PlantSphere& s : Vegetation::spheres(p.kind)) {
             out.push_back({p.position_m + double(p.scale) * s.centre_m,
                            double(p.scale) * s.radius_m, s.albedo});
@@ -542,7 +574,7 @@ void NearField::setTimeOfDay(double timeOfDay_h) {
 std::vector<SphereOccluder> NearField::occluders(const glm::dvec3& p, double selfRadius_m) const {
     std::vector<SphereOccluder> out;
     if (!settings_.plants) return out;
-    scene_.occludersNear(p, settings_.radius_m, out);
+    scene_.occludersNear(p, settings_.radius_m, settings_.smallRadius_m, out);
     if (selfRadius_m > 0.0) {
         // An object's own spheres sit on its axis, above its base.
         out.erase(std::remove_if(out.begin(), out.end(),
@@ -562,8 +594,8 @@ std::unique_ptr<NearFieldTransfer> NearField::build(const glm::dvec3& p,
         scene_.terrainNear(p, settings_.terrainRadius_m, horizon);
     std::vector<OccluderCap> caps = nearOccluders(p, occluders(p, selfRadius_m), horizon);
     if (caps.empty()) return nullptr;
-    bytes_ += sizeof(NearFieldTransfer) + caps.size() * sizeof(OccluderCap);
-    auto t = std::make_unique<NearFieldTransfer>(nearFieldTransfer(std::move(caps)));
+    bytes_ += sizeof(NearFieldTransfer);
+    auto t = std::make_unique<NearFieldTransfer>(nearFieldTransfer(caps));
     updateLightTerm(*t, light_.direction);
     return t;
 }
