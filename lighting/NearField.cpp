@@ -27,6 +27,7 @@ void readNearFieldSettings(JsonFields& f, NearFieldSettings& s) {
     f.boolean("terrain", s.terrain);
     f.number("terrainRadius_m", s.terrainRadius_m, 1.0, 500.0);
     f.integer("cacheEntries", s.cacheEntries, 1, 1 << 24);
+    f.number("pointCell_m", s.pointCell_m, 0.0, 64.0);
 }
 
 // ---- [SECTION] Closed forms --------------------------------------------------------------------
@@ -301,6 +302,7 @@ std::array<double, kShCoefficients> lightFunctional(const OccluderCap& e) {
 NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps) {
     NearFieldTransfer t;
     constexpr int K = kShCoefficients;
+    std::array<std::array<float, K * K>, 3> show{};  // what the caps show, per channel
     for (const OccluderCap& e : caps) {
         const auto& c = e.sh;
         auto g = showFunctional(e);
@@ -319,15 +321,18 @@ NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps) {
             const double rb = b ? b->albedo[ch] : 0.0;
             for (int j = 0; j < K; ++j)
                 for (int k = 0; k < K; ++k) {
-                    t.show[ch][j * K + k] +=
+                    show[ch][j * K + k] +=
                         float(e.weight * c[j] * (e.albedo[ch] * g[k] - rb * gb[k]));
                     t.light[ch][j * K + k] +=
                         float(e.weight * c[j] * (e.albedo[ch] * a[k] - rb * ab[k]));
                 }
         }
     }
-    for (int ch = 0; ch < 3; ++ch)
-        for (int i = 0; i < K * K; ++i) t.show[ch][i] += t.hide[i];
+    // T_c = hide + show_c, stored by column for the apply: columns[k][ch][j].
+    for (int k = 0; k < K; ++k)
+        for (int ch = 0; ch < 3; ++ch)
+            for (int j = 0; j < K; ++j)
+                t.columns[std::size_t(k * 3 * K + ch * K + j)] = show[ch][j * K + k] + t.hide[j * K + k];
     t.any = !caps.empty();
     return t;
 }
@@ -435,17 +440,17 @@ glm::dvec3 guardScale(const ShRgbD& far, const ShRgbD& hidden) {
 }
 
 // Whether the guard found for t.guardFar is kept for `far`: while the far field stays within
-// 5 % of it (coefficients, all channels). The irradiance moves by at most 1.44 times that change
-// (the norm of Ahat_l Y_k(n) over k), small against the margin the check usually finds; the
-// draw clamps what is left.
-bool stillGuarded(const NearFieldTransfer& t, const ShRgbD& far) {
-    double d = 0.0, norm = 0.0;
+// 25 % of it (coefficients, all channels; a point's far field moves that much only when new
+// anchors arrive or the light changes). The scale found holds for the field's shape, which
+// changes far less than its level; the draw clamps what is left.
+bool stillGuarded(const NearFieldTransfer& t, const ShRgb& far) {
+    float d = 0.0f, norm = 0.0f;
     for (int k = 0; k < kShCoefficients; ++k) {
-        const glm::dvec3 x = far.c[k] - t.guardFar.c[k];
+        const glm::vec3 x = far.c[k] - t.guardFar.c[k];
         d += glm::dot(x, x);
         norm += glm::dot(t.guardFar.c[k], t.guardFar.c[k]);
     }
-    return d <= 0.05 * 0.05 * norm;
+    return d <= 0.25f * 0.25f * norm;
 }
 
 }  // namespace
@@ -453,33 +458,39 @@ bool stillGuarded(const NearFieldTransfer& t, const ShRgbD& far) {
 ShRgb applyTransfer(const NearFieldTransfer& t, const ShRgb& far, const DirectionalLight& light) {
     if (t.empty()) return far;
     constexpr int K = kShCoefficients;
-    // The guard's scale is kept with the far field it was found for, and reused while the far
-    // field stays within 1 % of it (a point's far field changes slowly: blends, the sun).
-    const ShRgbD farD = toDouble(far);
-    if (!t.guardValid || !stillGuarded(t, farD)) {
+    if (!t.guardValid || !stillGuarded(t, far)) {
+        const ShRgbD farD = toDouble(far);
         ShRgbD hidden = farD;
         for (int j = 0; j < K; ++j)
             for (int k = 0; k < K; ++k) hidden.c[j] += double(t.hide[j * K + k]) * farD.c[k];
         t.guardScale = guardScale(farD, hidden);
-        t.guardFar = farD;
+        t.guardFar = far;
         t.guardValid = true;
     }
-    ShRgb out;
+    // out[ch][j] = far + S E + sum_k T_c[j][k] far[k], column by column (contiguous, so the
+    // inner loops vectorise).
+    float out[3][K];
     for (int ch = 0; ch < 3; ++ch) {
-        float f[K];
-        for (int k = 0; k < K; ++k) f[k] = far.c[k][ch];
         const float e = float(light.irradiance[ch]);
-        const float unhide = float(1.0 - t.guardScale[ch]);  // 0 unless the guard scaled
-        const float* m = t.show[ch].data();
-        for (int j = 0; j < K; ++j) {
-            float sum = f[j] + t.s[ch][j] * e;
-            for (int k = 0; k < K; ++k) sum += m[j * K + k] * f[k];
-            if (unhide > 0.0f)
-                for (int k = 0; k < K; ++k) sum -= unhide * t.hide[j * K + k] * f[k];
-            out.c[j][ch] = sum;
+        for (int j = 0; j < K; ++j) out[ch][j] = far.c[j][ch] + t.s[ch][j] * e;
+    }
+    for (int k = 0; k < K; ++k) {
+        const float* col = &t.columns[std::size_t(k * 3 * K)];
+        for (int ch = 0; ch < 3; ++ch) {
+            const float f = far.c[k][ch];
+            for (int j = 0; j < K; ++j) out[ch][j] += col[ch * K + j] * f;
         }
     }
-    return out;
+    // A guard that scaled: put back (1 - scale) of what is hidden.
+    for (int ch = 0; ch < 3; ++ch) {
+        const float unhide = float(1.0 - t.guardScale[ch]);
+        if (unhide <= 0.0f) continue;
+        for (int j = 0; j < K; ++j)
+            for (int k = 0; k < K; ++k) out[ch][j] -= unhide * t.hide[j * K + k] * far.c[k][ch];
+    }
+    ShRgb r;
+    for (int j = 0; j < K; ++j) r.c[j] = glm::vec3(out[0][j], out[1][j], out[2][j]);
+    return r;
 }
 
 ShRgbD applyNearField(const ShRgbD& far, const glm::dvec3& point_m,
@@ -600,13 +611,28 @@ std::unique_ptr<NearFieldTransfer> NearField::build(const glm::dvec3& p,
     return t;
 }
 
+double NearField::cellCentre(double v, double cell) const {
+    return cell > 0.0 ? (std::floor(v / cell) + 0.5) * cell : v;
+}
+
+glm::dvec3 NearField::snapped(const glm::dvec3& p) const {
+    const double c = settings_.pointCell_m;
+    return {cellCentre(p.x, c), cellCentre(p.y, 0.5 * c), cellCentre(p.z, c)};
+}
+
 ShRgb NearField::apply(const ShRgb& far, const glm::dvec3& point_m, double selfRadius_m) const {
-    const Key key{float(point_m.x), float(point_m.y), float(point_m.z), float(selfRadius_m)};
-    return applyKeyed(far, key, [&] { return point_m; }, selfRadius_m);
+    // An object's own spheres are found by its exact position: objects are not snapped.
+    const glm::dvec3 p = selfRadius_m > 0.0 ? point_m : snapped(point_m);
+    const Key key{float(p.x), float(p.y), float(p.z), float(selfRadius_m)};
+    return applyKeyed(far, key, [&] { return p; }, selfRadius_m);
 }
 
 ShRgb NearField::applyAbove(const ShRgb& far, double x_m, double z_m, double height_m,
                             double selfRadius_m) const {
+    if (selfRadius_m <= 0.0) {
+        x_m = cellCentre(x_m, settings_.pointCell_m);
+        z_m = cellCentre(z_m, settings_.pointCell_m);
+    }
     // A key no explicit point has (a height of -1e30): one NearField uses one lift.
     const Key key{float(x_m), -1e30f, float(z_m), float(selfRadius_m)};
     return applyKeyed(
@@ -619,34 +645,65 @@ ShRgb NearField::applyKeyed(const ShRgb& far, const Key& key,
     if (!settings_.enabled) return far;
     const auto t0 = std::chrono::steady_clock::now();
     std::lock_guard<std::mutex> lock(mutex_);
-    ShRgb out = far;
-    if (std::isfinite(double(key[0]) + double(key[2]))) {
-        const NearFieldTransfer* t = nullptr;
-        auto it = cache_.find(key);
-        if (it == cache_.end()) {
-            const glm::dvec3 p = point();
-            if (std::isfinite(p.x + p.y + p.z)) {
-                if (cache_.size() >= std::size_t(settings_.cacheEntries)) cache_.clear(), bytes_ = 0;
-                bytes_ += sizeof(Key) + sizeof(std::unique_ptr<NearFieldTransfer>) +
-                          2 * sizeof(void*);  // the map's slot
-                t = cache_.emplace(key, build(p, selfRadius_m)).first->second.get();
-            }
-        } else {
-            t = it->second.get();
-            if (t && glm::dot(t->lightDirection, light_.direction) < 0.99996)
-                updateLightTerm(*it.value(), light_.direction);
-        }
-        if (t) {
-            const ShRgb near = applyTransfer(*t, far, light_);
-            // Never NaN: a far field that overflows keeps its own value.
-            bool finite = true;
-            for (const auto& c : near.c) finite = finite && std::isfinite(c.x + c.y + c.z);
-            if (finite) out = near;
-        }
-    }
+    const ShRgb out = applyLocked(far, key, point, selfRadius_m);
     ++points_;
     seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return out;
+}
+
+void NearField::applyMany(std::size_t count, ShRgb* inOut, const glm::dvec3* points_m) const {
+    if (!settings_.enabled) return;
+    const auto t0 = std::chrono::steady_clock::now();
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (std::size_t i = 0; i < count; ++i) {
+        const glm::dvec3 p = snapped(points_m[i]);
+        const Key key{float(p.x), float(p.y), float(p.z), 0.0f};
+        inOut[i] = applyLocked(inOut[i], key, [&] { return p; }, 0.0);
+    }
+    points_ += count;
+    seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void NearField::applyAboveMany(std::size_t count, ShRgb* inOut, const double* x_m,
+                               const double* z_m, double height_m) const {
+    if (!settings_.enabled) return;
+    const auto t0 = std::chrono::steady_clock::now();
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (std::size_t i = 0; i < count; ++i) {
+        const double x = cellCentre(x_m[i], settings_.pointCell_m);
+        const double z = cellCentre(z_m[i], settings_.pointCell_m);
+        const Key key{float(x), -1e30f, float(z), 0.0f};
+        inOut[i] = applyLocked(
+            inOut[i], key, [&] { return glm::dvec3(x, scene_.groundHeight(x, z) + height_m, z); },
+            0.0);
+    }
+    points_ += count;
+    seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+ShRgb NearField::applyLocked(const ShRgb& far, const Key& key,
+                             const std::function<glm::dvec3()>& point, double selfRadius_m) const {
+    if (!std::isfinite(double(key[0]) + double(key[2]))) return far;
+    const NearFieldTransfer* t = nullptr;
+    auto it = cache_.find(key);
+    if (it == cache_.end()) {
+        const glm::dvec3 p = point();
+        if (!std::isfinite(p.x + p.y + p.z)) return far;
+        if (cache_.size() >= std::size_t(settings_.cacheEntries)) cache_.clear(), bytes_ = 0;
+        bytes_ += sizeof(Key) + sizeof(std::unique_ptr<NearFieldTransfer>) +
+                  2 * sizeof(void*);  // the map's slot
+        t = cache_.emplace(key, build(p, selfRadius_m)).first->second.get();
+    } else {
+        t = it->second.get();
+        if (t && glm::dot(t->lightDirection, light_.direction) < 0.99996)
+            updateLightTerm(*it.value(), light_.direction);
+    }
+    if (!t) return far;
+    const ShRgb near = applyTransfer(*t, far, light_);
+    // Never NaN: a far field that overflows keeps its own value.
+    for (const auto& c : near.c)
+        if (!std::isfinite(c.x + c.y + c.z)) return far;
+    return near;
 }
 
 std::size_t NearField::cachedPoints() const {
@@ -707,8 +764,7 @@ ShRgb NearFieldMethod::cornerShAt(double x_m, double z_m) const {
 void NearFieldMethod::cornerShAt(std::size_t count, const double* x_m, const double* z_m,
                                  ShRgb* out) const {
     far_->cornerShAt(count, x_m, z_m, out);
-    for (std::size_t i = 0; i < count; ++i)
-        out[i] = near_->applyAbove(out[i], x_m[i], z_m[i], kShadingHeight_m);
+    near_->applyAboveMany(count, out, x_m, z_m, kShadingHeight_m);
 }
 
 ShRgb NearFieldMethod::cornerShAtPoint(const glm::dvec3& point_m) const {
@@ -720,7 +776,7 @@ void NearFieldMethod::cornerShAtPoints(std::size_t count, const glm::dvec3* poin
     std::vector<double> x(count), z(count);
     for (std::size_t i = 0; i < count; ++i) x[i] = points_m[i].x, z[i] = points_m[i].z;
     far_->cornerShAt(count, x.data(), z.data(), out);
-    for (std::size_t i = 0; i < count; ++i) out[i] = near_->apply(out[i], points_m[i]);
+    near_->applyMany(count, out, points_m);
 }
 
 MethodStatistics NearFieldMethod::methodStatistics() const {

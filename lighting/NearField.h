@@ -36,7 +36,7 @@
 //   channel) a function of the light's direction l. The phase law and a wall's cosine are zonal
 //   about -d_i, so they are kept to order 2 in l (the phase law within 0.8 % of its peak, the
 //   wall's cosine within 9 %, as order-2 irradiance always is): S_c = Q_c Y(l) with Q_c (9 x 9) fixed too. T and Q are cached per point (the points
-//   the draw asks for do not move), 3.3 kB each whatever the number of occluders.
+//   the draw asks for do not move), 2.7 kB each whatever the number of occluders.
 // [SECTION] Terrain
 //   The terrain cannot be left out of a capture (it would leave a hole), so the anchors hold the
 //   terrain their probes saw. What they cannot hold is terrain near a point that rises above the
@@ -59,7 +59,7 @@
 //   second derivative along great circles times the squared covering radius (at the true
 //   minimum the gradient vanishes). Only if it is negative is the exact minimum
 //   (shMinIrradiance) taken and the hidden part scaled down until it holds. A point keeps its
-//   scale while its far field stays within 5 % of the one it was checked for (far fields change
+//   scale while its far field stays within 25 % of the one it was checked for (far fields change
 //   slowly: blends, the sun), so checks are rare. What the caps show is radiance >= 0 added, as a
 //   capture of a lit object adds it. Caps narrower than asin(0.015) (a trunk 20 m away) are left
 //   out.
@@ -99,9 +99,13 @@ struct NearFieldSettings {
     // Points the draw asks for (terrain corners, objects) are cached with their transfer; the
     // cache is emptied when it holds more than this.
     int cacheEntries = 16384;  // about 2.7 kB each
+    // Points share the transfer of their cell's centre (this wide across, half as tall; 0: each
+    // point its own): the draw's corners and road vertices are dense, and a transfer changes
+    // little over a metre. Objects are never snapped.
+    double pointCell_m = 2.0;
 };
 // Reads {"enabled", "radius_m", "captureRadius_m", "smallRadius_m", "plants", "terrain",
-// "terrainRadius_m", "cacheEntries"}
+// "terrainRadius_m", "cacheEntries", "pointCell_m"}
 // (JsonFields, lighting/JsonFields.h).
 void readNearFieldSettings(JsonFields& fields, NearFieldSettings& settings);
 
@@ -161,8 +165,9 @@ std::vector<OccluderCap> nearOccluders(const glm::dvec3& point_m,
 // for every channel) and what they show.
 struct NearFieldTransfer {
     std::array<float, kShCoefficients * kShCoefficients> hide{};  // row-major
-    // Per channel, hide + what the caps show: T_c, applied in one pass.
-    std::array<std::array<float, kShCoefficients * kShCoefficients>, 3> show{};
+    // T_c = hide + what the caps show, by column for the apply: columns[(k * 3 + ch) * 9 + j]
+    // = T_c[j][k].
+    std::array<float, 3 * kShCoefficients * kShCoefficients> columns{};
     // Per channel, S_c as a map of the light's direction: S_c = light_c Y(l) (see above).
     std::array<std::array<float, kShCoefficients * kShCoefficients>, 3> light{};
     std::array<std::array<float, kShCoefficients>, 3> s{};  // S_c for lightDirection
@@ -171,7 +176,7 @@ struct NearFieldTransfer {
     // The guard's last scale per channel and the far field it was found for (see Guard).
     mutable bool guardValid = false;
     mutable glm::dvec3 guardScale{1.0};
-    mutable ShRgbD guardFar;
+    mutable ShRgb guardFar;
     bool empty() const { return !any; }
 };
 NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps);
@@ -236,6 +241,10 @@ class NearField {
     // looked up only the first time (so every call on one NearField passes the same height_m).
     ShRgb applyAbove(const ShRgb& far, double x_m, double z_m, double height_m,
                      double selfRadius_m = 0.0) const;
+    // The same for many points at once (corners: no self radius), in place.
+    void applyMany(std::size_t count, ShRgb* inOut, const glm::dvec3* points_m) const;
+    void applyAboveMany(std::size_t count, ShRgb* inOut, const double* x_m, const double* z_m,
+                        double height_m) const;
     std::size_t cachedPoints() const;
     std::size_t cacheBytes() const;
     // Wall time spent in apply and the points it answered since the last resetCounters.
@@ -249,7 +258,12 @@ class NearField {
     std::unique_ptr<NearFieldTransfer> build(const glm::dvec3& point_m, double selfRadius_m) const;
     ShRgb applyKeyed(const ShRgb& far, const std::array<float, 4>& key,
                      const std::function<glm::dvec3()>& point, double selfRadius_m) const;
+    // The same with the lock held and without timing.
+    ShRgb applyLocked(const ShRgb& far, const std::array<float, 4>& key,
+                      const std::function<glm::dvec3()>& point, double selfRadius_m) const;
     std::vector<SphereOccluder> occluders(const glm::dvec3& point_m, double selfRadius_m) const;
+    double cellCentre(double v, double cell) const;
+    glm::dvec3 snapped(const glm::dvec3& p) const;
 
     const NearFieldScene& scene_;
     NearFieldSettings settings_;
