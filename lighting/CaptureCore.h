@@ -70,7 +70,9 @@ struct CaptureSettings {
     // leave the plants within nearField.captureRadius_m out and the method's decorator puts those
     // within nearField.radius_m of each shading point back there.
     NearFieldSettings nearField;
-    double nearRadius_m() const { return nearField.enabled ? nearField.captureRadius_m : 0.0; }
+    double nearRadius_m() const {
+        return nearField.enabled && nearField.plants ? nearField.captureRadius_m : 0.0;
+    }
 };
 
 // Reads the keys above from a settings object (JsonFields, lighting/JsonFields.h).

@@ -870,8 +870,8 @@ std::string jobDir(const std::string& replay, const std::string& method, const s
 
 // ---- Tuning ----------------------------------------------------------------------------------
 
-// Coordinate descent over the scheduler's and the store's main parameters, for the volume at
-// the default capture budget: each parameter in turn tries the values around the current best,
+// Coordinate descent over the scheduler's, the store's and the near field's main parameters, for
+// the volume at the default capture budget: each parameter in turn tries the values around the current best,
 // keeping a change only when the mean error over the tuning replays falls.
 struct TuneParameter {
     std::vector<std::string> path;  // into the volume settings JSON
@@ -912,6 +912,9 @@ void tune(const BenchOptions& o, const Runner& runner, int workers) {
         {{"scheduler", "finestRingCells"}, d.scheduler.finestRingCells, {0.5, 2.0}, false},
         {{"scheduler", "coarseRingCells"}, d.scheduler.coarseRingCells, {0.5, 2.0}, false},
         {{"store", "reachCells"}, double(d.store.reachCells), {2.0, 3.0}, true},
+        // The two scales (lighting/NearField.h): what probes leave out, what points put back.
+        {{"nearField", "captureRadius_m"}, d.capture.nearField.captureRadius_m, {0.75, 1.5}, false},
+        {{"nearField", "radius_m"}, d.capture.nearField.radius_m, {0.75, 1.5}, false},
     };
     struct Candidate {
         std::string label;
