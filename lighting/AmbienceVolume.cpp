@@ -75,6 +75,7 @@ AmbienceVolumeSettings ambienceSettingsFromJson(const std::string& jsonText,
             o.number("minReachSpeed_mps", t.minReachSpeed_mps, 1e-3, 1e6);
             o.number("gapBonus_s", t.gapBonus_s, -1e3, 1e3);
             o.number("staleBias_s", t.staleBias_s, -1e3, 1e3);
+            o.number("adaptiveThreshold", t.adaptiveThreshold, 0.0, 10.0);
         });
         readCaptureSettings(f, s.capture);
         f.number("nominalFrameTime_s", s.nominalFrameTime_s, 1e-4, 10.0);

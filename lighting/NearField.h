@@ -99,10 +99,10 @@ struct NearFieldSettings {
     // Points the draw asks for (terrain corners, objects) are cached with their transfer; the
     // cache is emptied when it holds more than this.
     int cacheEntries = 16384;  // about 2.7 kB each
-    // Points share the transfer of their cell's centre (this wide across, half as tall; 0: each
-    // point its own): the draw's corners and road vertices are dense, and a transfer changes
-    // little over a metre. Objects are never snapped.
-    double pointCell_m = 2.0;
+    // Points may share the transfer of their cell's centre (this wide across, half as tall; 0:
+    // each point its own). Off by default: 2 m cells raised the highway's mean error against the
+    // reference by 13 % and saved no time. Objects are never snapped.
+    double pointCell_m = 0.0;
 };
 // Reads {"enabled", "radius_m", "captureRadius_m", "smallRadius_m", "plants", "terrain",
 // "terrainRadius_m", "cacheEntries", "pointCell_m"}

@@ -6,12 +6,14 @@
 #include "lighting/ProbeScheduler.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <unordered_set>
 
 #include <glm/geometric.hpp>
 
+#include "lighting/Metrics.h"
 #include "world/Error.h"
 #include "world/Road.h"
 
@@ -139,6 +141,25 @@ int ProbeScheduler::finestLevel(const AnchorStore& store, double probesPerSecond
 
 // ---- Candidates and cost ------------------------------------------------------------------------
 
+bool ProbeScheduler::coarseIsUniform(const AnchorStore& store, const LatticeKey& key) const {
+    if (!(settings_.adaptiveThreshold > 0.0) || key.level < 1) return false;
+    const int coarse = key.level - 1;
+    const double s = store.spacing_m(coarse);
+    const double i0 = std::floor(store.keyX_m(key) / s), k0 = std::floor(store.keyZ_m(key) / s);
+    std::array<const Anchor*, 4> corner{};
+    ShRgb mean;
+    for (int c = 0; c < 4; ++c) {
+        const LatticeKey k =
+            store.canonical({coarse, std::int32_t(i0 + (c & 1)), std::int32_t(k0 + (c >> 1))});
+        corner[c] = store.find(k);
+        if (!corner[c] || corner[c]->expired) return false;
+        mean += corner[c]->current * 0.25f;
+    }
+    for (const Anchor* a : corner)
+        if (relativeIrradianceError(a->current, mean) > settings_.adaptiveThreshold) return false;
+    return true;
+}
+
 std::optional<ProbeChoice> ProbeScheduler::choose(const AnchorStore& store, double probesPerSecond,
                                                   const std::vector<LatticeKey>& busy) const {
     if (!initialised_) return std::nullopt;
@@ -181,6 +202,7 @@ std::optional<ProbeChoice> ProbeScheduler::choose(const AnchorStore& store, doub
             if (busyKeys.count(packKey(key))) continue;
             const Anchor* anchor = store.find(key);
             if (anchor && !anchor->regenerationRequested && !anchor->expired) continue;  // fresh
+            if (!anchor && coarseIsUniform(store, key)) continue;
             const glm::dvec3 x{store.keyX_m(key), 0.0, store.keyZ_m(key)};
             double reach = std::numeric_limits<double>::infinity();
             for (const PathSample& p : path) {

@@ -60,6 +60,12 @@ struct ProbeSchedulerSettings {
     double minReachSpeed_mps = 10.0;  // speed assumed for time-to-reach when slower
     double gapBonus_s = 0.5;
     double staleBias_s = 1.0;
+    // Adaptive density (thesis appendix B, "colour difference to neighbours"): a new point of a
+    // level L >= 1 is skipped when the four anchors of the level L - 1 cell around it are all
+    // there and none differs from their mean by more than this relative irradiance distance
+    // (lighting/Metrics.h): the coarse cell already says the field is uniform there, so a finer
+    // probe would change little. 0: off (every point of the finest level is taken).
+    double adaptiveThreshold = 0.0;
 };
 
 struct ProbeChoice {
@@ -107,6 +113,8 @@ class ProbeScheduler {
                                       const std::vector<LatticeKey>& busy = {}) const;
 
   private:
+    // True when adaptive density leaves the new point `key` out (see adaptiveThreshold).
+    bool coarseIsUniform(const AnchorStore& store, const LatticeKey& key) const;
     ProbeSchedulerSettings settings_;
     const RoadNetwork* roads_ = nullptr;
     struct Observation {

@@ -190,6 +190,50 @@ TEST(ProbeScheduler, ChoosesNearTheCameraFirstSkipsFreshAndReturnsToStale) {
     EXPECT_TRUE(again->refresh);
 }
 
+TEST(ProbeScheduler, AdaptiveDensityLeavesUniformCellsCoarse) {
+    // Fill every level but the finest around the camera, then ask for the finest level's new
+    // points: with uniform coarse anchors none is taken; where one coarse corner differs, the
+    // points of the cells it bounds are.
+    AnchorStoreSettings storeSettings;
+    storeSettings.blendTime_s = 0.0;
+    ProbeSchedulerSettings settings;
+    settings.maxWiden = 0;
+    settings.maxLevel = 2;
+    settings.adaptiveThreshold = 0.1;
+    const glm::dvec3 cam(100.4, 0.0, 50.2);
+    ShRgb sky;
+    sky.c[0] = glm::vec3(3.0f);
+    sky.c[2] = glm::vec3(1.0f);
+    for (bool uniform : {true, false}) {
+        AnchorStore store(storeSettings);
+        ProbeScheduler s(settings);
+        s.observe(cam, {0, 0, 0}, 0.0);
+        const double coarse = store.spacing_m(1);
+        for (int i = -8; i <= 8; ++i)
+            for (int k = -8; k <= 8; ++k) {
+                const LatticeKey key = store.canonical(
+                    {1, std::int32_t(std::floor(cam.x / coarse)) + i,
+                     std::int32_t(std::floor(cam.z / coarse)) + k});
+                // One corner darker by half where the field is not uniform.
+                const bool odd = !uniform && i == 0 && k == 0;
+                store.insert(key, odd ? sky * 0.5f : sky,
+                             {store.keyX_m(key), 2.0, store.keyZ_m(key)}, 100.0);
+            }
+        int finest = 0;
+        while (auto c = s.choose(store, 1e6)) {
+            if (c->key.level == 2) ++finest;
+            store.insert(c->key, sky, {store.keyX_m(c->key), 2.0, store.keyZ_m(c->key)}, 100.0);
+            if (finest > 500) break;
+        }
+        if (uniform) {
+            EXPECT_EQ(finest, 0);
+        } else {
+            EXPECT_GT(finest, 0);
+            EXPECT_LE(finest, 4 * 8);  // only the four cells around the odd corner
+        }
+    }
+}
+
 // ---- Driving an AmbienceVolume ----------------------------------------------------------------
 
 struct Drive {
