@@ -97,6 +97,7 @@ std::vector<OccluderCap> occluderCaps(const glm::dvec3& point_m,
         c.direction = to / d;
         c.cosHalfAngle = std::max(kMaxCosHalfAngle, std::sqrt(1.0 - sinT * sinT));
         c.albedo = o.albedo;
+        c.weight = std::clamp(o.weight, 0.0, 1.0);
         caps.push_back(c);
     }
     // Largest first; each keeps what earlier ones leave of it.
@@ -110,7 +111,7 @@ std::vector<OccluderCap> occluderCaps(const glm::dvec3& point_m,
     }
     for (std::size_t i = 0; i < caps.size(); ++i) {
         const double omega = capSolidAngle(caps[i].cosHalfAngle);
-        double w = 1.0;
+        double w = caps[i].weight;  // its fade (see Radii)
         for (std::size_t j = 0; j < i && w > 0.0; ++j) {
             const double cosD = std::clamp(glm::dot(caps[i].direction, caps[j].direction), -1.0, 1.0);
             // Apart when the separation is at least a_i + a_j: cos d <= cos(a_i + a_j).
@@ -118,7 +119,9 @@ std::vector<OccluderCap> occluderCaps(const glm::dvec3& point_m,
             if (sumA < kPi && cosD <= caps[i].cosHalfAngle * caps[j].cosHalfAngle -
                                           sinHalf[i] * sinHalf[j])
                 continue;
-            w *= std::max(0.0, 1.0 - capOverlap(halfAngle[i], halfAngle[j], std::acos(cosD)) / omega);
+            w *= std::max(0.0, 1.0 - caps[j].weight *
+                                         capOverlap(halfAngle[i], halfAngle[j], std::acos(cosD)) /
+                                         omega);
         }
         caps[i].weight = w;
     }
@@ -510,10 +513,15 @@ void WorldNearFieldScene::occludersNear(const glm::dvec3& point_m, double radius
     for (const Plant& p : world_.vegetation().inDisc(point_m.x, point_m.z, reach)) {
         const bool small = p.kind == PlantKind::Bush || p.kind == PlantKind::Rock;
         const double d = std::hypot(p.position_m.x - point_m.x, p.position_m.z - point_m.z);
-        if (d >= (small ? smallRadius_m : radius_m)) continue;
+        const double r = small ? smallRadius_m : radius_m;
+        if (d >= r) continue;
+        // Faded out over the last quarter of the radius: a moving point gains and loses plants
+        // smoothly (see Radii).
+        const double x = std::clamp((r - d) / (kNearFade * r), 0.0, 1.0);
+        const double weight = x * x * (3.0 - 2.0 * x);
         for (const PlantSphere& s : Vegetation::spheres(p.kind)) {
             out.push_back({p.position_m + double(p.scale) * s.centre_m,
-                           double(p.scale) * s.radius_m, s.albedo});
+                           double(p.scale) * s.radius_m, s.albedo, weight});
         }
     }
 }

@@ -13,7 +13,9 @@
 //   may be missing from a nearby probe's capture: putting back a little more than the probes
 //   leave out measures best (bench, reference oracle: 12 / 20 m against 16 / 16 m lowers the mean
 //   error on the highway, the mountain road and the low flight by 3-24 %). Bushes and rocks are
-//   never in a capture, so they are near out to smallRadius_m.
+//   never in a capture, so they are near out to smallRadius_m. A plant's weight fades from 1 to 0
+//   over the last kNearFade of its radius (smoothstep), so a moving point (the car) gains and
+//   loses plants without a step.
 // [SECTION] Caps
 //   An occluder is a sphere (world/Vegetation.h: crowns, trunks, rocks as spheres). Seen from a
 //   point p it is a cap of half-angle theta (sin theta = r / |c - p|) around d = (c - p) / |c - p|.
@@ -48,10 +50,10 @@
 //   closed form: over azimuth phi0..phi1 and elevation e1..e2 every basis function is a sum of
 //   products of cos/sin powers, integrated exactly. A plant seen against a band hides the band.
 // [SECTION] Overlap (occluders must not darken twice)
-//   Caps are taken largest first; cap i keeps the weight w_i = prod_{j<i} (1 - O_ij / Omega_i),
-//   O_ij the solid angle it shares with an earlier cap j (the smoothstep approximation of two
-//   caps' intersection of Oat and Sander, "Ambient aperture lighting", 2007). A cap inside an
-//   earlier one gets weight 0; caps apart keep 1.
+//   Caps are taken largest first; cap i keeps the weight w_i = f_i prod_{j<i} (1 - f_j O_ij /
+//   Omega_i), f its fade (see Radii), O_ij the solid angle it shares with an earlier cap j (the
+//   smoothstep approximation of two caps' intersection of Oat and Sander, "Ambient aperture
+//   lighting", 2007). A cap inside an earlier one gets weight 0; caps apart keep f.
 // [SECTION] Guard
 //   What the caps hide must not take the irradiance below zero for any normal (below the far
 //   field's own minimum if that is negative). A sampled lower bound of the minimum of the far
@@ -85,6 +87,8 @@ namespace amb {
 class JsonFields;
 class World;
 
+inline constexpr double kNearFade = 0.25;  // see Radii
+
 struct NearFieldSettings {
     bool enabled = true;     // apply the near field at shading points (a method's switch)
     double radius_m = 20.0;  // r_near: occluders this close (horizontally) to a point are near
@@ -113,6 +117,7 @@ struct SphereOccluder {
     glm::dvec3 centre_m{0.0};
     double radius_m = 0.0;
     glm::dvec3 albedo{0.0};
+    double weight = 1.0;  // in [0, 1]: faded near the edge of the near radius (see Radii)
 };
 
 // ---- Closed forms ------------------------------------------------------------------------------
