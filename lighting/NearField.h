@@ -312,11 +312,16 @@ class NearFieldMethod final : public AmbienceMethod {
     }
     bool wantsLookups() const override { return far_->wantsLookups(); }
     MethodStatistics methodStatistics() const override;
+    // None: the error budget's ideal volume (fresh full captures at the lattice points) is not
+    // what this method interpolates (far captures and the near field at the point), so its
+    // spacing and schedule terms are reported as one (lighting/ReferenceOracle.h).
     IdealSupport idealSupport(double x_m, double z_m) const override {
-        return far_->idealSupport(x_m, z_m);
+        (void)x_m, (void)z_m;
+        return {};
     }
-    // An object's own spheres sit within this of its ground point (horizontally).
-    static constexpr double kSelfRadius_m = 0.5;
+    // An object's own spheres sit on its axis, at its ground point: those within this
+    // (horizontally) are its own.
+    static constexpr double kSelfRadius_m = 0.05;
 
   private:
     std::unique_ptr<AmbienceMethod> far_;

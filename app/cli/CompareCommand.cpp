@@ -12,8 +12,10 @@
 // (5) the reference frame is the shaded frame with its ambient term replaced, per pixel:
 // L + albedo / pi x (E_ref - E_applied) (fog left out: it only fades the far field), tone mapped
 // as the frame is. Outputs in --out: method.png, reference.png, error.png (0 black .. 0.5 and
-// above white-yellow, sky grey), compare.png (the three side by side) and compare.json (the mean
-// error over the samples: screen-weighted, and by surface).
+// above white-yellow, sky grey), compare.png (the three side by side), ambient.png and
+// ambient-reference.png (the ambient term alone, albedo / pi x irradiance, the method's and the
+// reference's on one scale) and compare.json (the mean error over the samples: screen-weighted,
+// and by surface).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -120,8 +122,8 @@ CompareInputs checkInputs(const CompareOptions& o) {
         FilePlan files;
         files.input("--replay", replayPath);
         files.input("--config", o.config);
-        for (const char* name : {"method.png", "reference.png", "error.png", "compare.png",
-                                 "compare.json"})
+        for (const char* name : {"method.png", "reference.png", "error.png", "ambient.png",
+                                 "ambient-reference.png", "compare.png", "compare.json"})
             files.output("--out", (fs::path(out) / name).string());
         files.check();
     }
@@ -235,7 +237,35 @@ ReferenceGrid sampleReference(const CompareOptions& o, const Size& size, const W
 struct ComposedImages {
     std::vector<unsigned char> refLdr;
     std::vector<unsigned char> errorRgb;
+    // The ambient term alone (albedo / pi x irradiance), the method's and the reference's, on
+    // one scale: white at the method's 99th percentile, gamma 2.2, sky grey.
+    std::vector<unsigned char> ambientLdr, ambientRefLdr;
 };
+
+// Ambient-only images of `method` and `reference` (linear RGB, < 0 for sky) on a shared scale.
+void ambientImages(const std::vector<float>& method, const std::vector<float>& reference,
+                   ComposedImages& out) {
+    std::vector<float> lum;
+    for (std::size_t p = 0; 3 * p < method.size(); ++p)
+        if (method[3 * p] >= 0.0f)
+            lum.push_back(std::max({method[3 * p], method[3 * p + 1], method[3 * p + 2]}));
+    float white = 1.0f;
+    if (!lum.empty()) {
+        std::nth_element(lum.begin(), lum.begin() + std::ptrdiff_t(lum.size() * 99 / 100), lum.end());
+        white = std::max(lum[lum.size() * 99 / 100], 1e-6f);
+    }
+    const auto toLdr = [&](const std::vector<float>& img) {
+        std::vector<unsigned char> ldr(img.size());
+        for (std::size_t i = 0; i < img.size(); ++i)
+            ldr[i] = img[i] < 0.0f ? 60
+                                   : (unsigned char)std::lround(
+                                         255.0 * std::pow(std::clamp(img[i] / white, 0.0f, 1.0f),
+                                                          1.0 / 2.2));
+        return ldr;
+    };
+    out.ambientLdr = toLdr(method);
+    out.ambientRefLdr = toLdr(reference);
+}
 
 // (4) + (5) per pixel: the ratio and the error interpolated from the grid samples around, the
 // error as a heat colour and the shaded frame's ambient term scaled by the ratio.
@@ -248,6 +278,7 @@ ComposedImages composeImages(const CompareOptions& o, const Size& size, Renderer
     const std::vector<GridSample>& samples = grid.samples;
     std::vector<float> refHdr = images.hdr;
     std::vector<unsigned char> errorRgb(std::size_t(w) * h * 3);
+    std::vector<float> ambient(std::size_t(w) * h * 3, -1.0f), ambientRef = ambient;
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             const std::size_t p = std::size_t(y) * w + x;
@@ -283,10 +314,13 @@ ComposedImages composeImages(const CompareOptions& o, const Size& size, Renderer
                 const double a = applied.rgba[4 * p + c];
                 refHdr[3 * p + c] += float(albedo.rgba[4 * p + c] / kPi * (ratio[c] - 1.0) * a);
                 refHdr[3 * p + c] = std::max(refHdr[3 * p + c], 0.0f);
+                ambient[3 * p + c] = float(albedo.rgba[4 * p + c] / kPi * a);
+                ambientRef[3 * p + c] = float(albedo.rgba[4 * p + c] / kPi * ratio[c] * a);
             }
         }
-    const std::vector<unsigned char> refLdr = renderer.tonemap(refHdr);
-    return {refLdr, std::move(errorRgb)};
+    ComposedImages out{renderer.tonemap(refHdr), std::move(errorRgb), {}, {}};
+    ambientImages(ambient, ambientRef, out);
+    return out;
 }
 
 // Outputs: the three images alone and side by side, compare.json with the mean errors, and a
@@ -309,6 +343,9 @@ void writeOutputs(const CompareOptions& o, const CompareInputs& in, const Target
     writeImageRgb8((fs::path(out) / "method.png").string(), w, h, methodLdr);
     writeImageRgb8((fs::path(out) / "reference.png").string(), w, h, refLdr);
     writeImageRgb8((fs::path(out) / "error.png").string(), w, h, errorRgb);
+    writeImageRgb8((fs::path(out) / "ambient.png").string(), w, h, composed.ambientLdr);
+    writeImageRgb8((fs::path(out) / "ambient-reference.png").string(), w, h,
+                   composed.ambientRefLdr);
     std::vector<unsigned char> side(std::size_t(3) * w * h * 3);
     for (int y = 0; y < h; ++y)
         for (int i = 0; i < 3; ++i) {
