@@ -28,6 +28,7 @@ void readNearFieldSettings(JsonFields& f, NearFieldSettings& s) {
     f.number("terrainRadius_m", s.terrainRadius_m, 1.0, 500.0);
     f.integer("cacheEntries", s.cacheEntries, 1, 1 << 24);
     f.number("pointCell_m", s.pointCell_m, 0.0, 64.0);
+    f.number("objectRange_m", s.objectRange_m, 0.0, 1e6);
 }
 
 // ---- [SECTION] Closed forms --------------------------------------------------------------------
@@ -758,11 +759,16 @@ void NearFieldMethod::predictStage(const glm::dvec3& cameraPosition_m,
                                    double dt_s) {
     near_->resetCounters();
     if (std::isfinite(timeOfDay_h)) near_->setTimeOfDay(timeOfDay_h);
+    if (std::isfinite(cameraPosition_m.x + cameraPosition_m.z)) camera_m_ = cameraPosition_m;
     far_->predictStage(cameraPosition_m, cameraVelocity_mps, timeOfDay_h, dt_s);
 }
 
 ShRgb NearFieldMethod::shAt(double x_m, double z_m) const {
-    return near_->applyAbove(far_->shAt(x_m, z_m), x_m, z_m, kShadingHeight_m, kSelfRadius_m);
+    const ShRgb far = far_->shAt(x_m, z_m);
+    // Objects far from the camera take the far field alone (see NearFieldSettings::objectRange_m).
+    if (std::hypot(x_m - camera_m_.x, z_m - camera_m_.z) > near_->settings().objectRange_m)
+        return far;
+    return near_->applyAbove(far, x_m, z_m, kShadingHeight_m, kSelfRadius_m);
 }
 
 ShRgb NearFieldMethod::cornerShAt(double x_m, double z_m) const {
