@@ -347,7 +347,7 @@ void ErrorMeter::frame(int index, double time_s, double timeOfDay_h, const glm::
     // Pop: this frame's change at the held points.
     if (!popPoints_.empty()) {
         for (std::size_t i = 0; i < popPoints_.size(); ++i) {
-            const ShRgb now = appliedAt(method, popPoints_[i], witnessPoint(popPoints_[i]));
+            const ShRgb now = appliedAt(method, popPoints_[i], popAt_[i]);
             pending_.push_back({i, now - popPrevious_[i]});
             popPrevious_[i] = now;
         }
@@ -391,12 +391,14 @@ void ErrorMeter::frame(int index, double time_s, double timeOfDay_h, const glm::
     popPoints_.clear();
     popOracleStart_.clear();
     popPrevious_.clear();
+    popAt_.clear();
     for (std::size_t i = 0; i < mf.witnesses.size() && int(popPoints_.size()) < settings_.popPoints;
          ++i) {
         if (mf.witnesses[i].ring > 1) break;
         popPoints_.push_back(mf.witnesses[i]);
         popOracleStart_.push_back(oracles[i]);
-        popPrevious_.push_back(appliedAt(method, mf.witnesses[i], witnessPoint(mf.witnesses[i])));
+        popAt_.push_back(witnessPoint(mf.witnesses[i]));
+        popPrevious_.push_back(appliedAt(method, mf.witnesses[i], popAt_.back()));
     }
     measured_.push_back(std::move(mf));
 }

@@ -300,6 +300,7 @@ class ErrorMeter {
     std::vector<Witness> popPoints_;
     std::vector<ShRgb> popOracleStart_;
     std::vector<ShRgb> popPrevious_;  // applied at the previous frame
+    std::vector<glm::dvec3> popAt_;   // where each pop point's oracle looks from (placed once)
     struct PendingPop {
         std::size_t point;
         ShRgb delta;  // A_t - A_{t-1}

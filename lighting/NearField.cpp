@@ -27,7 +27,6 @@ void readNearFieldSettings(JsonFields& f, NearFieldSettings& s) {
     f.boolean("terrain", s.terrain);
     f.number("terrainRadius_m", s.terrainRadius_m, 1.0, 500.0);
     f.integer("cacheEntries", s.cacheEntries, 1, 1 << 24);
-    f.number("pointCell_m", s.pointCell_m, 0.0, 64.0);
     f.number("objectRange_m", s.objectRange_m, 0.0, 1e6);
 }
 
@@ -259,46 +258,15 @@ std::vector<OccluderCap> terrainBands(const std::vector<HorizonWedge>& wedges) {
 namespace {
 
 // What an entry shows per unit albedo, as a functional of the far field: the irradiance of the
-// surface facing the point (caps: its visible disc's mean, bands: a wall facing the point).
+// surface facing the point (caps: its visible disc's mean, bands: a wall facing the point), over
+// pi. The same functional of a delta Y(l) E is the light's term: for a cap the order-2 projection
+// of the Lambert sphere's phase law (2/3) Phi / pi, for a band that of max(0, cos) / pi.
 std::array<double, kShCoefficients> showFunctional(const OccluderCap& e) {
     const auto y = shBasis(-e.direction);
     std::array<double, kShCoefficients> g{};
     for (int k = 0; k < kShCoefficients; ++k)
         g[k] = kAhatBand[shBand(k)] * (e.band ? 1.0 : kDiscMean[shBand(k)]) * y[k] / kPi;
     return g;
-}
-
-// The light's term per unit albedo and unit irradiance, as a function of the light's direction
-// l: the sphere's phase law (2/3) Phi / pi, or a wall's max(0, cos) / pi, of the angle between l
-// and -d. Both are zonal about -d and smooth; kept to order 2 in l (zonal coefficients by
-// quadrature, once), so that a point's light term is a fixed 9 x 9 map of Y(l).
-const std::array<double, 3>& lightZonal(bool wall) {
-    static const auto table = [] {
-        std::array<std::array<double, 3>, 2> z{};
-        const int n = 20000;
-        for (int i = 0; i < n; ++i) {
-            const double t = -1.0 + (i + 0.5) * 2.0 / n;  // cos alpha
-            const double f[2] = {(2.0 / 3.0) * lambertSpherePhase(std::acos(t)) / kPi,
-                                 std::max(0.0, t) / kPi};
-            const double p[3] = {1.0, t, 0.5 * (3.0 * t * t - 1.0)};
-            for (int w = 0; w < 2; ++w)
-                for (int l = 0; l < 3; ++l)
-                    z[w][l] += 2.0 * kPi * std::sqrt((2 * l + 1) / (4.0 * kPi)) * p[l] * f[w] *
-                               (2.0 / n);
-        }
-        return z;
-    }();
-    return table[wall ? 1 : 0];
-}
-
-// Its coefficients in l: a_m = sqrt(4 pi / (2l + 1)) z_l Y_m(-d).
-std::array<double, kShCoefficients> lightFunctional(const OccluderCap& e) {
-    const auto& z = lightZonal(e.band);
-    const auto y = shBasis(-e.direction);
-    std::array<double, kShCoefficients> a{};
-    for (int m = 0; m < kShCoefficients; ++m)
-        a[m] = std::sqrt(4.0 * kPi / (2 * shBand(m) + 1)) * z[shBand(m)] * y[m];
-    return a;
 }
 
 }  // namespace
@@ -309,8 +277,7 @@ NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps) {
     std::array<std::array<float, K * K>, 3> show{};  // what the caps show, per channel
     for (const OccluderCap& e : caps) {
         const auto& c = e.sh;
-        auto g = showFunctional(e);
-        auto a = lightFunctional(e);
+        const auto g = showFunctional(e);
         if (e.behind < 0) {
             // It hides the far field ...
             for (int j = 0; j < K; ++j)
@@ -320,15 +287,12 @@ NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps) {
         // ... or, in front of a band, that band's radiance.
         const OccluderCap* b = e.behind >= 0 ? &caps[std::size_t(e.behind)] : nullptr;
         const auto gb = b ? showFunctional(*b) : std::array<double, K>{};
-        const auto ab = b ? lightFunctional(*b) : std::array<double, K>{};
         for (int ch = 0; ch < 3; ++ch) {
             const double rb = b ? b->albedo[ch] : 0.0;
             for (int j = 0; j < K; ++j)
                 for (int k = 0; k < K; ++k) {
                     show[ch][j * K + k] +=
                         float(e.weight * c[j] * (e.albedo[ch] * g[k] - rb * gb[k]));
-                    t.light[ch][j * K + k] +=
-                        float(e.weight * c[j] * (e.albedo[ch] * a[k] - rb * ab[k]));
                 }
         }
     }
@@ -336,19 +300,23 @@ NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps) {
     for (int k = 0; k < K; ++k)
         for (int ch = 0; ch < 3; ++ch)
             for (int j = 0; j < K; ++j)
-                t.columns[std::size_t(k * 3 * K + ch * K + j)] = show[ch][j * K + k] + t.hide[j * K + k];
+                t.columns[std::size_t(k * 3 * K + ch * K + j)] =
+                    show[ch][j * K + k] + t.hide[j * K + k];
     t.any = !caps.empty();
     return t;
 }
 
 void updateLightTerm(NearFieldTransfer& t, const glm::dvec3& lightDirection) {
+    // The light is a delta in the far field: what the caps show of it is show_c Y(l), show_c =
+    // T_c - hide (see "What a cap does").
+    constexpr int K = kShCoefficients;
     t.lightDirection = lightDirection;
     const auto y = shBasis(lightDirection);
     for (int ch = 0; ch < 3; ++ch)
-        for (int j = 0; j < kShCoefficients; ++j) {
+        for (int j = 0; j < K; ++j) {
             double v = 0.0;
-            for (int m = 0; m < kShCoefficients; ++m)
-                v += t.light[ch][j * kShCoefficients + m] * y[m];
+            for (int m = 0; m < K; ++m)
+                v += (t.columns[std::size_t(m * 3 * K + ch * K + j)] - t.hide[j * K + m]) * y[m];
             t.s[ch][j] = float(v);
         }
 }
@@ -369,11 +337,7 @@ const GuardSamples& guardSamples() {
         GuardSamples out;
         const auto fibonacci = [](int n) {
             std::vector<glm::dvec3> d;
-            const double golden = kPi * (3.0 - std::sqrt(5.0));
-            for (int i = 0; i < n; ++i) {
-                const double y = 1.0 - (i + 0.5) * 2.0 / n, r = std::sqrt(1.0 - y * y);
-                d.push_back({r * std::cos(golden * i), y, r * std::sin(golden * i)});
-            }
+            for (int i = 0; i < n; ++i) d.push_back(fibonacciDirection(i, n));
             return d;
         };
         const std::vector<glm::dvec3> samples = fibonacci(160);
@@ -620,28 +584,13 @@ std::unique_ptr<NearFieldTransfer> NearField::build(const glm::dvec3& p,
     return t;
 }
 
-double NearField::cellCentre(double v, double cell) const {
-    return cell > 0.0 ? (std::floor(v / cell) + 0.5) * cell : v;
-}
-
-glm::dvec3 NearField::snapped(const glm::dvec3& p) const {
-    const double c = settings_.pointCell_m;
-    return {cellCentre(p.x, c), cellCentre(p.y, 0.5 * c), cellCentre(p.z, c)};
-}
-
 ShRgb NearField::apply(const ShRgb& far, const glm::dvec3& point_m, double selfRadius_m) const {
-    // An object's own spheres are found by its exact position: objects are not snapped.
-    const glm::dvec3 p = selfRadius_m > 0.0 ? point_m : snapped(point_m);
-    const Key key{float(p.x), float(p.y), float(p.z), float(selfRadius_m)};
-    return applyKeyed(far, key, [&] { return p; }, selfRadius_m);
+    const Key key{float(point_m.x), float(point_m.y), float(point_m.z), float(selfRadius_m)};
+    return applyKeyed(far, key, [&] { return point_m; }, selfRadius_m);
 }
 
 ShRgb NearField::applyAbove(const ShRgb& far, double x_m, double z_m, double height_m,
                             double selfRadius_m) const {
-    if (selfRadius_m <= 0.0) {
-        x_m = cellCentre(x_m, settings_.pointCell_m);
-        z_m = cellCentre(z_m, settings_.pointCell_m);
-    }
     // A key no explicit point has (a height of -1e30): one NearField uses one lift.
     const Key key{float(x_m), -1e30f, float(z_m), float(selfRadius_m)};
     return applyKeyed(
@@ -665,7 +614,7 @@ void NearField::applyMany(std::size_t count, ShRgb* inOut, const glm::dvec3* poi
     const auto t0 = std::chrono::steady_clock::now();
     std::lock_guard<std::mutex> lock(mutex_);
     for (std::size_t i = 0; i < count; ++i) {
-        const glm::dvec3 p = snapped(points_m[i]);
+        const glm::dvec3& p = points_m[i];
         const Key key{float(p.x), float(p.y), float(p.z), 0.0f};
         inOut[i] = applyLocked(inOut[i], key, [&] { return p; }, 0.0);
     }
@@ -679,8 +628,7 @@ void NearField::applyAboveMany(std::size_t count, ShRgb* inOut, const double* x_
     const auto t0 = std::chrono::steady_clock::now();
     std::lock_guard<std::mutex> lock(mutex_);
     for (std::size_t i = 0; i < count; ++i) {
-        const double x = cellCentre(x_m[i], settings_.pointCell_m);
-        const double z = cellCentre(z_m[i], settings_.pointCell_m);
+        const double x = x_m[i], z = z_m[i];
         const Key key{float(x), -1e30f, float(z), 0.0f};
         inOut[i] = applyLocked(
             inOut[i], key, [&] { return glm::dvec3(x, scene_.groundHeight(x, z) + height_m, z); },

@@ -34,11 +34,11 @@
 //     Phi(a) = (sin a + (pi - a) cos a) / pi: the Lambert sphere's phase law, alpha_i the angle
 //                                  between the main light and -d_i, 2/3 its disc mean at full
 //                                  phase. The main light is the one the renderer draws apart.
-//   So L' = (I + T) L + S E_sun with T (9 x 9 per channel) fixed by the geometry, and S (9 per
-//   channel) a function of the light's direction l. The phase law and a wall's cosine are zonal
-//   about -d_i, so they are kept to order 2 in l (the phase law within 0.8 % of its peak, the
-//   wall's cosine within 9 %, as order-2 irradiance always is): S_c = Q_c Y(l) with Q_c (9 x 9) fixed too. T and Q are cached per point (the points
-//   the draw asks for do not move), 2.7 kB each whatever the number of occluders.
+//   So L' = (I + T) L + S E_sun with T (9 x 9 per channel) fixed by the geometry. The light is a
+//   delta in the far field, so its term uses the same map: S_c = (T_c - hide) Y(l), exactly the
+//   order-2 projection in l of the phase law (within 0.8 % of its peak) and, for terrain bands,
+//   of a wall's cosine (within 9 %, as order-2 irradiance always is). T is cached per point (the
+//   points the draw asks for do not move), 1.7 kB whatever the number of occluders.
 // [SECTION] Terrain
 //   The terrain cannot be left out of a capture (it would leave a hole), so the anchors hold the
 //   terrain their probes saw. What they cannot hold is terrain near a point that rises above the
@@ -73,10 +73,10 @@
 #include <functional>
 #include <memory>
 #include <mutex>
-#include <tsl/hopscotch_map.h>
 #include <vector>
 
 #include <glm/vec3.hpp>
+#include <tsl/hopscotch_map.h>
 
 #include "lighting/AmbienceMethod.h"
 #include "lighting/SH.h"
@@ -102,18 +102,14 @@ struct NearFieldSettings {
     double terrainRadius_m = 32.0;  // how far the near horizon is searched
     // Points the draw asks for (terrain corners, objects) are cached with their transfer; the
     // cache is emptied when it holds more than this.
-    int cacheEntries = 16384;  // about 2.7 kB each
-    // Points may share the transfer of their cell's centre (this wide across, half as tall; 0:
-    // each point its own). Off by default: 2 m cells raised the highway's mean error against the
-    // reference by 13 % and saved no time. Objects are never snapped.
-    double pointCell_m = 0.0;
+    int cacheEntries = 16384;  // about 1.7 kB each
     // Objects (shAt: plants, the car) farther than this from the camera take the far field
     // alone: a few pixels tall, they show no near field, and they are most of the draw's
     // lookups (4 600 of 7 500 a frame on the highway). Terrain corners and roads always take it.
     double objectRange_m = 64.0;
 };
 // Reads {"enabled", "radius_m", "captureRadius_m", "smallRadius_m", "plants", "terrain",
-// "terrainRadius_m", "cacheEntries", "pointCell_m", "objectRange_m"}
+// "terrainRadius_m", "cacheEntries", "objectRange_m"}
 // (JsonFields, lighting/JsonFields.h).
 void readNearFieldSettings(JsonFields& fields, NearFieldSettings& settings);
 
@@ -177,8 +173,6 @@ struct NearFieldTransfer {
     // T_c = hide + what the caps show, by column for the apply: columns[(k * 3 + ch) * 9 + j]
     // = T_c[j][k].
     std::array<float, 3 * kShCoefficients * kShCoefficients> columns{};
-    // Per channel, S_c as a map of the light's direction: S_c = light_c Y(l) (see above).
-    std::array<std::array<float, kShCoefficients * kShCoefficients>, 3> light{};
     std::array<std::array<float, kShCoefficients>, 3> s{};  // S_c for lightDirection
     glm::dvec3 lightDirection{0.0};
     bool any = false;  // some occluder is near
@@ -263,7 +257,6 @@ class NearField {
 
   private:
     // Null when nothing is near the point.
-    // Null when nothing is near the point.
     std::unique_ptr<NearFieldTransfer> build(const glm::dvec3& point_m, double selfRadius_m) const;
     ShRgb applyKeyed(const ShRgb& far, const std::array<float, 4>& key,
                      const std::function<glm::dvec3()>& point, double selfRadius_m) const;
@@ -271,8 +264,6 @@ class NearField {
     ShRgb applyLocked(const ShRgb& far, const std::array<float, 4>& key,
                       const std::function<glm::dvec3()>& point, double selfRadius_m) const;
     std::vector<SphereOccluder> occluders(const glm::dvec3& point_m, double selfRadius_m) const;
-    double cellCentre(double v, double cell) const;
-    glm::dvec3 snapped(const glm::dvec3& p) const;
 
     const NearFieldScene& scene_;
     NearFieldSettings settings_;
@@ -298,8 +289,6 @@ class NearFieldMethod final : public AmbienceMethod {
     NearFieldMethod(std::unique_ptr<AmbienceMethod> far, std::unique_ptr<NearFieldScene> scene,
                     const NearFieldSettings& settings);
     ~NearFieldMethod() override;
-    const AmbienceMethod& farMethod() const { return *far_; }
-    const NearField& nearField() const { return *near_; }
 
     std::string methodName() const override { return far_->methodName(); }
     void predictStage(const glm::dvec3& cameraPosition_m, const glm::dvec3& cameraVelocity_mps,

@@ -202,6 +202,13 @@ void shIrradianceBatch(const ShRgb& sh, std::size_t count, const float* nx, cons
 
 // ---- Extrema of the irradiance over the sphere -----------------------------------------------
 
+glm::dvec3 fibonacciDirection(int i, int n) {
+    const double golden = kPi * (3.0 - std::sqrt(5.0));
+    const double z = 1.0 - (2.0 * i + 1.0) / n;
+    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+    return {r * std::cos(golden * i), r * std::sin(golden * i), z};
+}
+
 namespace {
 
 // Minimum of a quadratic form over the unit sphere: the best of a Fibonacci sampling, refined by
@@ -209,13 +216,10 @@ namespace {
 double sphereMinimum(const Quadratic& q) {
     constexpr int kSamples = 768;
     constexpr int kStarts = 3;
-    const double golden = kPi * (3.0 - std::sqrt(5.0));
     std::array<std::pair<double, glm::dvec3>, kStarts> best;
     best.fill({std::numeric_limits<double>::infinity(), glm::dvec3(0, 1, 0)});
     for (int i = 0; i < kSamples; ++i) {
-        const double z = 1.0 - (2.0 * i + 1.0) / kSamples;
-        const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
-        const glm::dvec3 n(r * std::cos(golden * i), r * std::sin(golden * i), z);
+        const glm::dvec3 n = fibonacciDirection(i, kSamples);
         const double f = q(n);
         if (f < best[kStarts - 1].first) {
             best[kStarts - 1] = {f, n};

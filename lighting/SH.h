@@ -109,6 +109,10 @@ struct ShWindow {
 
 ShRgbD shApplyWindow(const ShRgbD& sh, const ShWindow& window);
 
+// The i-th of n directions of a Fibonacci (golden-angle) lattice on the sphere, about +Z: nearly
+// uniform, for sampling functions over the sphere of normals.
+glm::dvec3 fibonacciDirection(int i, int n);
+
 // Minimum / maximum of E(n) over all unit normals, per channel, found by a dense Fibonacci
 // sampling refined by projected Newton steps on the sphere (the quadratic form is smooth, so the
 // refined value is accurate to ~1e-12 relative of the form's scale).
