@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include <glm/common.hpp>
 #include <glm/vec3.hpp>
 
 #include "lighting/SH.h"
@@ -38,6 +39,8 @@ struct MethodStatistics {
     // answered, points it holds and the memory they take (0 without one).
     double nearField_s = 0.0;
     std::size_t nearFieldPoints = 0, nearFieldCached = 0, nearFieldBytes = 0;
+    std::size_t nearFieldBuilds = 0;  // of nearFieldPoints, those built (not cached)
+    double nearFieldBuild_s = 0.0;    // of nearField_s, the builds'
     // Wall time of this frame's stages [s] (project = SH projection of captured faces).
     double predict_s = 0.0, capture_s = 0.0, project_s = 0.0, store_s = 0.0;
 };
@@ -92,6 +95,17 @@ class AmbienceMethod {
         std::vector<double> x(count), z(count);
         for (std::size_t i = 0; i < count; ++i) x[i] = points_m[i].x, z[i] = points_m[i].z;
         cornerShAt(count, x.data(), z.data(), out);
+    }
+
+    // The ambient irradiance (clamped at 0) at such points for their normals: what the draw
+    // asks at terrain corners and road vertices. By default cornerShAtPoints evaluated there;
+    // the near field answers it with its transfer seen through the normal (lighting/NearField.h).
+    virtual void cornerIrradianceAtPoints(std::size_t count, const glm::dvec3* points_m,
+                                          const glm::dvec3* normals, glm::vec3* out) const {
+        std::vector<ShRgb> sh(count);
+        cornerShAtPoints(count, points_m, sh.data());
+        for (std::size_t i = 0; i < count; ++i)
+            out[i] = glm::max(shIrradiance(sh[i], glm::vec3(normals[i])), glm::vec3(0.0f));
     }
 
     // Where the draw looked up ambience this frame (terrain corners, objects). Only methods that

@@ -321,6 +321,65 @@ void updateLightTerm(NearFieldTransfer& t, const glm::dvec3& lightDirection) {
         }
 }
 
+NormalTransfer normalTransfer(const NearFieldTransfer* t, const glm::dvec3& normal) {
+    NormalTransfer n;
+    if (!t || t->empty()) return n;
+    constexpr int K = kShCoefficients;
+    const auto y = shBasis(normal);
+    std::array<double, K> a{};
+    for (int j = 0; j < K; ++j) a[j] = kAhatBand[shBand(j)] * y[j];
+    for (int k = 0; k < K; ++k) {
+        double h = 0.0;
+        for (int j = 0; j < K; ++j) h += a[j] * t->hide[j * K + k];
+        n.hide[k] = float(h);
+        for (int ch = 0; ch < 3; ++ch) {
+            double v = 0.0;
+            for (int j = 0; j < K; ++j)
+                v += a[j] * (double(t->columns[std::size_t(k * 3 * K + ch * K + j)]) -
+                             double(t->hide[j * K + k]));
+            n.show[std::size_t(ch * K + k)] = float(v);
+        }
+    }
+    n.any = true;
+    return n;
+}
+
+void updateLightTerm(NormalTransfer& t, const glm::dvec3& lightDirection, std::uint32_t epoch) {
+    const auto y = shBasis(lightDirection);
+    for (int ch = 0; ch < 3; ++ch) {
+        double v = 0.0;
+        for (int k = 0; k < kShCoefficients; ++k) v += t.show[std::size_t(ch * kShCoefficients + k)] * y[k];
+        t.light[ch] = float(v);
+    }
+    t.lightEpoch = epoch;
+}
+
+glm::vec3 applyNormalTransfer(const NormalTransfer& t, const ShRgb& far, const glm::vec3& normal,
+                              const DirectionalLight& light) {
+    constexpr int K = kShCoefficients;
+    const auto y = shBasis(normal);
+    glm::vec3 farE(0.0f), hidden(0.0f), shown(0.0f);
+    for (int k = 0; k < K; ++k) {
+        const glm::vec3& l = far.c[k];
+        farE += float(kAhatBand[shBand(k)]) * y[k] * l;
+        hidden += t.hide[k] * l;
+        shown += glm::vec3(t.show[k], t.show[K + k], t.show[2 * K + k]) * l;
+    }
+    glm::vec3 e = farE;
+    if (t.any) {
+        for (int ch = 0; ch < 3; ++ch) {
+            // The guard for this normal: never below min(0, the far irradiance).
+            const float floor = std::min(farE[ch], 0.0f);
+            float g = 1.0f;
+            if (farE[ch] + hidden[ch] < floor && hidden[ch] < 0.0f)
+                g = std::clamp((floor - farE[ch]) / hidden[ch], 0.0f, 1.0f);
+            e[ch] += g * hidden[ch] + shown[ch] + t.light[ch] * float(light.irradiance[ch]);
+        }
+        if (!std::isfinite(e.x + e.y + e.z)) e = farE;
+    }
+    return glm::max(e, glm::vec3(0.0f));
+}
+
 namespace {
 
 // A sampled lower bound of min_n E(n): the minimum over a Fibonacci set of normals less
@@ -531,6 +590,11 @@ double WorldNearFieldScene::groundHeight(double x_m, double z_m) const {
 
 // ---- [SECTION] Cache ---------------------------------------------------------------------------
 
+namespace {
+// A cached light term is remade when the light has moved more than 0.5 degrees.
+const double kLightMoved = std::cos(0.5 * kPi / 180.0);
+}  // namespace
+
 std::size_t NearField::KeyHash::operator()(const Key& k) const {
     std::uint32_t b[4];
     std::memcpy(b, k.data(), sizeof b);
@@ -551,8 +615,10 @@ void NearField::setTimeOfDay(double timeOfDay_h) {
     const DirectionalLight l = scene_.mainLight(timeOfDay_h);
     std::lock_guard<std::mutex> lock(mutex_);
     if (std::isfinite(l.direction.x + l.direction.y + l.direction.z) &&
-        std::isfinite(l.irradiance.x + l.irradiance.y + l.irradiance.z))
+        std::isfinite(l.irradiance.x + l.irradiance.y + l.irradiance.z)) {
         light_ = l;
+        if (glm::dot(epochLight_, l.direction) < kLightMoved) ++lightEpoch_, epochLight_ = l.direction;
+    }
 }
 
 std::vector<SphereOccluder> NearField::occluders(const glm::dvec3& p, double selfRadius_m) const {
@@ -578,7 +644,6 @@ std::unique_ptr<NearFieldTransfer> NearField::build(const glm::dvec3& p,
         scene_.terrainNear(p, settings_.terrainRadius_m, horizon);
     std::vector<OccluderCap> caps = nearOccluders(p, occluders(p, selfRadius_m), horizon);
     if (caps.empty()) return nullptr;
-    bytes_ += sizeof(NearFieldTransfer);
     auto t = std::make_unique<NearFieldTransfer>(nearFieldTransfer(caps));
     updateLightTerm(*t, light_.direction);
     return t;
@@ -638,6 +703,94 @@ void NearField::applyAboveMany(std::size_t count, ShRgb* inOut, const double* x_
     seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+std::uint32_t NearField::normalIndex(const Key& key, const glm::dvec3& p,
+                                     const glm::vec3& n) const {
+    auto it = normalCache_.find(key);
+    if (it != normalCache_.end()) return it->second;
+    if (normalCache_.size() >= std::size_t(settings_.cacheEntries)) {
+        normalCache_.clear(), normalTransfers_.clear(), normalBytes_ = 0;
+        for (Sequence& q : sequences_) q.keys.clear(), q.index.clear();
+        ++clears_;
+    }
+    const auto b0 = std::chrono::steady_clock::now();
+    std::uint32_t index = kNothingNear;
+    if (const std::unique_ptr<NearFieldTransfer> full = build(p, 0.0)) {
+        index = std::uint32_t(normalTransfers_.size());
+        normalTransfers_.push_back(normalTransfer(full.get(), glm::dvec3(n)));
+        normalBytes_ += sizeof(NormalTransfer);
+    }
+    normalBytes_ += sizeof(Key) + sizeof(std::uint32_t) + sizeof(void*);
+    normalCache_.emplace(key, index);
+    ++builds_;
+    buildSeconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - b0).count();
+    return index;
+}
+
+void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::dvec3* points_m,
+                               const glm::dvec3* normals, glm::vec3* out) const {
+    const auto t0 = std::chrono::steady_clock::now();
+    static const NormalTransfer none;
+    std::lock_guard<std::mutex> lock(mutex_);
+    const std::uint64_t clears = clears_;
+    const auto keyOf = [&](std::size_t i) {
+        const glm::dvec3& p = points_m[i];
+        return Key{float(p.x), float(p.y), float(p.z), -1.0f};
+    };
+    // The sequence this batch follows: the one that began with the same point, else the least
+    // recently used.
+    Sequence* seq = &sequences_[0];
+    if (count > 0) {
+        const Key first = keyOf(0);
+        for (Sequence& q : sequences_) {
+            if (!q.keys.empty() && q.keys[0] == first) {
+                seq = &q;
+                break;
+            }
+            if (q.used < seq->used) seq = &q;
+        }
+    }
+    std::vector<Key> keys;
+    std::vector<std::uint32_t> indices;
+    keys.reserve(count), indices.reserve(count);
+    std::size_t cursor = 0;
+    constexpr std::size_t kLookAhead = 16;  // points dropped from the batch since last time
+    for (std::size_t i = 0; i < count; ++i) {
+        const glm::dvec3& p = points_m[i];
+        const glm::vec3 n(normals[i]);
+        const NormalTransfer* t = &none;
+        if (settings_.enabled && std::isfinite(p.x + p.y + p.z) &&
+            std::isfinite(n.x + n.y + n.z)) {
+            const Key key = keyOf(i);
+            std::uint32_t index = kNothingNear;
+            bool found = false;
+            for (std::size_t d = 0; d < kLookAhead && cursor + d < seq->keys.size(); ++d) {
+                if (seq->keys[cursor + d] == key) {
+                    index = seq->index[cursor + d];
+                    cursor += d + 1;
+                    found = true;
+                    break;
+                }
+            }
+            if (!found) index = normalIndex(key, p, n);
+            keys.push_back(key), indices.push_back(index);
+            if (index != kNothingNear) {
+                NormalTransfer& nt = normalTransfers_[index];
+                if (nt.lightEpoch != lightEpoch_) updateLightTerm(nt, light_.direction, lightEpoch_);
+                t = &nt;
+            }
+        }
+        out[i] = applyNormalTransfer(*t, far[i], n, light_);
+    }
+    // normalIndex may have emptied the caches (and the sequences with them): then this batch's
+    // indices before that point are stale, so it is not kept.
+    if (clears_ == clears) {
+        seq->keys = std::move(keys), seq->index = std::move(indices);
+        seq->used = ++batches_;
+    }
+    points_ += count;
+    seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
 ShRgb NearField::applyLocked(const ShRgb& far, const Key& key,
                              const std::function<glm::dvec3()>& point, double selfRadius_m) const {
     if (!std::isfinite(double(key[0]) + double(key[2]))) return far;
@@ -649,10 +802,15 @@ ShRgb NearField::applyLocked(const ShRgb& far, const Key& key,
         if (cache_.size() >= std::size_t(settings_.cacheEntries)) cache_.clear(), bytes_ = 0;
         bytes_ += sizeof(Key) + sizeof(std::unique_ptr<NearFieldTransfer>) +
                   2 * sizeof(void*);  // the map's slot
+        const auto b0 = std::chrono::steady_clock::now();
         t = cache_.emplace(key, build(p, selfRadius_m)).first->second.get();
+        if (t) bytes_ += sizeof(NearFieldTransfer);
+        ++builds_;
+        buildSeconds_ +=
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - b0).count();
     } else {
         t = it->second.get();
-        if (t && glm::dot(t->lightDirection, light_.direction) < 0.99996)
+        if (t && glm::dot(t->lightDirection, light_.direction) < kLightMoved)
             updateLightTerm(*it.value(), light_.direction);
     }
     if (!t) return far;
@@ -665,12 +823,12 @@ ShRgb NearField::applyLocked(const ShRgb& far, const Key& key,
 
 std::size_t NearField::cachedPoints() const {
     std::lock_guard<std::mutex> lock(mutex_);
-    return cache_.size();
+    return cache_.size() + normalCache_.size();
 }
 
 std::size_t NearField::cacheBytes() const {
     std::lock_guard<std::mutex> lock(mutex_);
-    return bytes_;
+    return bytes_ + normalBytes_;
 }
 
 double NearField::seconds() const {
@@ -683,10 +841,20 @@ std::size_t NearField::points() const {
     return points_;
 }
 
+std::size_t NearField::builds() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return builds_;
+}
+
+double NearField::buildSeconds() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return buildSeconds_;
+}
+
 void NearField::resetCounters() {
     std::lock_guard<std::mutex> lock(mutex_);
-    seconds_ = 0.0;
-    points_ = 0;
+    seconds_ = buildSeconds_ = 0.0;
+    points_ = builds_ = 0;
 }
 
 // ---- [SECTION] The decorator -------------------------------------------------------------------
@@ -741,10 +909,21 @@ void NearFieldMethod::cornerShAtPoints(std::size_t count, const glm::dvec3* poin
     near_->applyMany(count, out, points_m);
 }
 
+void NearFieldMethod::cornerIrradianceAtPoints(std::size_t count, const glm::dvec3* points_m,
+                                               const glm::dvec3* normals, glm::vec3* out) const {
+    std::vector<double> x(count), z(count);
+    for (std::size_t i = 0; i < count; ++i) x[i] = points_m[i].x, z[i] = points_m[i].z;
+    std::vector<ShRgb> far(count);
+    far_->cornerShAt(count, x.data(), z.data(), far.data());
+    near_->irradianceMany(count, far.data(), points_m, normals, out);
+}
+
 MethodStatistics NearFieldMethod::methodStatistics() const {
     MethodStatistics s = far_->methodStatistics();
     s.nearField_s = near_->seconds();
     s.nearFieldPoints = near_->points();
+    s.nearFieldBuilds = near_->builds();
+    s.nearFieldBuild_s = near_->buildSeconds();
     s.nearFieldCached = near_->cachedPoints();
     s.nearFieldBytes = near_->cacheBytes();
     return s;

@@ -65,6 +65,13 @@
 //   slowly: blends, the sun), so checks are rare. What the caps show is radiance >= 0 added, as a
 //   capture of a lit object adds it. Caps narrower than asin(0.015) (a trunk 20 m away) are left
 //   out.
+// [SECTION] Through one normal
+//   The draw needs the SH at terrain corners and road vertices only through their own normal n
+//   (it interpolates the irradiance, not the SH). There E(n) = a(n) . L' with a_k = Ahat_l
+//   Y_k(n), so the 9 x 9 maps collapse to vectors: E_c = a . L_c + g_c (h . L_c) + s_c . L_c +
+//   (s_c . Y(l)) E_light,c, h = hide^T a, s_c = (T_c - hide)^T a: 40 floats a point, not 430,
+//   and no matrix product per frame. The guard is then exact for that normal: what is hidden
+//   never takes E(n) below min(0, a . L), g_c < 1 only where it would.
 #pragma once
 
 #include <array>
@@ -102,7 +109,7 @@ struct NearFieldSettings {
     double terrainRadius_m = 32.0;  // how far the near horizon is searched
     // Points the draw asks for (terrain corners, objects) are cached with their transfer; the
     // cache is emptied when it holds more than this.
-    int cacheEntries = 16384;  // about 1.7 kB each
+    int cacheEntries = 16384;  // about 1.7 kB each (objects), 0.2 kB (corners)
     // Objects (shAt: plants, the car) farther than this from the camera take the far field
     // alone: a few pixels tall, they show no near field, and they are most of the draw's
     // lookups (4 600 of 7 500 a frame on the highway). Terrain corners and roads always take it.
@@ -183,6 +190,23 @@ struct NearFieldTransfer {
     bool empty() const { return !any; }
 };
 NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps);
+
+// The transfer seen through one normal (see Through one normal).
+struct NormalTransfer {
+    std::array<float, kShCoefficients> hide{};      // h = hide^T a(n)
+    std::array<float, 3 * kShCoefficients> show{};  // s_c = (T_c - hide)^T a(n), [c * 9 + k]
+    glm::vec3 light{0.0f};                          // s_c . Y(l), for lightEpoch's light
+    std::uint32_t lightEpoch = 0;
+    bool any = false;
+};
+// `transfer` through `normal` (unit); with no transfer, nothing near.
+NormalTransfer normalTransfer(const NearFieldTransfer* transfer, const glm::dvec3& normal);
+void updateLightTerm(NormalTransfer& transfer, const glm::dvec3& lightDirection,
+                     std::uint32_t epoch);
+// The irradiance at `normal` of the far field with the near field applied, guarded for that
+// normal, clamped at 0 (as the draw clamps).
+glm::vec3 applyNormalTransfer(const NormalTransfer& transfer, const ShRgb& far,
+                              const glm::vec3& normal, const DirectionalLight& light);
 // Remakes S for the light direction.
 void updateLightTerm(NearFieldTransfer& transfer, const glm::dvec3& lightDirection);
 // The far field with the near field applied, guarded (see above).
@@ -248,11 +272,19 @@ class NearField {
     void applyMany(std::size_t count, ShRgb* inOut, const glm::dvec3* points_m) const;
     void applyAboveMany(std::size_t count, ShRgb* inOut, const double* x_m, const double* z_m,
                         double height_m) const;
+    // The irradiance at fixed points for their normals (corners, road vertices: a point always
+    // comes with the same normal), clamped at 0, from the far field there (see Through one
+    // normal); cached by the point.
+    void irradianceMany(std::size_t count, const ShRgb* far, const glm::dvec3* points_m,
+                        const glm::dvec3* normals, glm::vec3* out) const;
     std::size_t cachedPoints() const;
     std::size_t cacheBytes() const;
     // Wall time spent in apply and the points it answered since the last resetCounters.
     double seconds() const;
     std::size_t points() const;
+    // Of those, the points whose transfer was built (not in the cache) and the time it took.
+    std::size_t builds() const;
+    double buildSeconds() const;
     void resetCounters();
 
   private:
@@ -274,9 +306,29 @@ class NearField {
     };
     mutable std::mutex mutex_;
     mutable tsl::hopscotch_map<Key, std::unique_ptr<NearFieldTransfer>, KeyHash> cache_;
-    mutable double seconds_ = 0.0;
-    mutable std::size_t points_ = 0;
-    mutable std::size_t bytes_ = 0;  // the cache's, structure included
+    // Through one normal: the point's index in normalTransfers_ (kNothingNear: none). Small
+    // slots keep the map in cache; the transfers follow in the order the draw first asked.
+    static constexpr std::uint32_t kNothingNear = ~0u;
+    mutable tsl::hopscotch_map<Key, std::uint32_t, KeyHash> normalCache_;
+    mutable std::vector<NormalTransfer> normalTransfers_;
+    // The draw asks its batches (corners, road vertices) in nearly the same order every frame:
+    // the last few batches' keys and indices are walked alongside, and the map is asked only
+    // where the order changed (a random probe of the map misses the processor's caches).
+    struct Sequence {
+        std::vector<Key> keys;
+        std::vector<std::uint32_t> index;
+        std::uint64_t used = 0;
+    };
+    static constexpr int kSequences = 4;
+    mutable std::array<Sequence, kSequences> sequences_;
+    mutable std::uint64_t batches_ = 0, clears_ = 0;
+    std::uint32_t normalIndex(const Key& key, const glm::dvec3& point_m,
+                              const glm::vec3& normal) const;
+    std::uint32_t lightEpoch_ = 1;  // counts the light's moves of more than 0.5 degrees
+    glm::dvec3 epochLight_{0.0};
+    mutable double seconds_ = 0.0, buildSeconds_ = 0.0;
+    mutable std::size_t points_ = 0, builds_ = 0;
+    mutable std::size_t bytes_ = 0, normalBytes_ = 0;  // the caches', structure included
 };
 
 // A capturing method with the near field: its captures leave the near plants out
@@ -301,6 +353,8 @@ class NearFieldMethod final : public AmbienceMethod {
                     ShRgb* out) const override;
     ShRgb cornerShAtPoint(const glm::dvec3& point_m) const override;
     void cornerShAtPoints(std::size_t count, const glm::dvec3* points_m, ShRgb* out) const override;
+    void cornerIrradianceAtPoints(std::size_t count, const glm::dvec3* points_m,
+                                  const glm::dvec3* normals, glm::vec3* out) const override;
     void noteLookups(std::size_t count, const double* x_m, const double* z_m) override {
         far_->noteLookups(count, x_m, z_m);
     }

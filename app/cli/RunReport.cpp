@@ -290,7 +290,8 @@ json ambienceJson(const RunReport& report) {
     // The ambience's share of frame time: stages 2-5 plus the lookups the draw makes
     // (terrain corners and objects ask the volume while the draw list is built).
     double ambience_ms = 0.0, capture_ms = 0.0, total_ms = 0.0;
-    std::vector<double> anchors, bytes, lookup_ms, perFrameAmbience_ms, nearField_ms;
+    std::vector<double> anchors, bytes, lookup_ms, perFrameAmbience_ms, nearField_ms,
+        nearFieldBuild_ms, nearFieldPoints, nearFieldBuilds;
     std::size_t nearFieldBytesMax = 0;
     std::int64_t faces = 0;
     std::size_t maxAnchors = 0, maxBytes = 0;
@@ -309,6 +310,9 @@ json ambienceJson(const RunReport& report) {
         bytes.push_back(double(f.ambience.bytes));
         lookup_ms.push_back(f.ambience.lookup_ms);
         nearField_ms.push_back(f.ambience.nearField_ms);
+        nearFieldBuild_ms.push_back(f.ambience.nearFieldBuild_ms);
+        nearFieldPoints.push_back(double(f.ambience.nearFieldPoints));
+        nearFieldBuilds.push_back(double(f.ambience.nearFieldBuilds));
         nearFieldBytesMax = std::max(nearFieldBytesMax, f.ambience.nearFieldBytes);
         maxAnchors = std::max(maxAnchors, f.ambience.anchors);
         maxBytes = std::max(maxBytes, f.ambience.bytes);
@@ -338,6 +342,10 @@ json ambienceJson(const RunReport& report) {
         {"lookup_ms", statsJson(lookup_ms)},
         // The near field's share of the lookups (0 without it), and its cache's memory.
         {"nearField_ms", statsJson(nearField_ms)},
+        // Of which building the transfers of points not in the cache, and the points per frame.
+        {"nearFieldBuild_ms", statsJson(nearFieldBuild_ms)},
+        {"nearFieldPoints", statsJson(nearFieldPoints)},
+        {"nearFieldBuilds", statsJson(nearFieldBuilds)},
         {"nearFieldBytesMax", nearFieldBytesMax},
         // Stages 2-5 and the draw's lookups, per frame.
         {"ambience_ms", statsJson(perFrameAmbience_ms)},

@@ -98,8 +98,8 @@ struct FrameRecord {
         double predict_ms = 0.0, project_ms = 0.0, store_ms = 0.0;
         // The near field (lighting/NearField.h), part of the lookups: its time [ms], the points
         // it answered, the memory of its cache.
-        double nearField_ms = 0.0;
-        std::size_t nearFieldPoints = 0, nearFieldBytes = 0;
+        double nearField_ms = 0.0, nearFieldBuild_ms = 0.0;  // all, and building transfers
+        std::size_t nearFieldPoints = 0, nearFieldBuilds = 0, nearFieldBytes = 0;
         // Alive anchors per level, coarsest first: the first `levels` entries (0 without an
         // anchor store). Inline, so that the rows of a long run allocate nothing per frame.
         std::array<std::size_t, kMaxAnchorLevels> anchorsPerLevel{};

@@ -67,14 +67,11 @@ glm::vec3 MethodAmbient::cornerIrradiance(const glm::dvec3& position_m,
 void MethodAmbient::cornerIrradianceBatch(std::size_t count, const glm::dvec3* positions_m,
                                           const glm::dvec3* normals, glm::vec3* out) const {
     const auto t0 = Clock::now();
-    batchAt_.resize(count), batchSh_.resize(count);
+    batchAt_.resize(count);
     for (std::size_t i = 0; i < count; ++i)
         batchAt_[i] = positions_m[i] + glm::dvec3(0.0, kShadingHeight_m, 0.0);
-    method_.cornerShAtPoints(count, batchAt_.data(), batchSh_.data());
-    for (std::size_t i = 0; i < count; ++i) {
-        out[i] = glm::max(shIrradiance(batchSh_[i], glm::vec3(normals[i])), glm::vec3(0.0f));
-        note(positions_m[i]);
-    }
+    method_.cornerIrradianceAtPoints(count, batchAt_.data(), normals, out);
+    for (std::size_t i = 0; i < count; ++i) note(positions_m[i]);
     lookups_ += count;
     lookup_ms_ += elapsed_ms(t0);
 }
@@ -185,6 +182,8 @@ void MethodAmbienceStages::measure(const FrameState& frame, FrameRecord& rec) {
     a.store_ms = st.store_s * 1e3;
     a.nearField_ms = st.nearField_s * 1e3;
     a.nearFieldPoints = st.nearFieldPoints;
+    a.nearFieldBuild_ms = st.nearFieldBuild_s * 1e3;
+    a.nearFieldBuilds = st.nearFieldBuilds;
     a.nearFieldBytes = st.nearFieldBytes;
     if (const AmbienceVolume* v = volume()) {
         const AmbienceStatistics& vs = v->statistics();

@@ -56,7 +56,6 @@ class MethodAmbient final : public AmbientSource {
     mutable double lookup_ms_ = 0.0;
     mutable std::vector<double> x_, z_;
     mutable std::vector<glm::dvec3> batchAt_;  // scratch of the batch: the shading points
-    mutable std::vector<ShRgb> batchSh_;
 };
 
 // The SH of the fixed ambients (AmbientMode): the same at every point, from the sky model.
