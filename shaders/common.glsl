@@ -14,7 +14,8 @@ layout(std140, binding = 0) uniform FrameConstants {
     vec4 uSunDisc;           // rgb: radiance of the sun disc; w: cos(angular radius), > 1 = off
     vec4 uFog;               // x: extinction per metre; y: 1 when capturing (alpha marks sky);
                              // z: output (0 shaded; 1 ambient irradiance, 2 world normal, 3 albedo:
-                             // the screen witnesses' AOVs, alpha = surface kind, 0 = sky)
+                             // the screen witnesses' AOVs, alpha = surface kind, 0 = sky;
+                             // 4 the ambient view)
     vec4 uSunAzimuth;        // xz: unit horizontal direction of the sun's azimuth
     vec4 uFogToward;         // rgb: horizon sky radiance towards the sun's azimuth
     vec4 uFogAway;           // rgb: horizon sky radiance away from it
@@ -56,9 +57,14 @@ vec3 shadeLambert(vec3 albedo, vec3 n, vec3 ambientIrradiance) {
 // The screen witnesses' outputs (app/render/Renderer.h, RenderOutput): instead of the shaded colour,
 // the ambient irradiance as the draw applies it, the world normal or the albedo; alpha names
 // the surface (1 terrain, 2 road, 3 object, 4 object drawn with a simplified mesh). Returns false
-// for the shaded colour.
+// for the shaded colour. Output 4 (the ambient view) is the ambient term alone, as the radiance
+// of a white surface: ambient irradiance / pi, tone mapped like the shaded view.
 bool writeAov(vec3 ambientIrradiance, vec3 n, vec3 albedo, float kind, out vec4 color) {
     if (uFog.z < 0.5) return false;
+    if (uFog.z > 3.5) {  // the ambient view: a white Lambertian surface lit by the ambient alone
+        color = vec4(max(ambientIrradiance, vec3(0.0)) / PI, 0.0);
+        return true;
+    }
     color = vec4(uFog.z < 1.5 ? ambientIrradiance : (uFog.z < 2.5 ? n : albedo), kind);
     return true;
 }

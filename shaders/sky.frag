@@ -10,7 +10,7 @@ in vec2 vNdc;
 layout(location = 0) out vec4 oColor;
 
 void main() {
-    if (uFog.z > 0.5) {  // screen witness outputs: alpha 0 marks the sky
+    if (uFog.z > 0.5 && uFog.z < 3.5) {  // screen witness outputs: alpha 0 marks the sky
         oColor = vec4(0.0);
         return;
     }

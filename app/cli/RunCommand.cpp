@@ -58,6 +58,7 @@ struct RunOptions {
     int facesPerFrame = 1;
     bool debugOverlay = false;
     bool noVehicle = false;
+    std::string view = "shaded";
     int faceSize = 16;
     std::string out;
     bool noVideo = false;
@@ -186,6 +187,7 @@ struct RunPlan {
     OracleKind oracleKind = OracleKind::Self;
     Size size;
     std::string name;  // the replay's label
+    RenderOutput view = RenderOutput::Shaded;
 };
 
 // Stage (1) of a run: reads the replay and the settings files, checks every option, completes
@@ -201,6 +203,7 @@ RunPlan planRun(RunOptions& o) {
         throw InputError("--backend", "run is headless: auto, egl or osmesa");
     // "volume" is the dynamic ambience volume; the others are the baselines (app/frame/MethodStages.h).
     checkAmbienceMethod(o.ambient, "--ambient");
+    plan.view = parseViewOutput(o.view, "--view");
     const bool useVolume = o.ambient == "volume";
     AmbienceVolumeSettings& volumeSettings = plan.volumeSettings;
     if (!o.ambienceConfig.empty()) {
@@ -441,6 +444,7 @@ void runReplay(RunOptions o) {
     rs.width = size.width;
     rs.height = size.height;
     rs.drawVehicle = replay.mode == ReplayMode::Drive && !o.noVehicle;
+    rs.viewOutput = plan.view;
     Renderer renderer(world, rs);
     auto stages =
         makeMethodStages(renderer, o.ambient, plan.volumeSettings, plan.baselines, o.faceSize);
@@ -606,6 +610,8 @@ void addRunCommand(CLI::App& app) {
     cmd->add_option("--save-anchors", o->saveAnchors, "write the anchor store at the end (.vdb)");
     cmd->add_option("--load-anchors", o->loadAnchors, "warm-start from an anchor store (.vdb)");
     cmd->add_flag("--no-vehicle", o->noVehicle, "do not draw the car on drive replays");
+    cmd->add_option("--view", o->view,
+                    "shaded (default) or ambient: the ambient term alone, every surface white");
     cmd->add_flag("--debug-overlay", o->debugOverlay,
                   "draw anchors (colour = level, darker = older) and the probe being captured "
                   "over frames and video");

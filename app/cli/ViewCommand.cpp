@@ -44,6 +44,7 @@ struct ViewOptions {
     std::string record = "recorded.json";
     std::string ambient = "volume";
     bool debugOverlay = false;
+    std::string view = "shaded";
     std::string shaders;
     double time_h = -1.0;
 };
@@ -78,6 +79,7 @@ bool keyDown(GLFWwindow* w, int key) {
 Size checkViewOptions(const ViewOptions& o) {
     const Size size = parseSize(o.size, "--size");
     checkAmbienceMethod(o.ambient, "--ambient");
+    parseViewOutput(o.view, "--view");
     if (o.debugOverlay && o.ambient != "volume")
         throw InputError("--debug-overlay", "needs --ambient volume");
     if (o.frames < 0) throw InputError("--frames", "must be >= 0");
@@ -186,6 +188,7 @@ void runView(const ViewOptions& o) {
     RenderSettings rs;
     rs.width = size.width;
     rs.height = size.height;
+    rs.viewOutput = parseViewOutput(o.view, "--view");
     Renderer renderer(world, rs);
     auto stages =
         makeMethodStages(renderer, o.ambient, AmbienceVolumeSettings{}, BaselineSettings{});
@@ -291,6 +294,8 @@ void addViewCommand(CLI::App& app) {
     cmd->add_option("--ambient", o->ambient, ambienceMethodHelp());
     cmd->add_flag("--debug-overlay", o->debugOverlay,
                   "mark anchors and the probe being captured on screen and on screenshots");
+    cmd->add_option("--view", o->view,
+                    "shaded (default) or ambient: the ambient term alone, every surface white");
     cmd->add_option("--record", o->record, "file the R key records to (default recorded.json)");
     cmd->add_option("--frames", o->frames, "render N frames, then exit (non-interactive)");
     cmd->add_option("--screenshot", o->screenshot, "with --frames: save the last frame here");

@@ -103,7 +103,7 @@ RenderStats Renderer::render(const CameraSample& camera, const AmbientSource& am
     glClearNamedFramebufferfv(hdrFbo_.id(), GL_DEPTH, 0, &far);
     stats.triangles = drawer_->draw(list_, fc, true, false);
 
-    if (output == RenderOutput::Shaded) {
+    if (output == RenderOutput::Shaded || output == RenderOutput::Ambient) {
         glBindFramebuffer(GL_FRAMEBUFFER, ldrFbo_.id());
         drawer_->drawTonemap(hdr_.id(), exposureFor(sky_, noon_));
     }
@@ -201,8 +201,14 @@ void Renderer::blitToWindow(int windowWidth, int windowHeight) {
                            windowWidth, windowHeight, GL_COLOR_BUFFER_BIT, GL_LINEAR);
 }
 
+RenderOutput parseViewOutput(const std::string& name, const std::string& option) {
+    if (name == "shaded") return RenderOutput::Shaded;
+    if (name == "ambient") return RenderOutput::Ambient;
+    throw InputError(option, "unknown view '" + name + "' (expected shaded or ambient)");
+}
+
 RenderStats Renderer::drawView(const CameraSample& camera, const AmbientSource& ambient) {
-    const RenderStats stats = render(camera, ambient);
+    const RenderStats stats = render(camera, ambient, settings_.viewOutput);
     glFinish();
     return stats;
 }

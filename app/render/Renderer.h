@@ -20,6 +20,17 @@ namespace amb {
 
 class World;
 
+// What render() writes into the HDR target: the shaded view, or an output of the screen
+// witnesses (lighting/Metrics.h): per pixel the ambient irradiance exactly as the draw applies it
+// (corner colours for terrain, per-vertex for roads, per-pixel SH for objects), the world
+// normal or the albedo; alpha names the surface (1 terrain, 2 road, 3 object, 4 object drawn
+// with a simplified mesh; 0 sky). Ambient is the ambient view: every surface as a white
+// Lambertian one lit by the ambient alone (radiance = ambient irradiance / pi, the sky as in
+// Shaded). Outputs other than Shaded and Ambient skip tone mapping.
+enum class RenderOutput { Shaded = 0, AmbientIrradiance = 1, Normal = 2, Albedo = 3, Ambient = 4 };
+// "shaded" or "ambient" (--view); anything else is an InputError naming `option`.
+RenderOutput parseViewOutput(const std::string& name, const std::string& option);
+
 // ---- Renderer --------------------------------------------------------------------------------
 struct RenderSettings {
     int width = 640, height = 360;
@@ -30,15 +41,9 @@ struct RenderSettings {
     // Draw the camera's own car under the eye (drives): eye 1.5 m above the car's ground point.
     bool drawVehicle = false;
     double vehicleEyeHeight_m = 1.5;
+    // What the main view (drawView) shows: Shaded, or Ambient (--view ambient).
+    RenderOutput viewOutput = RenderOutput::Shaded;
 };
-
-// What render() writes into the HDR target: the shaded view, or an output of the screen
-// witnesses (lighting/Metrics.h): per pixel the ambient irradiance exactly as the draw applies it
-// (corner colours for terrain, per-vertex for roads, per-pixel SH for objects), the world
-// normal or the albedo; alpha names the surface (1 terrain, 2 road, 3 object, 4 object drawn
-// with a simplified mesh; 0 sky). Outputs other than
-// Shaded skip tone mapping.
-enum class RenderOutput { Shaded = 0, AmbientIrradiance = 1, Normal = 2, Albedo = 3 };
 
 // One output read back: RGBA per pixel and the camera-relative position of its surface (from
 // the depth buffer), top row first.

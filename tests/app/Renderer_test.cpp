@@ -308,5 +308,80 @@ TEST(Renderer, ScreenWitnessOutputsAreWhatTheDrawApplies) {
     EXPECT_GT(onTerrain, terrain * 9 / 10);
 }
 
+// The ambient view (--view ambient): every surface pixel is a white Lambertian surface lit by
+// the ambient alone, radiance = E / pi. With the hemisphere ambient (E varies with the normal)
+// an object pixel equals the SH irradiance at its normal (read from the normal output) over pi,
+// within 2e-3 relative; every surface pixel equals the screen witnesses' ambient output over pi
+// (the same corner and vertex colours) within 1.5e-3 (the HDR target is half float: 2^-11 a
+// rounding, two roundings); the sky stays the shaded view's.
+TEST(Renderer, TheAmbientViewIsTheShIrradianceOverPi) {
+    AMB_REQUIRE_PLATFORM(platform, Backend::Auto, kW, kH);
+    const World world(WorldSettings{});
+    RenderSettings rs;
+    rs.width = kW;
+    rs.height = kH;
+    Renderer renderer(world, rs);
+    const SkyLighting sky = renderer.setTimeOfDay(10.0);
+    const FixedAmbient ambient(AmbientMode::Hemisphere, sky);
+    // Looking at a tree from 14 m, so objects fill part of the view.
+    glm::dvec3 ground = test::openGround(world);
+    std::vector<Plant> near;
+    for (int step = 0; step < 40 && near.empty(); ++step) {
+        ground.x += 400.0;  // eastwards until a tree is near
+        near = world.vegetation().inDisc(ground.x, ground.z, 200.0);
+        near.erase(std::remove_if(near.begin(), near.end(),
+                                  [](const Plant& p) {
+                                      return p.kind != PlantKind::Conifer &&
+                                             p.kind != PlantKind::Broadleaf;
+                                  }),
+                   near.end());
+    }
+    ASSERT_FALSE(near.empty());
+    const Plant& plant = *std::min_element(near.begin(), near.end(), [&](const Plant& a, const Plant& b) {
+        return std::hypot(a.position_m.x - ground.x, a.position_m.z - ground.z) <
+               std::hypot(b.position_m.x - ground.x, b.position_m.z - ground.z);
+    });
+    CameraSample cam;
+    cam.position_m = plant.position_m + glm::dvec3(0.0, 0.0, 14.0);
+    cam.position_m.y = world.height(cam.position_m.x, cam.position_m.z) + 2.0;
+    cam.forward = glm::normalize(plant.position_m + glm::dvec3(0.0, 1.0, 0.0) - cam.position_m);
+    cam.up = glm::normalize(glm::cross(glm::cross(cam.forward, glm::dvec3(0, 1, 0)), cam.forward));
+    renderer.render(cam, ambient, RenderOutput::Ambient);
+    const std::vector<float> view = renderer.readHdr();
+    renderer.render(cam, ambient, RenderOutput::Shaded);
+    const std::vector<float> shaded = renderer.readHdr();
+    renderer.render(cam, ambient, RenderOutput::AmbientIrradiance);
+    const SurfaceImage applied = renderer.readSurface(cam);
+    renderer.render(cam, ambient, RenderOutput::Normal);
+    const SurfaceImage normals = renderer.readSurface(cam);
+    ASSERT_EQ(view.size(), std::size_t(kW) * kH * 3);
+    int objects = 0, surface = 0, sky0 = 0;
+    float spread = 0.0f, least = 1e30f;
+    for (std::size_t p = 0; p < std::size_t(kW) * kH; ++p) {
+        const float kind = applied.rgba[4 * p + 3];
+        const glm::vec3 got(view[3 * p], view[3 * p + 1], view[3 * p + 2]);
+        if (kind == 0.0f) {
+            ++sky0;
+            for (int c = 0; c < 3; ++c) EXPECT_EQ(got[c], shaded[3 * p + c]);
+            continue;
+        }
+        ++surface;
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(got[c] * kPi, applied.rgba[4 * p + c], 1.5e-3 * applied.rgba[4 * p + c] + 1e-6);
+        if (kind == 3.0f || kind == 4.0f) {
+            ++objects;
+            const glm::vec3 n(normals.rgba[4 * p], normals.rgba[4 * p + 1], normals.rgba[4 * p + 2]);
+            const glm::vec3 want = glm::max(shIrradiance(ambient.sh(), glm::normalize(n)), glm::vec3(0.0f));
+            for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[c] * kPi, want[c], 2e-3 * want[c] + 1e-5);
+            spread = std::max(spread, got.g), least = std::min(least, got.g);
+        }
+    }
+    EXPECT_GT(surface, kW * kH / 4);
+    ASSERT_GT(objects, 50);
+    ::testing::Test::RecordProperty("skyPixels", sky0);
+    // The hemisphere ambient varies with the normal: the test sees more than one value.
+    EXPECT_GT(spread, 1.2f * least);
+}
+
 }  // namespace
 }  // namespace amb
