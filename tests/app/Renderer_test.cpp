@@ -32,6 +32,13 @@ CameraSample viewAt(const World& world, double pitch_rad) {
     return c;
 }
 
+RenderSettings testSettings() {
+    RenderSettings rs;
+    rs.width = kW;
+    rs.height = kH;
+    return rs;
+}
+
 struct Frame {
     std::vector<float> hdr;
     std::vector<unsigned char> ldr;
@@ -270,12 +277,8 @@ TEST(Renderer, RoadsAreLitAtTheirOwnVerticesAndNormals) {
 TEST(Renderer, ScreenWitnessOutputsAreWhatTheDrawApplies) {
     AMB_REQUIRE_PLATFORM(platform, Backend::Auto, kW, kH);
     const World world(WorldSettings{});
-    RenderSettings rs;
-    rs.width = kW;
-    rs.height = kH;
-    Renderer renderer(world, rs);
-    const SkyLighting sky = renderer.setTimeOfDay(10.0);
-    const FixedAmbient ambient(AmbientMode::Constant, sky);
+    Renderer renderer(world, testSettings());
+    const FixedAmbient ambient(AmbientMode::Constant, renderer.setTimeOfDay(10.0));
     const glm::vec3 expected = shIrradiance(ambient.sh(), glm::vec3(0.0f, 1.0f, 0.0f));
     const CameraSample cam = viewAt(world, -0.05);
     renderer.render(cam, ambient, RenderOutput::AmbientIrradiance);
@@ -317,12 +320,8 @@ TEST(Renderer, ScreenWitnessOutputsAreWhatTheDrawApplies) {
 TEST(Renderer, TheAmbientViewIsTheShIrradianceOverPi) {
     AMB_REQUIRE_PLATFORM(platform, Backend::Auto, kW, kH);
     const World world(WorldSettings{});
-    RenderSettings rs;
-    rs.width = kW;
-    rs.height = kH;
-    Renderer renderer(world, rs);
-    const SkyLighting sky = renderer.setTimeOfDay(10.0);
-    const FixedAmbient ambient(AmbientMode::Hemisphere, sky);
+    Renderer renderer(world, testSettings());
+    const FixedAmbient ambient(AmbientMode::Hemisphere, renderer.setTimeOfDay(10.0));
     // Looking at a tree from 14 m, so objects fill part of the view.
     glm::dvec3 ground = test::openGround(world);
     std::vector<Plant> near;
