@@ -17,7 +17,7 @@ packages=(
   libglm-dev libopenimageio-dev openimageio-tools libopenvdb-dev libboost-dev
   libboost-iostreams-dev libtbb-dev libgtest-dev libbenchmark-dev libcli11-dev
   nlohmann-json3-dev xvfb xauth ffmpeg python3-matplotlib libtsl-hopscotch-map-dev
-  ccache clang libfuzzer-14-dev libclang-rt-14-dev
+  ccache clang libfuzzer-14-dev libclang-rt-14-dev fonts-dejavu-core
 )
 
 missing=()

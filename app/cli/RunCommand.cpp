@@ -20,6 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/cli/Commands.h"
+#include "app/cli/ContactSheet.h"
 #include "app/render/CubeCaptureGl.h"
 #include "app/render/DebugOverlay.h"
 #include "app/frame/FrameLoop.h"
@@ -59,6 +60,8 @@ struct RunOptions {
     bool debugOverlay = false;
     bool noVehicle = false;
     std::string view = "shaded";
+    std::string contactSheet;  // empty: <out>/contact-sheet.png; "none": none
+    int sheetCells = 12;
     int faceSize = 16;
     std::string out;
     bool noVideo = false;
@@ -244,7 +247,9 @@ RunPlan planRun(RunOptions& o) {
         if (!o.video.empty()) throw InputError("--video", "--no-frames draws no main view");
         o.frames = "none";
         o.noVideo = true;
+        o.contactSheet = "none";
     }
+    if (o.sheetCells < 1 || o.sheetCells > 400) throw InputError("--sheet-cells", "expected 1 to 400");
     if (o.faceSize < 1 || o.faceSize > 256) throw InputError("--face-size", "expected 1 to 256");
     if (!useVolume && o.debugOverlay) throw InputError("--debug-overlay", "needs --ambient volume");
     if (!useVolume && (!o.saveAnchors.empty() || !o.loadAnchors.empty()))
@@ -264,6 +269,7 @@ RunPlan planRun(RunOptions& o) {
     if (o.frames != "none") ensureDirectory(o.frames, "--frames");
     if (o.video.empty() && !o.noVideo) o.video = o.out + "/" + stem + ".mp4";
     if (o.report.empty()) o.report = o.out + "/report.json";
+    if (o.contactSheet.empty()) o.contactSheet = o.out + "/contact-sheet.png";
     {
         // Before any work: no output may overwrite an input or another output, and every
         // output must be writable.
@@ -278,6 +284,7 @@ RunPlan planRun(RunOptions& o) {
             files.output("--report (measure.csv)",
                          (fs::path(o.report).parent_path() / "measure.csv").string());
         files.output("--video", o.video);
+        if (o.contactSheet != "none") files.output("--contact-sheet", o.contactSheet);
         files.output("--save-anchors", o.saveAnchors);
         files.output("--oracle", o.oracle);
         files.output("--reference", o.reference);
@@ -425,6 +432,7 @@ void printRunSummary(const RunOptions& o, const RunPlan& plan, int frames, const
     printSoakSummary(report, volume != nullptr);
     std::printf("output: %s\n", fs::weakly_canonical(o.out).string().c_str());
     if (o.frames != "none") std::printf("  frames: %s (every %d)\n", o.frames.c_str(), o.every);
+    if (o.contactSheet != "none") std::printf("  contact sheet: %s\n", o.contactSheet.c_str());
     if (video) std::printf("  video:  %s\n", o.video.c_str());
     std::printf("  report: %s (+ .csv)\n", o.report.c_str());
     if (meter)
@@ -485,6 +493,9 @@ void runReplay(RunOptions o) {
                  size.width, size.height, report.backend.c_str(), report.glRenderer.c_str());
 
     // (3) frames
+    std::unique_ptr<ContactSheet> sheet;
+    if (o.contactSheet != "none")
+        sheet = std::make_unique<ContactSheet>(frames, o.sheetCells, size.width, size.height);
     ProgressBar progress(frames);
     const auto start = std::chrono::steady_clock::now();
     for (int i = 0; i < frames; ++i) {
@@ -500,7 +511,8 @@ void runReplay(RunOptions o) {
             takeScreenWitnesses(renderer, camera, stages->ambient(), o.screenWitnesses, rec.index,
                                 rec.timeOfDay_h, *meter);
         const bool writeFrame = o.frames != "none" && rec.index % o.every == 0;
-        if (writeFrame || video) {
+        const bool onSheet = sheet && sheet->wants(i);
+        if (writeFrame || video || onSheet) {
             auto pixels = renderer.readRgb8();
             if (o.debugOverlay && volume) {
                 drawAnchorOverlay(pixels, size.width, size.height, renderer.viewProjection(camera),
@@ -512,6 +524,12 @@ void runReplay(RunOptions o) {
                 writeImageRgb8(o.frames + file, size.width, size.height, pixels);
             }
             if (video) video->write(pixels);
+            if (onSheet) {
+                char label[64];
+                std::snprintf(label, sizeof(label), "frame %d  %05.2f h", rec.index,
+                              rec.timeOfDay_h);
+                sheet->add(i, pixels, label);
+            }
         }
         // After everything this frame allocated (captures, lookups, frames written).
         rec.rss_kB = residentMemory_kB();
@@ -523,6 +541,7 @@ void runReplay(RunOptions o) {
     report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     report.rssPeak_kB = peakResidentMemory_kB();
     if (video) video->close();
+    if (sheet) sheet->write(o.contactSheet);
     addAmbienceTotals(o, *stages, report);
     finishMeasurement(o, measurement, report);
 
@@ -612,6 +631,11 @@ void addRunCommand(CLI::App& app) {
     cmd->add_flag("--no-vehicle", o->noVehicle, "do not draw the car on drive replays");
     cmd->add_option("--view", o->view,
                     "shaded (default) or ambient: the ambient term alone, every surface white");
+    cmd->add_option("--contact-sheet", o->contactSheet,
+                    "PNG of frames across the run in a grid, or 'none' "
+                    "(default <out>/contact-sheet.png)");
+    cmd->add_option("--sheet-cells", o->sheetCells,
+                    "frames on the contact sheet, evenly across the run (default 12)");
     cmd->add_flag("--debug-overlay", o->debugOverlay,
                   "draw anchors (colour = level, darker = older) and the probe being captured "
                   "over frames and video");
