@@ -18,6 +18,7 @@ packages=(
   libboost-iostreams-dev libtbb-dev libgtest-dev libbenchmark-dev libcli11-dev
   nlohmann-json3-dev xvfb xauth ffmpeg python3-matplotlib libtsl-hopscotch-map-dev
   ccache clang libfuzzer-14-dev libclang-rt-14-dev fonts-dejavu-core
+  libimgui-dev parallel python3-openvdb
 )
 
 missing=()
@@ -41,7 +42,9 @@ fi
 
 jobs="$(nproc)"
 if [[ ! -f build/CMakeCache.txt ]]; then
-  cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release
+  # ccache (in the list above) makes a rebuild after a fresh clone or a clean cheap.
+  cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release \
+    -DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache
 fi
 cmake --build build -j "$jobs"
 
