@@ -32,6 +32,7 @@
 #include "app/frame/MethodStages.h"
 #include "lighting/Baselines.h"
 #include "lighting/Metrics.h"
+#include "world/DataPaths.h"
 #include "world/Error.h"
 #include "world/TextFile.h"
 #include "world/World.h"
@@ -553,15 +554,10 @@ void runReplay(RunOptions o) {
 }  // namespace
 
 std::string shippedReplayDir() {
-    // Beside the executable's tree (<exe>/../../replays) or the current directory.
-    char exe[4096] = {};
-    const ssize_t n = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
-    if (n > 0) {
-        const fs::path p = fs::path(std::string(exe, size_t(n))).parent_path();
-        for (const fs::path& c : {p / "../../replays", p / "../replays"}) {
-            if (fs::exists(c / "highway-drive.json")) return fs::weakly_canonical(c).string();
-        }
-    }
+    // The data folders (world/DataPaths.h: P/share/ambience/replays installed, the source's
+    // replays/ around a build tree inside it), else the current directory.
+    const std::string found = findDataFile("replays/highway-drive.json");
+    if (!found.empty()) return fs::weakly_canonical(fs::path(found).parent_path()).string();
     if (fs::exists("replays/highway-drive.json")) return fs::weakly_canonical("replays").string();
     return "";
 }

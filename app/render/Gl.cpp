@@ -3,7 +3,6 @@
 
 #include <unistd.h>
 
-#include <climits>
 #include <cstdlib>
 #include <fstream>
 #include <set>
@@ -12,6 +11,7 @@
 
 #include <glm/gtc/type_ptr.hpp>
 
+#include "world/DataPaths.h"
 #include "world/Error.h"
 #include "world/TextFile.h"
 
@@ -67,11 +67,11 @@ void setShaderDirectory(const std::string& dir) {
 std::string shaderDirectory() {
     if (!shaderDirOverride().empty()) return shaderDirOverride();
     if (const char* env = std::getenv("AMBIENCE_SHADER_DIR"); env && *env) return env;
-    char exe[PATH_MAX] = {};
-    const ssize_t n = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
-    std::string dir = n > 0 ? std::string(exe, size_t(n)) : std::string(".");
-    dir = dir.substr(0, dir.find_last_of('/'));
-    return dir + "/../shaders";
+    // The data folders (world/DataPaths.h): P/share/ambience/shaders installed, build/shaders
+    // in the build tree; when neither exists, the build tree's place names the missing file.
+    if (std::string dir = findDataFile("shaders"); !dir.empty()) return dir;
+    const std::string exe = executableDirectory();
+    return (exe.empty() ? std::string(".") : exe) + "/../shaders";
 }
 
 static std::string readText(const std::string& path) {

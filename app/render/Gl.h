@@ -56,8 +56,9 @@ GlBuffer makeBuffer(const void* data, size_t bytes, GLbitfield flags = 0);
 GlVertexArray makeVertexArray();
 GlTexture makeTexture2D(GLenum internalFormat, int width, int height, int levels = 1);
 
-// The folder the renderer loads GLSL from: $AMBIENCE_SHADER_DIR if set, else
-// <executable dir>/../shaders (the build tree and an install both put them there).
+// The folder the renderer loads GLSL from: $AMBIENCE_SHADER_DIR if set, else the first
+// `shaders` data folder (world/DataPaths.h): P/share/ambience/shaders for an installed program,
+// <executable dir>/../shaders in the build tree.
 std::string shaderDirectory();
 void setShaderDirectory(const std::string& dir);  // overrides both (the --shaders option)
 
