@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -71,7 +72,8 @@ std::string shaderDirectory() {
     // in the build tree; when neither exists, the build tree's place names the missing file.
     if (std::string dir = findDataFile("shaders"); !dir.empty()) return dir;
     const std::string exe = executableDirectory();
-    return (exe.empty() ? std::string(".") : exe) + "/../shaders";
+    return exe.empty() ? std::string("shaders")
+                       : (std::filesystem::path(exe).parent_path() / "shaders").string();
 }
 
 static std::string readText(const std::string& path) {
