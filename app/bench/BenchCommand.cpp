@@ -37,10 +37,10 @@
 
 #include "app/bench/BenchEmit.h"
 #include "app/bench/BenchSweep.h"
-#include "app/cli/RunReport.h"
 #include "app/cli/Commands.h"
-#include "app/platform/Platform.h"
+#include "app/cli/RunReport.h"
 #include "app/frame/MethodStages.h"
+#include "app/platform/Platform.h"
 #include "lighting/Metrics.h"
 #include "world/Error.h"
 
@@ -115,7 +115,8 @@ std::vector<ReplayRef> resolveReplays(const std::string& list) {
         for (const auto& e : fs::directory_iterator(dir))
             if (e.path().extension() == ".json") files.push_back(e.path());
         std::sort(files.begin(), files.end());
-        for (const auto& f : files) out.push_back({f.stem().string(), fs::weakly_canonical(f).string()});
+        for (const auto& f : files)
+            out.push_back({f.stem().string(), fs::weakly_canonical(f).string()});
         return out;
     }
     const std::vector<std::string> items = splitList(list);
@@ -1142,7 +1143,8 @@ void emitBench(const BenchOptions& o, const std::vector<Job>& jobs, const Runner
     json manifestRuns = json::array();
     for (const Job& j : jobs) {
         runner.prepare(j);
-        runs.push_back({runner.args(j), runner.dirOf(j), j.makesOracle ? "" : oracleRun[j.replay.name]});
+        runs.push_back(
+            {runner.args(j), runner.dirOf(j), j.makesOracle ? "" : oracleRun[j.replay.name]});
         manifestRuns.push_back(j.runDir);
     }
     const std::string dir = runner.out;
@@ -1156,15 +1158,21 @@ void emitBench(const BenchOptions& o, const std::vector<Job>& jobs, const Runner
     for (const ReplayRef& r : replays) replayList.push_back({{"name", r.name}, {"path", r.path}});
     std::string methodList;
     for (const auto& m : methods) methodList += (methodList.empty() ? "" : ",") + m;
-    const json manifest = {{"command", commandLine},   {"replays", replayList},
-                           {"methods", methodList},    {"sweep", o.sweep.empty() ? "" : "sweep.json"},
-                           {"budgets", o.budgets},     {"oracle", o.oracle},
+    const json manifest = {{"command", commandLine},
+                           {"replays", replayList},
+                           {"methods", methodList},
+                           {"sweep", o.sweep.empty() ? "" : "sweep.json"},
+                           {"budgets", o.budgets},
+                           {"oracle", o.oracle},
                            {"referenceEvery", o.referenceEvery},
                            {"fullLengthBudget", o.fullLengthBudget},
                            {"screenWitnesses", o.screenWitnesses},
-                           {"measureEvery", o.measureEvery}, {"maxFrames", o.maxFrames},
-                           {"stride", o.stride},       {"frames", o.frames},
-                           {"backend", o.backend},     {"runs", manifestRuns}};
+                           {"measureEvery", o.measureEvery},
+                           {"maxFrames", o.maxFrames},
+                           {"stride", o.stride},
+                           {"frames", o.frames},
+                           {"backend", o.backend},
+                           {"runs", manifestRuns}};
     std::ofstream(fs::path(dir) / "bench.json") << manifest.dump(2) << "\n";
     const auto q = [&](const char* file) { return shellQuote((fs::path(dir) / file).string()); };
     std::printf("bench: %zu runs emitted into %s (the first %d make the oracles)\n", jobs.size(),
@@ -1172,7 +1180,8 @@ void emitBench(const BenchOptions& o, const std::vector<Job>& jobs, const Runner
     std::printf("  here:           parallel --will-cite --jobs N < %s\n", q("jobs.txt").c_str());
     std::printf("  over machines:  parallel --will-cite --jobs N --sshloginfile hosts.txt < %s\n",
                 q("jobs.txt").c_str());
-    std::printf("  Slurm:          sbatch --array=0-%zu %s\n", jobs.size() - 1, q("slurm.sh").c_str());
+    std::printf("  Slurm:          sbatch --array=0-%zu %s\n", jobs.size() - 1,
+                q("slurm.sh").c_str());
     std::printf("  then:           %s bench --collect %s   (%s says more)\n",
                 shellQuote(runner.exe).c_str(), shellQuote(dir).c_str(), q("README.txt").c_str());
 }
@@ -1188,7 +1197,8 @@ BenchOptions readManifest(const std::string& dir, std::string& commandLine) {
         const json m = json::parse(in);
         commandLine = m.at("command").get<std::string>();
         for (const json& r : m.at("replays"))
-            o.resolved.push_back({r.at("name").get<std::string>(), r.at("path").get<std::string>()});
+            o.resolved.push_back(
+                {r.at("name").get<std::string>(), r.at("path").get<std::string>()});
         o.methods = m.at("methods").get<std::string>();
         const std::string sweep = m.at("sweep").get<std::string>();
         o.sweep = sweep.empty() ? "" : (fs::path(dir) / sweep).string();
@@ -1240,7 +1250,8 @@ void checkOptions(const BenchOptions& o) {
     if (!(o.tuneMinGain >= 0.0 && o.tuneMinGain < 1.0))
         throw InputError("--tune-min-gain", "expected 0 to 1");
     if (!o.emit.empty() && o.tune)
-        throw InputError("--emit", "--tune picks each candidate from the last: it cannot be emitted");
+        throw InputError("--emit",
+                         "--tune picks each candidate from the last: it cannot be emitted");
     if (!o.emit.empty() && o.fromRuns) throw InputError("--emit", "conflicts with --from-runs");
 }
 
@@ -1394,8 +1405,10 @@ void addBenchCommand(CLI::App& app) {
         for (const auto* opt : cmd->get_options()) {
             if (opt->count() == 0 || opt->get_name() == "--help") continue;
             if (!o->collect.empty() && opt->get_name() != "--collect")
-                throw InputError("--collect", "takes the sweep from DIR/bench.json: give no "
-                                              "other option (" + opt->get_name() + ")");
+                throw InputError("--collect",
+                                 "takes the sweep from DIR/bench.json: give no "
+                                 "other option (" +
+                                     opt->get_name() + ")");
             line += " " + opt->get_name();
             if (opt->get_type_size() != 0) line += " " + shellQuote(opt->as<std::string>());
         }

@@ -25,6 +25,8 @@ void writeFile(const std::string& path, const std::string& text) {
     if (!out) throw InputError(path, "cannot write the file");
 }
 
+// The texts read as they will be printed (clang-format would break them at every "+").
+// clang-format off
 std::string readmeText(const std::string& dir, std::size_t runs, int firstStage,
                        const std::string& exe) {
     const std::string d = shellQuote(dir), n = std::to_string(runs),
@@ -99,6 +101,8 @@ std::string slurmScript(const std::string& dir, std::size_t runs) {
            "exec /bin/sh -c \"$line\"\n";
 }
 
+// clang-format on
+
 }  // namespace
 
 // ---- Quoting ---------------------------------------------------------------------------------
@@ -107,7 +111,8 @@ std::string shellQuote(const std::string& word) {
     bool plain = !word.empty();
     for (const char c : word) {
         const bool safe = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') ||
-                          (c >= '0' && c <= '9') || std::string("_-./:=+,@%").find(c) != std::string::npos;
+                          (c >= '0' && c <= '9') ||
+                          std::string("_-./:=+,@%").find(c) != std::string::npos;
         if (!safe) plain = false;
     }
     if (plain) return word;

@@ -200,8 +200,8 @@ void ProgressBar::draw(double now_s) {
     drawn_ = true;
     if (terminal_) {
         const int width = 30;
-        const int filled = total_ > 0 ? std::clamp(int(width * double(done_) / total_), 0, width)
-                                      : width;
+        const int filled =
+            total_ > 0 ? std::clamp(int(width * double(done_) / total_), 0, width) : width;
         std::fprintf(to_, "\r\033[K[%s%s] %s", std::string(size_t(filled), '#').c_str(),
                      std::string(size_t(width - filled), '.').c_str(), text(now_s).c_str());
     } else {
@@ -220,7 +220,9 @@ void ProgressBar::update(int done, const std::string& detail) {
     if (terminal_ ? (since >= 0.1 || done == total_) : since >= interval_s_) draw(now);
 }
 
-void ProgressBar::update(int done, double) { update(done, std::string()); }
+void ProgressBar::update(int done, double) {
+    update(done, std::string());
+}
 
 void ProgressBar::note(const std::string& line) {
     if (terminal_ && drawn_) std::fprintf(to_, "\r\033[K");

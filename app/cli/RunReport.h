@@ -1,5 +1,6 @@
 // RunReport.h — what `ambience run` (and `view`) share: image size parsing, the ffmpeg video
-// pipe, the progress of long commands, and the report (JSON with timing statistics, per-frame rows, CSV).
+// pipe, the progress of long commands, and the report (JSON with timing statistics, per-frame
+// rows, CSV).
 #pragma once
 
 #include <cstdint>

@@ -195,11 +195,11 @@ TEST(BenchCommand, BadInputIsOneLineAndExitCode2) {
     EXPECT_NE(r.err.find("points[0]"), std::string::npos) << r.err;
 }
 
-
 // Columns that time the run (wall clock or CPU): they differ from one run to the next.
 bool timingColumn(const std::string& name) {
     auto endsWith = [&](const std::string& end) {
-        return name.size() >= end.size() && name.compare(name.size() - end.size(), end.size(), end) == 0;
+        return name.size() >= end.size() &&
+               name.compare(name.size() - end.size(), end.size(), end) == 0;
     };
     return name == "wall_s" || name == "oracle_s" || name == "reference_s" ||
            name == "share_of_frame" || endsWith("_ms_median") || endsWith("_ms_p95");
@@ -220,9 +220,10 @@ TEST(BenchCommand, EmittedSweepRunByParallelCollectsAsALocalBench) {
         << R"({"points": [{"label": "broken", "methods": ["volume"], "volume": {"noSuchSetting": 1}}]})";
     const std::string sweep = "--replays " + shellQuote((replays / "highway-drive.json").string()) +
                               " --methods volume,constant --max-frames 60 --measure-every 20 "
-                              "--sweep " + shellQuote((dir / "sweep points.json").string());
-    const auto local = runAmbience("bench " + sweep + " --jobs 2 --out " +
-                                   shellQuote((dir / "local").string()));
+                              "--sweep " +
+                              shellQuote((dir / "sweep points.json").string());
+    const auto local =
+        runAmbience("bench " + sweep + " --jobs 2 --out " + shellQuote((dir / "local").string()));
     ASSERT_EQ(local.exitCode, 0) << local.err;
 
     const fs::path emitted = dir / "emit'ted";
@@ -232,9 +233,10 @@ TEST(BenchCommand, EmittedSweepRunByParallelCollectsAsALocalBench) {
     EXPECT_TRUE(fs::exists(emitted / "slurm.sh") && fs::exists(emitted / "README.txt"));
     EXPECT_FALSE(fs::exists(emitted / "results.csv"));  // nothing ran
     const std::string log = (dir / "parallel.log").string();
-    const int status = std::system(("cd / && parallel --will-cite --jobs 2 < " +
-                                    shellQuote((emitted / "jobs.txt").string()) + " >" +
-                                    shellQuote(log) + " 2>&1").c_str());
+    const int status =
+        std::system(("cd / && parallel --will-cite --jobs 2 < " +
+                     shellQuote((emitted / "jobs.txt").string()) + " >" + shellQuote(log) + " 2>&1")
+                        .c_str());
     ASSERT_TRUE(WIFEXITED(status)) << slurp(log);
     EXPECT_EQ(WEXITSTATUS(status), 1) << slurp(log);  // parallel: the number of failed runs
     const auto collect = runAmbience("bench --collect " + shellQuote(emitted.string()));
@@ -282,8 +284,10 @@ TEST(BenchCommand, EmittedSweepRunByParallelCollectsAsALocalBench) {
 // collector takes nothing but the folder, and --emit refuses what it cannot write out.
 TEST(BenchCommand, CollectReportsRunsThatDidNotRun) {
     const fs::path dir = scratchDir("bench-collect");
-    const auto emit = runAmbience("bench --replays highway-drive --methods constant,hemisphere "
-                                  "--max-frames 30 --emit " + (dir / "e").string());
+    const auto emit = runAmbience(
+        "bench --replays highway-drive --methods constant,hemisphere "
+        "--max-frames 30 --emit " +
+        (dir / "e").string());
     ASSERT_EQ(emit.exitCode, 0) << emit.err;
     // The first line only (the oracle run), from commands.txt.
     const std::string first = slurp((dir / "e" / "commands.txt").string());
@@ -302,8 +306,10 @@ TEST(BenchCommand, CollectReportsRunsThatDidNotRun) {
     EXPECT_EQ(rows[2][column(h, "error_message")],
               "not run: no runs/highway-drive__hemisphere__default/exit-status.txt");
     // Nothing ran at all: every run failed, exit code 1, as a local bench in which nothing ran.
-    const auto again = runAmbience("bench --replays highway-drive --methods constant "
-                                   "--emit " + (dir / "f").string());
+    const auto again = runAmbience(
+        "bench --replays highway-drive --methods constant "
+        "--emit " +
+        (dir / "f").string());
     ASSERT_EQ(again.exitCode, 0) << again.err;
     const auto none = runAmbience("bench --collect " + (dir / "f").string());
     EXPECT_EQ(none.exitCode, 1) << none.err;
@@ -323,8 +329,10 @@ TEST(BenchCommand, CollectReportsRunsThatDidNotRun) {
 TEST(BenchCommand, ProgressLinesWhenStderrIsAFile) {
     const fs::path dir = scratchDir("bench-progress");
     setenv("AMBIENCE_PROGRESS_S", "0.2", 1);
-    const auto r = runAmbience("bench --replays highway-drive --methods constant,hemisphere "
-                               "--max-frames 60 --measure-every 20 --jobs 1 --out " + dir.string());
+    const auto r = runAmbience(
+        "bench --replays highway-drive --methods constant,hemisphere "
+        "--max-frames 60 --measure-every 20 --jobs 1 --out " +
+        dir.string());
     unsetenv("AMBIENCE_PROGRESS_S");
     ASSERT_EQ(r.exitCode, 0) << r.err;
     EXPECT_EQ(r.err.find('\r'), std::string::npos);

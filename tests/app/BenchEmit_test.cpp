@@ -33,10 +33,10 @@ std::string shell(const std::string& command, int* code = nullptr) {
 }
 
 const std::vector<std::string> kHostileWords = {
-    "",          "plain",       "a b",          "it's",       "'",          "''",
-    "\"quoted\"", "$HOME",       "`id`",         "$(id)",      "back\\slash", "tab\there",
-    "new\nline", "*",           "~",            "a;b|c&d",    "!x",         "#not a comment",
-    "-n",        "x'\"'\"'y",   "{a,b}",        "%s %d",      "ünïcode",    "=",
+    "",           "plain",     "a b",   "it's",    "'",           "''",
+    "\"quoted\"", "$HOME",     "`id`",  "$(id)",   "back\\slash", "tab\there",
+    "new\nline",  "*",         "~",     "a;b|c&d", "!x",          "#not a comment",
+    "-n",         "x'\"'\"'y", "{a,b}", "%s %d",   "ünïcode",     "=",
 };
 
 // Every word comes back from sh as it went in: printf gets exactly one argument per word.
@@ -69,14 +69,16 @@ fs::path awkwardDir(const std::string& name) {
     return dir;
 }
 
-std::string statusOf(const fs::path& dir) { return test::slurp((dir / kExitStatusFile).string()); }
+std::string statusOf(const fs::path& dir) {
+    return test::slurp((dir / kExitStatusFile).string());
+}
 
 // The line runs from any working directory: output into <dir>/log.txt, the exit status and
 // whole seconds into exit-status.txt, and the line exits with the run's code.
 TEST(BenchEmit, RunLineRecordsLogAndExitStatus) {
     const fs::path dir = awkwardDir("emit-line");
-    const EmittedRun run{{"/bin/sh", "-c", "echo \"out $0\"; echo err >&2; exit 3", "x'y z"},
-                         dir.string(), ""};
+    const EmittedRun run{
+        {"/bin/sh", "-c", "echo \"out $0\"; echo err >&2; exit 3", "x'y z"}, dir.string(), ""};
     int code = -1;
     shell("cd / && " + runLine(run, true), &code);
     EXPECT_EQ(code, 3);
@@ -126,7 +128,8 @@ TEST(BenchEmit, JobFilesAndTheSlurmScript) {
     for (int i = 0; i < 3; ++i) {
         const fs::path d = dir / ("run " + std::to_string(i));
         fs::create_directories(d);
-        runs.push_back({{"/bin/sh", "-c", "echo run " + std::to_string(i)}, d.string(),
+        runs.push_back({{"/bin/sh", "-c", "echo run " + std::to_string(i)},
+                        d.string(),
                         i == 0 ? "" : runs.front().dir});
     }
     writeJobFiles(dir.string(), runs, 1, "/opt/x y/ambience");

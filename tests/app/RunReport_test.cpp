@@ -112,8 +112,7 @@ TEST(ProgressBar, OnATerminalABarRedrawnInPlace) {
     EXPECT_EQ(text.rfind("\r\033[K[###############...............] frame 5/10 (50 %)", 0), 0u)
         << text;
     EXPECT_NE(text.find("\r\033[Krun failed: x\n\r\033[K[####"), std::string::npos) << text;
-    EXPECT_NE(text.find("[##############################] frame 10/10 (100 %)"),
-              std::string::npos)
+    EXPECT_NE(text.find("[##############################] frame 10/10 (100 %)"), std::string::npos)
         << text;
     EXPECT_EQ(text.back(), '\n');
     EXPECT_EQ(test::lineCount(text), 2);  // the note's and the bar's end
@@ -147,8 +146,9 @@ TEST(ProgressBar, RunWithStderrInAFileWritesProgressLines) {
     const auto dir = test::scratchDir("run-progress");
     auto progressLines = [&](const char* interval) {
         setenv("AMBIENCE_PROGRESS_S", interval, 1);
-        const auto r = test::runAmbience("run --no-frames --ambient constant --max-frames 60 --measure-every 10 --out " +
-                                         (dir / interval).string());
+        const auto r = test::runAmbience(
+            "run --no-frames --ambient constant --max-frames 60 --measure-every 10 --out " +
+            (dir / interval).string());
         unsetenv("AMBIENCE_PROGRESS_S");
         EXPECT_EQ(r.exitCode, 0) << r.err;
         std::vector<std::string> out;
@@ -171,7 +171,8 @@ TEST(ProgressBar, RunWithStderrInAFileWritesProgressLines) {
     ASSERT_EQ(rarely.size(), 1u);
     EXPECT_EQ(rarely[0].rfind("run: frame 60/60 (100 %)", 0), 0u) << rarely[0];
     setenv("AMBIENCE_PROGRESS_S", "soon", 1);
-    const auto bad = test::runAmbience("run --no-frames --max-frames 2 --out " + (dir / "bad").string());
+    const auto bad =
+        test::runAmbience("run --no-frames --max-frames 2 --out " + (dir / "bad").string());
     unsetenv("AMBIENCE_PROGRESS_S");
     EXPECT_EQ(bad.exitCode, 2);
     EXPECT_NE(bad.err.find("AMBIENCE_PROGRESS_S"), std::string::npos) << bad.err;
