@@ -353,6 +353,12 @@ struct Runner {
     }
 };
 
+// "bench: <replay>/<method>/<point> FAILED: <error>", for a run that failed.
+std::string failureLine(const std::string& title, const Job& j) {
+    return title + ": " + j.replay.name + "/" + j.method + "/" + j.point.label +
+           " FAILED: " + j.error;
+}
+
 // Runs the jobs on `workers` threads; jobs of a replay wait for that replay's oracle job. This
 // thread shows the progress (ProgressBar: a bar on a terminal, else a line every few seconds)
 // and a line for each run that failed.
@@ -398,7 +404,7 @@ void runJobs(std::vector<Job>& jobs, const Runner& runner, int workers, const st
                 if (jobs[pick].makesOracle) oracleDone[jobs[pick].replay.name] = true;
                 const Job& j = jobs[pick];
                 last = j.replay.name + "/" + j.method + "/" + j.point.label;
-                if (!j.ok) failed.push_back(title + ": " + last + " FAILED: " + j.error);
+                if (!j.ok) failed.push_back(failureLine(title, j));
             }
             changed.notify_all();
         }
@@ -1295,7 +1301,10 @@ void runBench(const BenchOptions& o, const std::string& commandLine) {
     // One path for the results: every run is read back from its folder (readRun), whether it ran
     // here just now or earlier (--from-runs), or was emitted and ran elsewhere (--collect).
     if (o.fromRuns) {
-        for (Job& j : jobs) readRun(j, runner.out);
+        for (Job& j : jobs) {
+            readRun(j, runner.out);
+            if (!j.ok) std::fprintf(stderr, "%s\n", failureLine("bench", j).c_str());
+        }
     } else {
         runJobs(jobs, runner, workers, "bench");
     }
