@@ -197,6 +197,7 @@ std::string ProgressBar::text(double now_s) const {
 
 void ProgressBar::draw(double now_s) {
     lastDrawn_s_ = now_s;
+    drawnDone_ = done_;
     drawn_ = true;
     if (terminal_) {
         const int width = 30;
@@ -234,7 +235,8 @@ void ProgressBar::note(const std::string& line) {
 void ProgressBar::finish() {
     if (finished_) return;
     finished_ = true;
-    draw(nowSeconds());
+    // Off a terminal the end once: not again when the last line already shows it.
+    if (terminal_ || drawnDone_ != done_) draw(nowSeconds());
     if (terminal_) std::fprintf(to_, "\n");
     std::fflush(to_);
 }

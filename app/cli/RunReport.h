@@ -45,7 +45,8 @@ class VideoPipe {
 // Progress of a long command (`run` frames, `bench` runs) on stderr, one implementation for
 // both. On a terminal: a bar redrawn in place. Elsewhere (CI logs, cluster jobs): a plain line
 // every few seconds, e.g. "run: frame 1200/2701 (44 %), 31.0 fps, 0:38 elapsed, 0:49 left",
-// and one at the end. The interval is AMBIENCE_PROGRESS_S seconds (default 5; 0.05 to 86400).
+// and one at the end (unless the last already shows it). The interval is AMBIENCE_PROGRESS_S
+// seconds (default 5; 0.05 to 86400).
 class ProgressBar {
   public:
     // `label` opens every line ("run", "bench"), `unit` names what is counted ("frame", "run").
@@ -70,6 +71,7 @@ class ProgressBar {
     std::FILE* to_;
     bool terminal_, drawn_ = false, finished_ = false;
     double interval_s_, started_s_, lastDrawn_s_ = -1.0;
+    int drawnDone_ = -1;  // `done` in the last line drawn
 };
 
 // True for a line ProgressBar writes when not on a terminal (so a log's last lines can be read
