@@ -6,9 +6,11 @@
 // go side by side. The oracle of a replay does not depend on the method: the first run of each
 // replay (the cheapest method) captures it and saves it, the others of that replay wait for it
 // and read it back. Outputs in --out: runs/<replay>__<method>__<point>/ (each run's report,
-// measurement CSV and log), oracle/<replay>.json, results.csv (one row per run), summary.md
-// (tables), PNG plots from bench-plots.py (matplotlib), and with --tune, tune.csv and
-// tuned-volume.json.
+// measurement CSV, log and exit status), oracle/<replay>.json, results.csv (one row per run),
+// summary.md (tables), PNG plots from bench-plots.py (matplotlib), and with --tune, tune.csv and
+// tuned-volume.json. `--emit DIR` writes the runs as shell command lines for GNU parallel or
+// Slurm instead (BenchEmit.h), and `--collect DIR` reads them back: every run's result is read
+// from its folder (readRun), whoever ran it.
 #include <fcntl.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -33,10 +35,12 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "app/bench/BenchEmit.h"
 #include "app/bench/BenchSweep.h"
 #include "app/cli/Commands.h"
-#include "app/platform/Platform.h"
+#include "app/cli/RunReport.h"
 #include "app/frame/MethodStages.h"
+#include "app/platform/Platform.h"
 #include "lighting/Metrics.h"
 #include "world/Error.h"
 
@@ -48,6 +52,10 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+
+struct ReplayRef {
+    std::string name, path;  // path absolute
+};
 
 struct BenchOptions {
     std::string replays, methods, sweep, budgets, out = "out/bench";
@@ -68,6 +76,13 @@ struct BenchOptions {
     int tuneBudget = 1;  // faces per frame: the cost the tuning holds fixed
     double tuneMinGain = 0.002;
     std::string backend = "auto";
+    std::string emit;     // --emit DIR: write the runs as command lines, run nothing
+    std::string collect;  // --collect DIR: the results of runs emitted there
+    // With --collect: the replays as emitted (their files need not be here), and where the
+    // runs were read from in the summary.
+    std::vector<ReplayRef> resolved;
+    std::vector<std::string> emitted;  // the run folders bench.json lists
+    bool collected = false;
 };
 
 std::vector<std::string> splitList(const std::string& text) {
@@ -91,10 +106,6 @@ std::string selfExecutable() {
 
 // ---- What to run -----------------------------------------------------------------------------
 
-struct ReplayRef {
-    std::string name, path;
-};
-
 std::vector<ReplayRef> resolveReplays(const std::string& list) {
     std::vector<ReplayRef> out;
     const std::string dir = shippedReplayDir();
@@ -104,7 +115,8 @@ std::vector<ReplayRef> resolveReplays(const std::string& list) {
         for (const auto& e : fs::directory_iterator(dir))
             if (e.path().extension() == ".json") files.push_back(e.path());
         std::sort(files.begin(), files.end());
-        for (const auto& f : files) out.push_back({f.stem().string(), f.string()});
+        for (const auto& f : files)
+            out.push_back({f.stem().string(), fs::weakly_canonical(f).string()});
         return out;
     }
     const std::vector<std::string> items = splitList(list);
@@ -191,7 +203,8 @@ std::string lastLines(const std::string& path, int count) {
         // Progress output uses carriage returns; keep the text after the last one.
         const auto cr = line.find_last_of('\r');
         if (cr != std::string::npos) line = line.substr(cr + 1);
-        if (!line.empty()) lines.push_back(line);
+        // Progress lines come every few seconds: a log's last lines are read without them.
+        if (!line.empty() && !isProgressLine(line)) lines.push_back(line);
     }
     std::string out;
     for (std::size_t i = lines.size() > std::size_t(count) ? lines.size() - count : 0;
@@ -200,8 +213,47 @@ std::string lastLines(const std::string& path, int count) {
     return out;
 }
 
+// A run's outcome, read back from its folder alone (kExitStatusFile, report.json, log.txt), the
+// same way whoever ran it: a local bench just after the run, --from-runs and --collect later.
+void readRun(Job& job, const std::string& out) {
+    const fs::path dir = fs::path(out) / job.runDir;
+    job.ok = false;
+    job.error.clear();
+    job.report = json();
+    job.wall_s = std::nan("");
+    int status = 0;
+    bool ended = false;
+    {
+        std::ifstream in(dir / kExitStatusFile);
+        double wall_s = 0.0;
+        if (in >> status) {
+            ended = true;
+            if (in >> wall_s) job.wall_s = wall_s;
+        }
+    }
+    const fs::path report = dir / "report.json";
+    // A folder from before the exit status was kept counts as ended when it has its report.
+    if (!ended && !fs::exists(report)) {
+        job.error = "not run: no " + (fs::path(job.runDir) / kExitStatusFile).string();
+        return;
+    }
+    if (status != 0 || !fs::exists(report)) {
+        job.error = (status > 128 ? "killed by signal " + std::to_string(status - 128)
+                                  : "exit code " + std::to_string(status)) +
+                    ": " + lastLines((dir / "log.txt").string(), 2);
+        return;
+    }
+    try {
+        std::ifstream in(report);
+        job.report = json::parse(in);
+        job.ok = true;
+    } catch (const json::exception& e) {
+        job.error = std::string("unreadable report: ") + e.what();
+    }
+}
+
 struct Runner {
-    std::string exe, out, backend;
+    std::string exe, out, backend;  // `out` absolute
     int measureEvery = 30, maxFrames = 0, stride = 2;
     bool frames = false;
     // The reference oracle (lighting/ReferenceOracle.h) for every run, and the capture budget
@@ -214,14 +266,25 @@ struct Runner {
     // Runs above this many faces per frame play the first fullLengthBudget / faces of the replay.
     int fullLengthBudget = 64;
 
-    void run(Job& job) const {
-        const fs::path dir = fs::path(out) / job.runDir;
+    std::string dirOf(const Job& job) const { return (fs::path(out) / job.runDir).string(); }
+
+    // The run's folder with its settings files and command line, without the outcome of an
+    // earlier run there.
+    void prepare(const Job& job) const {
+        const fs::path dir = dirOf(job);
         fs::create_directories(dir);
-        const std::string volumeFile = (dir / "volume.json").string();
-        const std::string baselineFile = (dir / "baseline.json").string();
-        std::ofstream(volumeFile) << job.point.volume.dump(2) << "\n";
-        std::ofstream(baselineFile) << job.point.baseline.dump(2) << "\n";
-        std::vector<std::string> args = {
+        std::ofstream(dir / "volume.json") << job.point.volume.dump(2) << "\n";
+        std::ofstream(dir / "baseline.json") << job.point.baseline.dump(2) << "\n";
+        std::ofstream(dir / "command.txt") << shellCommand(args(job)) << "\n";
+        std::error_code ec;
+        fs::remove(dir / kExitStatusFile, ec);
+        fs::remove(dir / "report.json", ec);
+    }
+
+    // `ambience run ...` for the job (absolute paths: the same line runs anywhere).
+    std::vector<std::string> args(const Job& job) const {
+        const fs::path dir = dirOf(job);
+        std::vector<std::string> a = {
             exe,
             "run",
             "--replay",
@@ -229,9 +292,9 @@ struct Runner {
             "--ambient",
             job.method,
             "--config",
-            volumeFile,
+            (dir / "volume.json").string(),
             "--baseline-config",
-            baselineFile,
+            (dir / "baseline.json").string(),
             "--faces-per-frame",
             std::to_string(job.point.facesPerFrame),
             "--measure-every",
@@ -245,58 +308,60 @@ struct Runner {
             "--out",
             dir.string()};
         if (reference) {
-            args.insert(args.end(),
-                        {"--oracle-kind", "reference", "--reference",
-                         (fs::path(out) / "oracle" / (job.replay.name + "-reference.json")).string(),
-                         "--reference-every", std::to_string(referenceEvery)});
+            a.insert(a.end(),
+                     {"--oracle-kind", "reference", "--reference",
+                      (fs::path(out) / "oracle" / (job.replay.name + "-reference.json")).string(),
+                      "--reference-every", std::to_string(referenceEvery)});
             if (job.point.facesPerFrame != idealBudget) {
-                args.push_back("--no-ideal-volume");
+                a.push_back("--no-ideal-volume");
             } else if (screenWitnesses > 0) {
-                args.insert(args.end(), {"--screen-witnesses", std::to_string(screenWitnesses)});
+                a.insert(a.end(), {"--screen-witnesses", std::to_string(screenWitnesses)});
             }
         }
         if (frames) {
-            args.insert(args.end(), {"--frames", "none", "--no-video"});
+            a.insert(a.end(), {"--frames", "none", "--no-video"});
         } else {
-            args.push_back("--no-frames");
+            a.push_back("--no-frames");
         }
-        if (maxFrames > 0) args.insert(args.end(), {"--max-frames", std::to_string(maxFrames)});
+        if (maxFrames > 0) a.insert(a.end(), {"--max-frames", std::to_string(maxFrames)});
         if (job.point.facesPerFrame > fullLengthBudget) {
             char share[32];
             std::snprintf(share, sizeof(share), "%.6f",
                           double(fullLengthBudget) / double(job.point.facesPerFrame));
-            args.insert(args.end(), {"--share", share});
+            a.insert(a.end(), {"--share", share});
         }
-        const std::string log = (dir / "log.txt").string();
-        {
-            std::ofstream cmd((dir / "command.txt").string());
-            for (const auto& a : args) cmd << a << ' ';
-            cmd << "\n";
-        }
+        return a;
+    }
+
+    // Runs the job here, records its exit status as an emitted line does, and reads it back.
+    void run(Job& job) const {
+        prepare(job);
+        const fs::path dir = dirOf(job);
         const auto t0 = std::chrono::steady_clock::now();
-        const int status = spawnAndWait(args, log);
-        job.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        const fs::path report = dir / "report.json";
-        if (status != 0 || !fs::exists(report)) {
-            job.ok = false;
-            job.error =
-                (status < 0 && status > -1000 ? "killed by signal " + std::to_string(-status)
-                                              : "exit code " + std::to_string(status)) +
-                ": " + lastLines(log, 2);
-            return;
+        const int status = spawnAndWait(args(job), (dir / "log.txt").string());
+        const double wall_s =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        // As a shell reports it: 128 + signal for a killed run, 127 for one that did not start.
+        const int code = status <= -1000 ? 127 : status < 0 ? 128 - status : status;
+        {
+            std::ofstream s(dir / (std::string(kExitStatusFile) + ".tmp"));
+            s << code << " " << wall_s << "\n";
         }
-        try {
-            std::ifstream in(report);
-            job.report = json::parse(in);
-            job.ok = true;
-        } catch (const json::exception& e) {
-            job.ok = false;
-            job.error = std::string("unreadable report: ") + e.what();
-        }
+        std::error_code ec;
+        fs::rename(dir / (std::string(kExitStatusFile) + ".tmp"), dir / kExitStatusFile, ec);
+        readRun(job, out);
     }
 };
 
-// Runs the jobs on `workers` threads; jobs of a replay wait for that replay's oracle job.
+// "bench: <replay>/<method>/<point> FAILED: <error>", for a run that failed.
+std::string failureLine(const std::string& title, const Job& j) {
+    return title + ": " + j.replay.name + "/" + j.method + "/" + j.point.label +
+           " FAILED: " + j.error;
+}
+
+// Runs the jobs on `workers` threads; jobs of a replay wait for that replay's oracle job. This
+// thread shows the progress (ProgressBar: a bar on a terminal, else a line every few seconds)
+// and a line for each run that failed.
 void runJobs(std::vector<Job>& jobs, const Runner& runner, int workers, const std::string& title) {
     std::mutex mutex;
     std::condition_variable changed;
@@ -306,19 +371,10 @@ void runJobs(std::vector<Job>& jobs, const Runner& runner, int workers, const st
     for (const Job& j : jobs)
         if (j.makesOracle) oracleDone[j.replay.name] = false;
     std::size_t done = 0;
-    const auto start = std::chrono::steady_clock::now();
-    const bool tty = isatty(2);
-    auto progress = [&](const std::string& what) {
-        const double elapsed =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        const double eta = done ? elapsed / double(done) * double(jobs.size() - done) : 0.0;
-        const int width = 30, filled = int(width * double(done) / double(jobs.size()));
-        std::fprintf(stderr, "%s[%s%s] %zu/%zu  %.0f s elapsed, ~%.0f s left  %s%s",
-                     tty ? "\r\033[K" : "", std::string(std::size_t(filled), '#').c_str(),
-                     std::string(std::size_t(width - filled), '.').c_str(), done, jobs.size(),
-                     elapsed, eta, what.c_str(), tty ? "" : "\n");
-    };
+    std::string last;                 // the run that ended last
+    std::vector<std::string> failed;  // not yet shown
     std::fprintf(stderr, "%s: %zu runs on %d job(s)\n", title.c_str(), jobs.size(), workers);
+    ProgressBar bar(int(jobs.size()), title, "run");
     auto worker = [&] {
         for (;;) {
             std::size_t pick = jobs.size();
@@ -346,16 +402,28 @@ void runJobs(std::vector<Job>& jobs, const Runner& runner, int workers, const st
                 state[pick] = 2;
                 ++done;
                 if (jobs[pick].makesOracle) oracleDone[jobs[pick].replay.name] = true;
-                progress(jobs[pick].replay.name + "/" + jobs[pick].method + "/" +
-                         jobs[pick].point.label + (jobs[pick].ok ? "" : " FAILED"));
+                const Job& j = jobs[pick];
+                last = j.replay.name + "/" + j.method + "/" + j.point.label;
+                if (!j.ok) failed.push_back(failureLine(title, j));
             }
             changed.notify_all();
         }
     };
     std::vector<std::thread> threads;
     for (int w = 0; w < workers; ++w) threads.emplace_back(worker);
+    {
+        std::unique_lock<std::mutex> lock(mutex);
+        for (;;) {
+            for (const std::string& f : failed) bar.note(f);
+            failed.clear();
+            if (done == jobs.size()) break;
+            bar.update(int(done), last.empty() ? "" : "last " + last);
+            changed.wait_for(lock, std::chrono::milliseconds(200));
+        }
+        bar.update(int(done), last.empty() ? "" : "last " + last);
+    }
     for (auto& t : threads) t.join();
-    if (tty) std::fprintf(stderr, "\n");
+    bar.finish();
 }
 
 // ---- Results ---------------------------------------------------------------------------------
@@ -747,14 +815,13 @@ void writeErrorBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
 }
 
 void writeSummary(const std::vector<Job>& jobs, const std::string& path,
-                  const std::string& commandLine, double wall_s, int workers,
+                  const std::string& commandLine, const std::string& timing,
                   const std::string& oracle, int idealBudget, int fullLengthBudget) {
     std::ofstream out(path);
     if (!out) throw InputError(path, "cannot write the summary");
     out << "# Ambience bench: speed against error\n\n";
     out << "Command: `" << commandLine << "`  \n";
-    out << "Wall time " << fmt(wall_s / 60.0, "%.1f") << " min on " << workers
-        << " job(s). **Oracle: " << oracle
+    out << timing << " **Oracle: " << oracle
         << (oracle == "reference"
                 ? "** (the full scene at 64 x 64, irradiance straight from the cube map, on every "
                   "reference frame; lighting/ReferenceOracle.h)."
@@ -1007,7 +1074,7 @@ void tune(const BenchOptions& o, const Runner& runner, int workers) {
 Runner benchRunner(const BenchOptions& o, const std::vector<Point>& points) {
     Runner runner;
     runner.exe = selfExecutable();
-    runner.out = o.out;
+    runner.out = fs::absolute(o.out).lexically_normal().string();
     runner.backend = o.backend;
     runner.measureEvery = o.measureEvery;
     runner.maxFrames = o.maxFrames;
@@ -1066,22 +1133,119 @@ std::vector<Job> benchJobs(const std::vector<ReplayRef>& replays,
     return jobs;
 }
 
-// --from-runs: nothing runs; each job's report is read back from its folder.
-void readRuns(std::vector<Job>& jobs, const std::string& out) {
-    for (Job& j : jobs) {
-        const fs::path report = fs::path(out) / j.runDir / "report.json";
-        std::ifstream in(report);
-        try {
-            j.report = json::parse(in);
-            j.ok = in.good() || in.eof();
-        } catch (const json::exception&) {
-            j.ok = false;
-            j.error = "no readable report in " + report.string();
-        }
+// --emit: each run's folder and settings, its command line (commands.txt, jobs.txt, slurm.sh,
+// README.txt: BenchEmit.h) and bench.json, the sweep for --collect. The oracle runs (one per
+// replay, at the front of `jobs`) are the first stage: their lines come first, and in jobs.txt
+// the others wait for their replay's one, as a local bench's runs do. (An oracle per run would
+// need no waiting, but capture the same oracle once per run: most of a cheap method's time.)
+void emitBench(const BenchOptions& o, const std::vector<Job>& jobs, const Runner& runner,
+               const std::vector<ReplayRef>& replays, const std::vector<std::string>& methods,
+               const std::string& commandLine) {
+    std::map<std::string, std::string> oracleRun;  // replay -> its oracle run's folder
+    int firstStage = 0;
+    for (const Job& j : jobs)
+        if (j.makesOracle) oracleRun[j.replay.name] = runner.dirOf(j), ++firstStage;
+    std::vector<EmittedRun> runs;
+    json manifestRuns = json::array();
+    for (const Job& j : jobs) {
+        runner.prepare(j);
+        runs.push_back(
+            {runner.args(j), runner.dirOf(j), j.makesOracle ? "" : oracleRun[j.replay.name]});
+        manifestRuns.push_back(j.runDir);
     }
+    const std::string dir = runner.out;
+    writeJobFiles(dir, runs, firstStage, runner.exe);
+    // The sweep file is copied in, so the collector needs nothing outside the folder.
+    const fs::path sweepCopy = fs::path(dir) / "sweep.json";
+    std::error_code ec;
+    if (!o.sweep.empty() && !fs::equivalent(o.sweep, sweepCopy, ec))
+        fs::copy_file(o.sweep, sweepCopy, fs::copy_options::overwrite_existing);
+    json replayList = json::array();
+    for (const ReplayRef& r : replays) replayList.push_back({{"name", r.name}, {"path", r.path}});
+    std::string methodList;
+    for (const auto& m : methods) methodList += (methodList.empty() ? "" : ",") + m;
+    const json manifest = {{"command", commandLine},
+                           {"replays", replayList},
+                           {"methods", methodList},
+                           {"sweep", o.sweep.empty() ? "" : "sweep.json"},
+                           {"budgets", o.budgets},
+                           {"oracle", o.oracle},
+                           {"referenceEvery", o.referenceEvery},
+                           {"fullLengthBudget", o.fullLengthBudget},
+                           {"screenWitnesses", o.screenWitnesses},
+                           {"measureEvery", o.measureEvery},
+                           {"maxFrames", o.maxFrames},
+                           {"stride", o.stride},
+                           {"frames", o.frames},
+                           {"backend", o.backend},
+                           {"runs", manifestRuns}};
+    std::ofstream(fs::path(dir) / "bench.json") << manifest.dump(2) << "\n";
+    const auto q = [&](const char* file) { return shellQuote((fs::path(dir) / file).string()); };
+    std::printf("bench: %zu runs emitted into %s (the first %d make the oracles)\n", jobs.size(),
+                dir.c_str(), firstStage);
+    std::printf("  here:           parallel --will-cite --jobs N < %s\n", q("jobs.txt").c_str());
+    std::printf("  over machines:  parallel --will-cite --jobs N --sshloginfile hosts.txt < %s\n",
+                q("jobs.txt").c_str());
+    std::printf("  Slurm:          sbatch --array=0-%zu %s\n", jobs.size() - 1,
+                q("slurm.sh").c_str());
+    std::printf("  then:           %s bench --collect %s   (%s says more)\n",
+                shellQuote(runner.exe).c_str(), shellQuote(dir).c_str(), q("README.txt").c_str());
 }
 
-void runBench(const BenchOptions& o, const std::string& commandLine) {
+// --collect DIR: the bench options as --emit saved them in DIR/bench.json.
+BenchOptions readManifest(const std::string& dir, std::string& commandLine) {
+    const std::string path = (fs::path(dir) / "bench.json").string();
+    if (!fs::exists(path))
+        throw InputError("--collect", "no bench.json in '" + dir + "' (write one with --emit DIR)");
+    BenchOptions o;
+    try {
+        std::ifstream in(path);
+        const json m = json::parse(in);
+        commandLine = m.at("command").get<std::string>();
+        for (const json& r : m.at("replays"))
+            o.resolved.push_back(
+                {r.at("name").get<std::string>(), r.at("path").get<std::string>()});
+        o.methods = m.at("methods").get<std::string>();
+        const std::string sweep = m.at("sweep").get<std::string>();
+        o.sweep = sweep.empty() ? "" : (fs::path(dir) / sweep).string();
+        o.budgets = m.at("budgets").get<std::string>();
+        o.oracle = m.at("oracle").get<std::string>();
+        o.referenceEvery = m.at("referenceEvery").get<int>();
+        o.fullLengthBudget = m.at("fullLengthBudget").get<int>();
+        o.screenWitnesses = m.at("screenWitnesses").get<int>();
+        o.measureEvery = m.at("measureEvery").get<int>();
+        o.maxFrames = m.at("maxFrames").get<int>();
+        o.stride = m.at("stride").get<int>();
+        o.frames = m.at("frames").get<bool>();
+        o.backend = m.at("backend").get<std::string>();
+        o.emitted = m.at("runs").get<std::vector<std::string>>();
+    } catch (const json::exception& e) {
+        throw InputError(path, std::string("not a bench.json from --emit: ") + e.what());
+    }
+    if (o.resolved.empty()) throw InputError(path, "no replays");
+    o.out = dir;
+    o.fromRuns = true;
+    o.collected = true;
+    return o;
+}
+
+// Results keep the order replay x method x point.
+void sortForResults(std::vector<Job>& jobs, const std::vector<ReplayRef>& replays,
+                    const std::vector<std::string>& methods) {
+    std::stable_sort(jobs.begin(), jobs.end(), [&](const Job& a, const Job& b) {
+        auto ri = [&](const Job& j) {
+            for (std::size_t i = 0; i < replays.size(); ++i)
+                if (replays[i].name == j.replay.name) return i;
+            return replays.size();
+        };
+        auto mi = [&](const Job& j) {
+            return std::find(methods.begin(), methods.end(), j.method) - methods.begin();
+        };
+        return std::make_pair(ri(a), mi(a)) < std::make_pair(ri(b), mi(b));
+    });
+}
+
+void checkOptions(const BenchOptions& o) {
     if (o.jobs < 0 || o.jobs > 64) throw InputError("--jobs", "expected 0 (cores) to 64");
     if (o.measureEvery < 1) throw InputError("--measure-every", "must be at least 1");
     if (o.maxFrames < 0) throw InputError("--max-frames", "must be >= 0");
@@ -1091,6 +1255,14 @@ void runBench(const BenchOptions& o, const std::string& commandLine) {
     if (o.tuneBudget < 1 || o.tuneBudget > 6) throw InputError("--tune-budget", "expected 1 to 6");
     if (!(o.tuneMinGain >= 0.0 && o.tuneMinGain < 1.0))
         throw InputError("--tune-min-gain", "expected 0 to 1");
+    if (!o.emit.empty() && o.tune)
+        throw InputError("--emit",
+                         "--tune picks each candidate from the last: it cannot be emitted");
+    if (!o.emit.empty() && o.fromRuns) throw InputError("--emit", "conflicts with --from-runs");
+}
+
+void runBench(const BenchOptions& o, const std::string& commandLine) {
+    checkOptions(o);
     std::vector<std::string> methods =
         o.methods.empty() ? ambienceMethodNames() : splitList(o.methods);
     if (methods.empty()) throw InputError("--methods", "no method named in '" + o.methods + "'");
@@ -1112,38 +1284,59 @@ void runBench(const BenchOptions& o, const std::string& commandLine) {
         tune(o, runner, workers);
         return;
     }
-    const auto replays = resolveReplays(o.replays);
+    const auto replays = o.resolved.empty() ? resolveReplays(o.replays) : o.resolved;
 
     std::vector<Job> jobs = benchJobs(replays, methods, points);
+    if (!o.emit.empty()) {
+        emitBench(o, jobs, runner, replays, methods, commandLine);
+        return;
+    }
+    if (o.collected) {
+        std::vector<std::string> dirs;
+        for (const Job& j : jobs) dirs.push_back(j.runDir);
+        if (dirs != o.emitted)
+            throw InputError((fs::path(o.out) / "bench.json").string(),
+                             "its sweep no longer gives the runs it emitted");
+    }
+    // One path for the results: every run is read back from its folder (readRun), whether it ran
+    // here just now or earlier (--from-runs), or was emitted and ran elsewhere (--collect).
     if (o.fromRuns) {
-        readRuns(jobs, o.out);
+        for (Job& j : jobs) {
+            readRun(j, runner.out);
+            if (!j.ok) std::fprintf(stderr, "%s\n", failureLine("bench", j).c_str());
+        }
     } else {
         runJobs(jobs, runner, workers, "bench");
     }
     const double wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    double runTime_s = 0.0;
+    for (const Job& j : jobs)
+        if (std::isfinite(j.wall_s)) runTime_s += j.wall_s;
+    char timing[200];
+    if (o.fromRuns)
+        std::snprintf(timing, sizeof(timing),
+                      "Runs read back from their folders (%s): %.1f min of run time in all.",
+                      o.collected ? "emitted, run elsewhere, --collect" : "--from-runs",
+                      runTime_s / 60.0);
+    else
+        std::snprintf(timing, sizeof(timing), "Wall time %.1f min on %d job(s).", wall / 60.0,
+                      workers);
 
-    // Results keep the order replay x method x point.
-    std::stable_sort(jobs.begin(), jobs.end(), [&](const Job& a, const Job& b) {
-        auto ri = [&](const Job& j) {
-            for (std::size_t i = 0; i < replays.size(); ++i)
-                if (replays[i].name == j.replay.name) return i;
-            return replays.size();
-        };
-        auto mi = [&](const Job& j) {
-            return std::find(methods.begin(), methods.end(), j.method) - methods.begin();
-        };
-        return std::make_pair(ri(a), mi(a)) < std::make_pair(ri(b), mi(b));
-    });
+    sortForResults(jobs, replays, methods);
     const std::string results = (fs::path(o.out) / "results.csv").string();
     writeResultsCsv(jobs, results);
-    writeSummary(jobs, (fs::path(o.out) / "summary.md").string(), commandLine, wall, workers,
-                 o.oracle, runner.idealBudget, runner.fullLengthBudget);
+    writeSummary(jobs, (fs::path(o.out) / "summary.md").string(), commandLine, timing, o.oracle,
+                 runner.idealBudget, runner.fullLengthBudget);
     drawPlots(o.out);
     int failed = 0;
     for (const Job& j : jobs) failed += !j.ok;
-    std::printf("bench: %zu runs (%d failed) in %.1f min on %d job(s)\n", jobs.size(), failed,
-                wall / 60.0, workers);
+    if (o.fromRuns)
+        std::printf("bench: %zu runs (%d failed) read from %s\n", jobs.size(), failed,
+                    o.out.c_str());
+    else
+        std::printf("bench: %zu runs (%d failed) in %.1f min on %d job(s)\n", jobs.size(), failed,
+                    wall / 60.0, workers);
     std::printf("  results: %s\n  summary: %s\n", results.c_str(),
                 (fs::path(o.out) / "summary.md").string().c_str());
     // A sweep goes on past a failed run, but a bench in which nothing ran is a failure.
@@ -1207,13 +1400,33 @@ void addBenchCommand(CLI::App& app) {
     cmd->add_option("--tune-budget", o->tuneBudget,
                     "capture budget held fixed while tuning, faces per frame (default 1)");
     cmd->add_option("--backend", o->backend, "auto, egl or osmesa (default auto)");
+    auto* out = cmd->get_option("--out");
+    cmd->add_option("--emit", o->emit,
+                    "run nothing: write each run as one shell command line into DIR "
+                    "(commands.txt, jobs.txt for GNU parallel, slurm.sh, README.txt) for "
+                    "--collect DIR; replaces --out")
+        ->excludes(out);
+    cmd->add_option("--collect", o->collect,
+                    "run nothing: results.csv, summary.md and the plots of runs --emit wrote "
+                    "into DIR (the sweep comes from DIR/bench.json: no other option)");
     cmd->callback([o, cmd] {
         std::string line = "ambience bench";
         for (const auto* opt : cmd->get_options()) {
             if (opt->count() == 0 || opt->get_name() == "--help") continue;
+            if (!o->collect.empty() && opt->get_name() != "--collect")
+                throw InputError("--collect",
+                                 "takes the sweep from DIR/bench.json: give no "
+                                 "other option (" +
+                                     opt->get_name() + ")");
             line += " " + opt->get_name();
-            if (opt->get_type_size() != 0) line += " " + opt->as<std::string>();
+            if (opt->get_type_size() != 0) line += " " + shellQuote(opt->as<std::string>());
         }
+        if (!o->collect.empty()) {
+            std::string emitted;
+            runBench(readManifest(o->collect, emitted), emitted);
+            return;
+        }
+        if (!o->emit.empty()) o->out = o->emit;
         runBench(*o, line);
     });
 }

@@ -1,4 +1,4 @@
-// RunReport.cpp — size parsing, ffmpeg pipe, progress bar, report.
+// RunReport.cpp — size parsing, ffmpeg pipe, progress of long commands, report.
 #include "app/cli/RunReport.h"
 
 #include "lighting/Metrics.h"
@@ -140,23 +140,118 @@ static double nowSeconds() {
         .count();
 }
 
-ProgressBar::ProgressBar(int total)
-    : total_(total), enabled_(isatty(STDERR_FILENO) != 0), started_s_(nowSeconds()) {}
+double progressInterval_s() {
+    const char* text = std::getenv("AMBIENCE_PROGRESS_S");
+    if (!text || !*text) return 5.0;
+    char* end = nullptr;
+    const double v = std::strtod(text, &end);
+    if (*end != '\0' || !(v >= 0.05 && v <= 86400.0))
+        throw InputError("AMBIENCE_PROGRESS_S",
+                         std::string("expected seconds from 0.05 to 86400, got '") + text + "'");
+    return v;
+}
+
+// "m:ss", or "h:mm:ss" from an hour on; "-:--" when unknown.
+static std::string clockText(double s) {
+    if (!std::isfinite(s) || s < 0.0) return "-:--";
+    const long t = std::lround(s);
+    char text[32];
+    if (t >= 3600)
+        std::snprintf(text, sizeof(text), "%ld:%02ld:%02ld", t / 3600, t / 60 % 60, t % 60);
+    else
+        std::snprintf(text, sizeof(text), "%ld:%02ld", t / 60, t % 60);
+    return text;
+}
+
+ProgressBar::ProgressBar(int total, std::string label, std::string unit)
+    : ProgressBar(total, std::move(label), std::move(unit), stderr, isatty(STDERR_FILENO) != 0,
+                  progressInterval_s()) {}
+
+ProgressBar::ProgressBar(int total, std::string label, std::string unit, std::FILE* to,
+                         bool terminal, double interval_s)
+    : total_(total),
+      label_(std::move(label)),
+      unit_(std::move(unit)),
+      to_(to),
+      terminal_(terminal),
+      interval_s_(interval_s),
+      started_s_(nowSeconds()) {}
+
+std::string ProgressBar::text(double now_s) const {
+    const double elapsed = now_s - started_s_;
+    const double rate = done_ > 0 ? done_ / std::max(elapsed, 1e-9) : 0.0;  // per second
+    char speed[48] = "";
+    if (done_ > 0 && unit_ == "frame")
+        std::snprintf(speed, sizeof(speed), ", %.1f fps", rate);
+    else if (done_ > 0 && rate >= 1.0)
+        std::snprintf(speed, sizeof(speed), ", %.1f %ss/s", rate, unit_.c_str());
+    else if (done_ > 0)
+        std::snprintf(speed, sizeof(speed), ", %.0f s/%s", 1.0 / rate, unit_.c_str());
+    const double left = done_ > 0 ? (total_ - done_) / rate : std::nan("");
+    char line[160];
+    std::snprintf(line, sizeof(line), "%s %d/%d (%d %%)%s, %s elapsed, %s left", unit_.c_str(),
+                  done_, total_, total_ > 0 ? int(100.0 * done_ / total_) : 100, speed,
+                  clockText(elapsed).c_str(), clockText(left).c_str());
+    return std::string(line) + (detail_.empty() ? "" : ", " + detail_);
+}
+
+void ProgressBar::draw(double now_s) {
+    lastDrawn_s_ = now_s;
+    drawnDone_ = done_;
+    drawn_ = true;
+    if (terminal_) {
+        const int width = 30;
+        const int filled =
+            total_ > 0 ? std::clamp(int(width * double(done_) / total_), 0, width) : width;
+        std::fprintf(to_, "\r\033[K[%s%s] %s", std::string(size_t(filled), '#').c_str(),
+                     std::string(size_t(width - filled), '.').c_str(), text(now_s).c_str());
+    } else {
+        std::fprintf(to_, "%s: %s\n", label_.c_str(), text(now_s).c_str());
+    }
+    std::fflush(to_);
+}
+
+void ProgressBar::update(int done, const std::string& detail) {
+    if (finished_) return;
+    done_ = done;
+    detail_ = detail;
+    const double now = nowSeconds();
+    // A terminal at most 10 times a second; a log every interval, counted from the start.
+    const double since = now - (lastDrawn_s_ < 0.0 ? started_s_ : lastDrawn_s_);
+    if (terminal_ ? (since >= 0.1 || done == total_) : since >= interval_s_) draw(now);
+}
 
 void ProgressBar::update(int done, double) {
-    if (!enabled_ || total_ <= 0) return;
-    const double elapsed = nowSeconds() - started_s_;
-    const double fps = done / std::max(elapsed, 1e-9);
-    const double eta = (total_ - done) / std::max(fps, 1e-9);
-    const int width = 30, filled = int(width * double(done) / total_);
-    std::fprintf(stderr, "\r[%s%s] %d/%d  %.1f fps  ETA %.0f s   ",
-                 std::string(size_t(filled), '#').c_str(),
-                 std::string(size_t(width - filled), '.').c_str(), done, total_, fps, eta);
-    std::fflush(stderr);
+    update(done, std::string());
+}
+
+void ProgressBar::note(const std::string& line) {
+    if (terminal_ && drawn_) std::fprintf(to_, "\r\033[K");
+    std::fprintf(to_, "%s\n", line.c_str());
+    if (terminal_ && drawn_) draw(nowSeconds());
+    std::fflush(to_);
 }
 
 void ProgressBar::finish() {
-    if (enabled_) std::fprintf(stderr, "\n");
+    if (finished_) return;
+    finished_ = true;
+    // Off a terminal the end once: not again when the last line already shows it.
+    if (terminal_ || drawnDone_ != done_) draw(nowSeconds());
+    if (terminal_) std::fprintf(to_, "\n");
+    std::fflush(to_);
+}
+
+bool isProgressLine(const std::string& line) {
+    // "<label>: <unit> <done>/<total> (<percent> %)" and more: what draw() writes off a terminal.
+    const std::size_t colon = line.find(": ");
+    if (colon == std::string::npos || colon == 0) return false;
+    std::istringstream in(line.substr(colon + 2));
+    std::string unit;
+    int done = 0, total = 0, percent = 0;
+    char slash = 0, open = 0;
+    std::string rest;
+    if (!(in >> unit >> done >> slash >> total >> open >> percent >> rest)) return false;
+    return slash == '/' && open == '(' && rest.rfind("%)", 0) == 0;
 }
 
 // ---- Memory ----------------------------------------------------------------------------------

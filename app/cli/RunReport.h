@@ -1,5 +1,6 @@
 // RunReport.h — what `ambience run` (and `view`) share: image size parsing, the ffmpeg video
-// pipe, the progress bar, and the report (JSON with timing statistics, per-frame rows, CSV).
+// pipe, the progress of long commands, and the report (JSON with timing statistics, per-frame
+// rows, CSV).
 #pragma once
 
 #include <cstdint>
@@ -41,18 +42,45 @@ class VideoPipe {
     size_t frameBytes_;
 };
 
-// Frames, fps and ETA on stderr, only when stderr is a terminal.
+// Progress of a long command (`run` frames, `bench` runs) on stderr, one implementation for
+// both. On a terminal: a bar redrawn in place. Elsewhere (CI logs, cluster jobs): a plain line
+// every few seconds, e.g. "run: frame 1200/2701 (44 %), 31.0 fps, 0:38 elapsed, 0:49 left",
+// and one at the end (unless the last already shows it). The interval is AMBIENCE_PROGRESS_S
+// seconds (default 5; 0.05 to 86400).
 class ProgressBar {
   public:
-    explicit ProgressBar(int total);
-    void update(int done, double frame_ms);
+    // `label` opens every line ("run", "bench"), `unit` names what is counted ("frame", "run").
+    explicit ProgressBar(int total, std::string label = "run", std::string unit = "frame");
+    // For tests: where to write, whether that is a terminal, and the line interval [s].
+    ProgressBar(int total, std::string label, std::string unit, std::FILE* to, bool terminal,
+                double interval_s);
+    // `done` of the total so far; draws when due (a terminal at most 10 times a second).
+    void update(int done, const std::string& detail = "");
+    void update(int done, double frame_ms);  // `run`'s per-frame call
+    // A line of its own (above the bar on a terminal), e.g. a run that failed.
+    void note(const std::string& line);
+    // The last state: the bar's line ended, or a final plain line.
     void finish();
+    bool terminal() const { return terminal_; }
 
   private:
-    int total_;
-    bool enabled_;
-    double started_s_;
+    void draw(double now_s);
+    std::string text(double now_s) const;  // the plain line without the label
+    int total_, done_ = 0;
+    std::string label_, unit_, detail_;
+    std::FILE* to_;
+    bool terminal_, drawn_ = false, finished_ = false;
+    double interval_s_, started_s_, lastDrawn_s_ = -1.0;
+    int drawnDone_ = -1;  // `done` in the last line drawn
 };
+
+// True for a line ProgressBar writes when not on a terminal (so a log's last lines can be read
+// without them).
+bool isProgressLine(const std::string& line);
+
+// The line interval from AMBIENCE_PROGRESS_S (default 5 s); InputError for a value that is not
+// a number of seconds from 0.05 to 86400.
+double progressInterval_s();
 
 struct TimingStats {
     double median = 0.0, p95 = 0.0, max = 0.0, mean = 0.0;

@@ -1,7 +1,11 @@
 // BenchCommand_test.cpp — `ambience run --measure-every` and `ambience bench` end to end on
 // short runs: results, summary, oracle reuse, a failing run recorded while the sweep goes on,
-// bad input.
+// bad input; a sweep emitted, run by GNU parallel and collected against the same sweep run
+// here; progress lines in a log.
+#include <sys/wait.h>
+
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -11,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "RunAmbience.h"
+#include "app/bench/BenchEmit.h"
 
 namespace amb::test {
 namespace {
@@ -188,6 +193,157 @@ TEST(BenchCommand, BadInputIsOneLineAndExitCode2) {
     const auto r = runAmbience("bench --sweep " + (dir / "bad.json").string());
     EXPECT_EQ(r.exitCode, 2);
     EXPECT_NE(r.err.find("points[0]"), std::string::npos) << r.err;
+}
+
+// Columns that time the run (wall clock or CPU): they differ from one run to the next.
+bool timingColumn(const std::string& name) {
+    auto endsWith = [&](const std::string& end) {
+        return name.size() >= end.size() &&
+               name.compare(name.size() - end.size(), end.size(), end) == 0;
+    };
+    return name == "wall_s" || name == "oracle_s" || name == "reference_s" ||
+           name == "share_of_frame" || endsWith("_ms_median") || endsWith("_ms_p95");
+}
+
+// A sweep (one short replay, two methods, a point that fails) emitted into a folder whose path
+// has a space and quotes, run by GNU parallel from elsewhere, and collected, gives the same
+// results.csv as the same sweep run by a local bench: the same rows, every column but the
+// timing ones equal (the simulation is deterministic), the failure with the same error.
+TEST(BenchCommand, EmittedSweepRunByParallelCollectsAsALocalBench) {
+    ASSERT_TRUE(test::onPath("parallel")) << "needs GNU parallel (Debian package parallel)";
+    const fs::path dir = scratchDir("bench-emit") / "it's a \"sweep\"";
+    fs::create_directories(dir);
+    const fs::path replays = dir / "my replays";
+    fs::create_directories(replays);
+    fs::copy_file(sourcePath("replays/highway-drive.json"), replays / "highway-drive.json");
+    std::ofstream(dir / "sweep points.json")
+        << R"({"points": [{"label": "broken", "methods": ["volume"], "volume": {"noSuchSetting": 1}}]})";
+    const std::string sweep = "--replays " + shellQuote((replays / "highway-drive.json").string()) +
+                              " --methods volume,constant --max-frames 60 --measure-every 20 "
+                              "--sweep " +
+                              shellQuote((dir / "sweep points.json").string());
+    const auto local =
+        runAmbience("bench " + sweep + " --jobs 2 --out " + shellQuote((dir / "local").string()));
+    ASSERT_EQ(local.exitCode, 0) << local.err;
+
+    const fs::path emitted = dir / "emit'ted";
+    const auto emit = runAmbience("bench " + sweep + " --emit " + shellQuote(emitted.string()));
+    ASSERT_EQ(emit.exitCode, 0) << emit.err;
+    EXPECT_EQ(lineCount(slurp((emitted / "commands.txt").string())), 3);
+    EXPECT_TRUE(fs::exists(emitted / "slurm.sh") && fs::exists(emitted / "README.txt"));
+    EXPECT_FALSE(fs::exists(emitted / "results.csv"));  // nothing ran
+    const std::string log = (dir / "parallel.log").string();
+    const int status =
+        std::system(("cd / && parallel --will-cite --jobs 2 < " +
+                     shellQuote((emitted / "jobs.txt").string()) + " >" + shellQuote(log) + " 2>&1")
+                        .c_str());
+    ASSERT_TRUE(WIFEXITED(status)) << slurp(log);
+    EXPECT_EQ(WEXITSTATUS(status), 1) << slurp(log);  // parallel: the number of failed runs
+    const auto collect = runAmbience("bench --collect " + shellQuote(emitted.string()));
+    ASSERT_EQ(collect.exitCode, 0) << collect.err;
+    EXPECT_NE(collect.out.find("3 runs (1 failed)"), std::string::npos) << collect.out;
+
+    const auto a = readCsv((dir / "local" / "results.csv").string());
+    const auto b = readCsv((emitted / "results.csv").string());
+    ASSERT_EQ(a.size(), 1u + 3u);
+    ASSERT_EQ(b.size(), a.size());
+    ASSERT_EQ(b[0], a[0]);
+    const auto& h = a[0];
+    // An error names the file it is about: the same one in each bench's own folder.
+    auto inOut = [](std::string text, const fs::path& out) {
+        for (std::size_t at; (at = text.find(out.string())) != std::string::npos;)
+            text.replace(at, out.string().size(), "<out>");
+        return text;
+    };
+    int compared = 0;
+    for (std::size_t r = 1; r < a.size(); ++r) {
+        ASSERT_EQ(b[r].size(), h.size());
+        for (std::size_t c = 0; c < h.size(); ++c) {
+            if (timingColumn(h[c])) continue;
+            EXPECT_EQ(inOut(b[r][c], emitted), inOut(a[r][c], dir / "local"))
+                << "row " << r << ", column " << h[c];
+            compared += !a[r][c].empty();
+        }
+        const bool broken = a[r][column(h, "point")] == "broken";
+        EXPECT_EQ(a[r][column(h, "status")], broken ? "failed" : "ok");
+        if (broken) {
+            EXPECT_NE(a[r][column(h, "error_message")].find("exit code 2: "), std::string::npos);
+            EXPECT_NE(a[r][column(h, "error_message")].find("noSuchSetting"), std::string::npos);
+        } else {
+            EXPECT_FALSE(a[r][column(h, "error_mean")].empty());
+        }
+        EXPECT_FALSE(b[r][column(h, "wall_s")].empty());
+    }
+    EXPECT_GT(compared, 2 * 30);  // the two runs that ran fill most columns
+    const std::string summary = slurp((emitted / "summary.md").string());
+    EXPECT_NE(summary.find("--collect"), std::string::npos);
+    EXPECT_NE(summary.find("volume (ours)"), std::string::npos);
+}
+
+// Runs that never ran are reported as failed, as a local bench reports a failed run; the
+// collector takes nothing but the folder, and --emit refuses what it cannot write out.
+TEST(BenchCommand, CollectReportsRunsThatDidNotRun) {
+    const fs::path dir = scratchDir("bench-collect");
+    const auto emit = runAmbience(
+        "bench --replays highway-drive --methods constant,hemisphere "
+        "--max-frames 30 --emit " +
+        (dir / "e").string());
+    ASSERT_EQ(emit.exitCode, 0) << emit.err;
+    // The first line only (the oracle run), from commands.txt.
+    const std::string first = slurp((dir / "e" / "commands.txt").string());
+    ASSERT_EQ(lineCount(first), 2);
+    const int status = std::system(first.substr(0, first.find('\n')).c_str());
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+    const auto collect = runAmbience("bench --collect " + (dir / "e").string());
+    ASSERT_EQ(collect.exitCode, 0) << collect.err;
+    const auto rows = readCsv((dir / "e" / "results.csv").string());
+    ASSERT_EQ(rows.size(), 3u);
+    const auto& h = rows[0];
+    EXPECT_EQ(rows[1][column(h, "method")], "constant");
+    EXPECT_EQ(rows[1][column(h, "status")], "ok");
+    EXPECT_EQ(rows[2][column(h, "method")], "hemisphere");
+    EXPECT_EQ(rows[2][column(h, "status")], "failed");
+    EXPECT_EQ(rows[2][column(h, "error_message")],
+              "not run: no runs/highway-drive__hemisphere__default/exit-status.txt");
+    // Nothing ran at all: every run failed, exit code 1, as a local bench in which nothing ran.
+    const auto again = runAmbience(
+        "bench --replays highway-drive --methods constant "
+        "--emit " +
+        (dir / "f").string());
+    ASSERT_EQ(again.exitCode, 0) << again.err;
+    const auto none = runAmbience("bench --collect " + (dir / "f").string());
+    EXPECT_EQ(none.exitCode, 1) << none.err;
+    for (const std::string& args :
+         {"bench --collect " + (dir / "e").string() + " --jobs 2",
+          "bench --collect " + (dir / "nowhere").string(),
+          "bench --tune --emit " + (dir / "g").string(),
+          "bench --emit " + (dir / "g").string() + " --out " + (dir / "h").string()}) {
+        const auto r = runAmbience(args);
+        EXPECT_EQ(r.exitCode, 2) << args;
+        EXPECT_EQ(r.errLines(), 1) << args << ": " << r.err;
+    }
+}
+
+// A bench with stderr in a file (not a terminal) writes plain progress lines at the interval
+// set, the run count rising to the total, with no carriage returns.
+TEST(BenchCommand, ProgressLinesWhenStderrIsAFile) {
+    const fs::path dir = scratchDir("bench-progress");
+    setenv("AMBIENCE_PROGRESS_S", "0.2", 1);
+    const auto r = runAmbience(
+        "bench --replays highway-drive --methods constant,hemisphere "
+        "--max-frames 60 --measure-every 20 --jobs 1 --out " +
+        dir.string());
+    unsetenv("AMBIENCE_PROGRESS_S");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_EQ(r.err.find('\r'), std::string::npos);
+    std::vector<std::string> progress;
+    std::istringstream in(r.err);
+    for (std::string line; std::getline(in, line);)
+        if (line.rfind("bench: run ", 0) == 0) progress.push_back(line);
+    ASSERT_GE(progress.size(), 3u) << r.err;  // two runs of several seconds each
+    EXPECT_EQ(progress.front().rfind("bench: run 0/2 (0 %), ", 0), 0u) << progress.front();
+    EXPECT_EQ(progress.back().rfind("bench: run 2/2 (100 %), ", 0), 0u) << progress.back();
+    EXPECT_NE(progress.back().find("last highway-drive/hemisphere/default"), std::string::npos);
 }
 
 }  // namespace
