@@ -42,6 +42,7 @@
 #include "app/frame/MethodStages.h"
 #include "app/platform/Platform.h"
 #include "lighting/Metrics.h"
+#include "world/DataPaths.h"
 #include "world/Error.h"
 
 extern char** environ;
@@ -904,15 +905,11 @@ void writeSummary(const std::vector<Job>& jobs, const std::string& path,
 }
 
 void drawPlots(const std::string& out) {
-    const fs::path exeDir = fs::path(selfExecutable()).parent_path();
-    fs::path script;
-    for (const fs::path& c : {exeDir / "bench-plots.py", exeDir / "../../app/bench/bench-plots.py"})
-        if (fs::exists(c)) {
-            script = c;
-            break;
-        }
+    // Beside the executable in the build tree, in P/share/ambience when installed (DataPaths.h).
+    const fs::path script = findDataFile("bench-plots.py");
     if (script.empty()) {
-        std::fprintf(stderr, "plots skipped: bench-plots.py not found beside the executable\n");
+        std::fprintf(stderr, "plots skipped: bench-plots.py found neither beside the executable "
+                             "nor in its installed data folder\n");
         return;
     }
     // Debian's Python (the one python3-matplotlib installs into), else the first on PATH.
