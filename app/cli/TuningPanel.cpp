@@ -548,7 +548,9 @@ void TuningPanel::drawAnchors() {
         ImGui::TableNextColumn();
         ImGui::Text("%d", L);
         ImGui::TableNextColumn();
-        if (volume) ImGui::Text("%.3g", volume->store().spacing_m(L));
+        // (The record may be of the method before a rebuild, with other levels.)
+        if (volume && L < volume->store().levels())
+            ImGui::Text("%.3g", volume->store().spacing_m(L));
         ImGui::TableNextColumn();
         ImGui::Text("%zu", a.anchorsPerLevel[std::size_t(L)]);
     }
