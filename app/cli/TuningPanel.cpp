@@ -291,7 +291,6 @@ TuningPanel::TuningPanel(void* window, LiveMethod& method, std::string configPat
     ImGui::StyleColorsDark();
     ImGui_ImplGlfw_InitForOpenGL(static_cast<GLFWwindow*>(window_), true);
     renderer_ = std::make_unique<PanelRenderer>();
-    draft_ = method_.settings();
 }
 
 TuningPanel::~TuningPanel() {
@@ -365,7 +364,6 @@ bool TuningPanel::applyCandidate(const AmbienceVolumeSettings& candidate, const 
         checked = ambienceSettingsFromJson(settingsToJson(candidate), what);
     } catch (const InputError& e) {
         error_ = e.what();
-        draft_ = method_.settings();
         return false;
     }
     error_.clear();
@@ -375,7 +373,6 @@ bool TuningPanel::applyCandidate(const AmbienceVolumeSettings& candidate, const 
     } else {
         notice_ = what + ": applied in place";
     }
-    draft_ = method_.settings();
     return true;
 }
 
@@ -581,9 +578,13 @@ void TuningPanel::drawError() {
     plotRing("##error", errorHistory_.data(), errorCount_, errorNext_, kHistory, "error", 40.0f);
 }
 
-// One setting's widget; true when its value changed this frame (applied, or drafted).
+// One setting's widget, through set() like every other change; true when its value changed.
+// Settings that apply in place (and switches) are set at once; the others, which rebuild the
+// method, when the slider is let go, so that a drag rebuilds once (the slider shows the draft
+// meanwhile).
 bool TuningPanel::settingWidget(const SettingInfo& info) {
-    double v = settingValue(draft_, info);
+    const bool drafted = drafting_ == &info;
+    double v = settingValue(drafted ? draft_ : method_.settings(), info);
     bool changed = false;
     switch (info.kind) {
         case Kind::Boolean: {
@@ -606,21 +607,21 @@ bool TuningPanel::settingWidget(const SettingInfo& info) {
             break;
     }
     std::string help = info.help;
-    help += info.rebuilds ? "\nChanging it rebuilds the method (applied when the slider is let go): "
-                            "its anchors start over."
+    help += info.rebuilds ? "\nChanging it rebuilds the method (when the slider is let go): its "
+                            "anchors start over."
                           : "\nApplies in place, from the next frame on.";
     help += "\nCtrl+click a slider to type a value.";
     tooltip(help);
-    if (changed) {
+    if (changed && (!info.rebuilds || info.kind == Kind::Boolean)) {
+        set(info.key, v);
+    } else if (changed) {
+        if (!drafted) draft_ = method_.settings();
         setSettingValue(draft_, info, v);
-        drafting_ = true;
+        drafting_ = &info;
     }
-    // Live settings (and switches) apply at once; the others when the widget is let go, so a
-    // drag rebuilds the method once.
-    const bool now = changed && (!info.rebuilds || info.kind == Kind::Boolean);
-    if (now || (drafting_ && ImGui::IsItemDeactivatedAfterEdit())) {
-        drafting_ = false;
-        applyCandidate(draft_, info.key);
+    if (drafting_ == &info && ImGui::IsItemDeactivatedAfterEdit()) {
+        drafting_ = nullptr;
+        set(info.key, settingValue(draft_, info));
     }
     return changed;
 }

@@ -152,9 +152,9 @@ class TuningPanel {
     std::unique_ptr<PanelRenderer> renderer_;
     bool built_ = false;  // build() ran since the last render()
     std::string error_, notice_;
-    // Drafts of settings that rebuild the method, applied when the widget is let go.
+    // The draft of a setting that rebuilds the method while its slider is held (set() when let go).
     AmbienceVolumeSettings draft_;
-    bool drafting_ = false;
+    const SettingInfo* drafting_ = nullptr;
     // History for the plots.
     static constexpr int kHistory = 240;
     std::array<std::array<float, kHistory>, kFrameStages + 1> stageHistory_{};  // + frame
