@@ -133,6 +133,8 @@ class TuningPanel {
         double seconds = 0.0;       // wall time of the oracle captures
     };
     const Measurement& lastMeasurement() const { return measurement_; }
+    // The panel's own CPU time in the latest frame (widgets and draw) [ms]; not a stage's.
+    double panel_ms() const { return panel_ms_; }
 
   private:
     bool applyCandidate(const AmbienceVolumeSettings& candidate, const std::string& what);
@@ -151,6 +153,7 @@ class TuningPanel {
     double replayDuration_s_;
     std::unique_ptr<PanelRenderer> renderer_;
     bool built_ = false;  // build() ran since the last render()
+    double build_ms_ = 0.0, panel_ms_ = 0.0;  // its own CPU time: widgets, and widgets + draw
     std::string error_, notice_;
     // The draft of a setting that rebuilds the method while its slider is held (set() when let go).
     AmbienceVolumeSettings draft_;
