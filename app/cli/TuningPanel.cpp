@@ -318,7 +318,7 @@ void TuningPanel::build(ViewControls& controls) {
     if (ImGui::Begin("Tuning (Tab hides)")) {
         ImGui::Text("method %s, frame %d, %.1f ms (%.0f fps)", method_.name().c_str(), last_.index,
                     last_.frame_ms, last_.frame_ms > 0.0 ? 1000.0 / last_.frame_ms : 0.0);
-        ImGui::TextDisabled("the panel itself: %.2f ms a frame (not in the stage times)", panel_ms_);
+        ImGui::TextDisabled("the panel: %.2f ms a frame (in no stage)", panel_ms_);
         if (!error_.empty()) ImGui::TextColored(ImVec4(1.0f, 0.4f, 0.3f, 1.0f), "%s", error_.c_str());
         if (!notice_.empty()) ImGui::TextDisabled("%s", notice_.c_str());
         drawReplay(controls);
@@ -486,8 +486,9 @@ void plotRing(const char* label, const float* values, int count, int next, int c
     const int offset = count < capacity ? 0 : next;
     float hi = 0.0f;
     for (int i = 0; i < count; ++i) hi = std::max(hi, values[i]);
+    // (A negative width fills the window.)
     ImGui::PlotLines(label, values, count, offset, overlay, 0.0f, std::max(hi * 1.1f, 1e-3f),
-                     ImVec2(0.0f, height));
+                     ImVec2(-1.0f, height));
 }
 
 }  // namespace
@@ -530,7 +531,7 @@ void TuningPanel::drawTimings() {
         std::snprintf(overlay, sizeof overlay, "%s %.2f ms", name, double(h[now]));
         ImGui::PushID(s);
         plotRing("", h.data(), historyCount_, historyNext_, kHistory, overlay,
-                 s < kFrameStages ? 26.0f : 40.0f);
+                 s < kFrameStages ? 22.0f : 36.0f);
         ImGui::PopID();
     }
 }
