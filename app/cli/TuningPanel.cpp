@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <utility>
 
 #include <imgui.h>
@@ -66,146 +67,150 @@ namespace {
 using Kind = SettingInfo::Kind;
 using S = AmbienceVolumeSettings;
 
-// One row: key, kind, widget range, logarithmic, help, the field.
+// One row: key, kind, widget range, logarithmic, help, the field (rebuilds: see makeTable).
+const SettingInfo kRows[] = {
+    // store (lighting/AnchorStore.h)
+    {"store.coarsestSpacing_m", Kind::Number, 27.0, 2187.0, true,
+     "spacing of the coarsest lattice level [m]; level L has s_0 / 3^L",
+     [](S& s) -> void* { return &s.store.coarsestSpacing_m; }, false},
+    {"store.levels", Kind::Integer, 1, 8, false,
+     "lattice levels (the finest is s_0 / 3^(levels - 1))",
+     [](S& s) -> void* { return &s.store.levels; }, false},
+    {"store.blendTime_s", Kind::Number, 0.0, 10.0, false,
+     "a refreshed anchor blends, a new one fades in, over this time [s]",
+     [](S& s) -> void* { return &s.store.blendTime_s; }, false},
+    {"store.allowedSunAngle_rad", Kind::Number, 0.001, 0.5, true,
+     "a capture is out of date once the sun has moved this far [rad]",
+     [](S& s) -> void* { return &s.store.allowedSunAngle_rad; }, false},
+    {"store.minLifetime_s", Kind::Number, 0.1, 600.0, true, "shortest anchor lifetime [s]",
+     [](S& s) -> void* { return &s.store.minLifetime_s; }, false},
+    {"store.maxLifetime_s", Kind::Number, 1.0, 3600.0, true,
+     "longest anchor lifetime (also while time stands still) [s]",
+     [](S& s) -> void* { return &s.store.maxLifetime_s; }, false},
+    {"store.regenerateFraction", Kind::Number, 0.0, 1.0, false,
+     "an anchor asks for a new capture after this fraction of its lifetime",
+     [](S& s) -> void* { return &s.store.regenerateFraction; }, false},
+    {"store.searchCells", Kind::Integer, 1, 16, false, "nearest-anchor search, in cells",
+     [](S& s) -> void* { return &s.store.searchCells; }, false},
+    {"store.reachCells", Kind::Integer, 1, 16, false,
+     "a hole takes the residuals of the anchors within this many cells",
+     [](S& s) -> void* { return &s.store.reachCells; }, false},
+    {"store.coarseReachCells", Kind::Integer, 1, 16, false, "the same at the coarsest level",
+     [](S& s) -> void* { return &s.store.coarseReachCells; }, false},
+    {"store.finerWeight", Kind::Number, 0.0, 1.0, false,
+     "weight of the finer levels' anchors in a hole's fill",
+     [](S& s) -> void* { return &s.store.finerWeight; }, false},
+    {"store.smoothInterpolation", Kind::Boolean, 0, 1, false,
+     "bicubic Hermite cells (C1); off: bilinear",
+     [](S& s) -> void* { return &s.store.smoothInterpolation; }, false},
+    {"store.bilinearFixedPoints", Kind::Boolean, 0, 1, false,
+     "terrain corners and road vertices read bilinear cells",
+     [](S& s) -> void* { return &s.store.bilinearFixedPoints; }, false},
+    // scheduler (lighting/ProbeScheduler.h)
+    {"scheduler.velocityTimeConstant_s", Kind::Number, 0.0, 5.0, false,
+     "inertia of the velocity filter [s]",
+     [](S& s) -> void* { return &s.scheduler.velocityTimeConstant_s; }, false},
+    {"scheduler.horizon_s", Kind::Number, 0.0, 10.0, false,
+     "how far ahead the path is predicted [s]",
+     [](S& s) -> void* { return &s.scheduler.horizon_s; }, false},
+    {"scheduler.pathStep_s", Kind::Number, 0.01, 2.0, true, "spacing of the path samples [s]",
+     [](S& s) -> void* { return &s.scheduler.pathStep_s; }, false},
+    {"scheduler.historyLength_s", Kind::Number, 0.0, 10.0, false, "position history kept [s]",
+     [](S& s) -> void* { return &s.scheduler.historyLength_s; }, false},
+    {"scheduler.roadSnap_m", Kind::Number, 0.0, 50.0, false,
+     "within the road's half width + this the camera is on it [m]",
+     [](S& s) -> void* { return &s.scheduler.roadSnap_m; }, false},
+    {"scheduler.roadAlignment", Kind::Number, 0.0, 1.0, false,
+     "|cos| between motion and road needed to follow the road",
+     [](S& s) -> void* { return &s.scheduler.roadAlignment; }, false},
+    {"scheduler.corridorCells", Kind::Number, 0.1, 16.0, true,
+     "width of the finest-level corridor along the path [cells]",
+     [](S& s) -> void* { return &s.scheduler.corridorCells; }, false},
+    {"scheduler.maxLevel", Kind::Integer, 0, 7, false, "never capture finer than this level",
+     [](S& s) -> void* { return &s.scheduler.maxLevel; }, false},
+    {"scheduler.finestRingCells", Kind::Number, 0.0, 8.0, false,
+     "finest-level candidates within this many cells of the path",
+     [](S& s) -> void* { return &s.scheduler.finestRingCells; }, false},
+    {"scheduler.coarseRingCells", Kind::Number, 0.0, 8.0, false,
+     "coarser-level candidates within this many cells of the path",
+     [](S& s) -> void* { return &s.scheduler.coarseRingCells; }, false},
+    {"scheduler.maxWiden", Kind::Integer, 0, 8, false,
+     "doublings of the rings when everything near is fresh",
+     [](S& s) -> void* { return &s.scheduler.maxWiden; }, false},
+    {"scheduler.minReachSpeed_mps", Kind::Number, 0.1, 100.0, true,
+     "speed assumed for the time to reach a point when slower [m/s]",
+     [](S& s) -> void* { return &s.scheduler.minReachSpeed_mps; }, false},
+    {"scheduler.gapBonus_s", Kind::Number, -5.0, 5.0, false,
+     "priority of a point with no anchor of its level near it [s]",
+     [](S& s) -> void* { return &s.scheduler.gapBonus_s; }, false},
+    {"scheduler.staleBias_s", Kind::Number, -5.0, 5.0, false,
+     "cost of refreshing an anchor that asks for it, at urgency 0 [s]",
+     [](S& s) -> void* { return &s.scheduler.staleBias_s; }, false},
+    {"scheduler.adaptiveThreshold", Kind::Number, 0.0, 1.0, false,
+     "adaptive density: skip a finer point where the coarser anchors agree within this (0: off)",
+     [](S& s) -> void* { return &s.scheduler.adaptiveThreshold; }, false},
+    // capture, shared by every capturing method (lighting/CaptureCore.h)
+    {"facesPerFrame", Kind::Integer, 1, kMaxFacesPerFrame, false,
+     "capture budget: cube faces per frame (a probe is 6)",
+     [](S& s) -> void* { return &s.capture.facesPerFrame; }, false},
+    {"sunThreshold", Kind::Number, 100.0, 1e7, true,
+     "texels brighter than this are the sun disc, left out of the SH [W sr^-1 m^-2]",
+     [](S& s) -> void* { return &s.capture.sunThreshold; }, false},
+    {"maxAside_m", Kind::Number, 0.0, 20.0, false, "how far a probe may move out of solids [m]",
+     [](S& s) -> void* { return &s.capture.maxAside_m; }, false},
+    {"defaultTimeRate_hPerS", Kind::Number, -0.01, 0.01, false,
+     "rate of the time of day before it is measured [h/s] (at the start only)",
+     [](S& s) -> void* { return &s.capture.defaultTimeRate_hPerS; }, false},
+    {"timeJump_h", Kind::Number, 0.0, 12.0, false,
+     "a larger change of the time of day in one frame is a jump [h]",
+     [](S& s) -> void* { return &s.capture.timeJump_h; }, false},
+    {"teleportDistance_m", Kind::Number, 0.0, 1000.0, false,
+     "a camera step longer than this + 3 x speed x dt is a teleport [m]",
+     [](S& s) -> void* { return &s.capture.teleportDistance_m; }, false},
+    {"fallbackFaceSize", Kind::Integer, 1, 64, false, "cube map size of the sky fallback",
+     [](S& s) -> void* { return &s.capture.fallbackFaceSize; }, false},
+    {"fallbackRefresh_h", Kind::Number, 0.0, 1.0, false,
+     "recompute the fallback after this much day time [h]",
+     [](S& s) -> void* { return &s.capture.fallbackRefresh_h; }, false},
+    // the volume's own (lighting/AmbienceVolume.h)
+    {"nominalFrameTime_s", Kind::Number, 0.001, 0.1, true,
+     "frame time assumed before one is seen [s] (at the start only)",
+     [](S& s) -> void* { return &s.nominalFrameTime_s; }, false},
+    {"asideFraction", Kind::Number, 0.0, 2.0, false,
+     "a probe may move aside this x its level's spacing (and at most maxAside_m)",
+     [](S& s) -> void* { return &s.asideFraction; }, false},
+    {"relightBySkyLevel", Kind::Boolean, 0, 1, false,
+     "read stale anchors scaled by the sky level now over the sky level at their capture",
+     [](S& s) -> void* { return &s.relightBySkyLevel; }, false},
+    // the near field (lighting/NearField.h)
+    {"nearField.enabled", Kind::Boolean, 0, 1, false, "the two-scale ambience",
+     [](S& s) -> void* { return &s.capture.nearField.enabled; }, false},
+    {"nearField.radius_m", Kind::Number, 0.0, 60.0, false,
+     "occluders this close to a shading point are put back there [m]",
+     [](S& s) -> void* { return &s.capture.nearField.radius_m; }, false},
+    {"nearField.captureRadius_m", Kind::Number, 0.0, 60.0, false,
+     "probes leave out the plants this close to them [m]",
+     [](S& s) -> void* { return &s.capture.nearField.captureRadius_m; }, false},
+    {"nearField.plants", Kind::Boolean, 0, 1, false, "trees, bushes and rocks as spheres",
+     [](S& s) -> void* { return &s.capture.nearField.plants; }, false},
+    {"nearField.smallRadius_m", Kind::Number, 0.0, 200.0, false,
+     "bushes and rocks (never captured) are near out to this [m]",
+     [](S& s) -> void* { return &s.capture.nearField.smallRadius_m; }, false},
+    {"nearField.terrain", Kind::Boolean, 0, 1, false, "the terrain's near horizon",
+     [](S& s) -> void* { return &s.capture.nearField.terrain; }, false},
+    {"nearField.terrainRadius_m", Kind::Number, 1.0, 200.0, false,
+     "how far the near horizon is searched [m]",
+     [](S& s) -> void* { return &s.capture.nearField.terrainRadius_m; }, false},
+    {"nearField.cacheEntries", Kind::Integer, 1, 1 << 20, true,
+     "points cached with their transfer before the cache is emptied",
+     [](S& s) -> void* { return &s.capture.nearField.cacheEntries; }, false},
+    {"nearField.objectRange_m", Kind::Number, 0.0, 1000.0, false,
+     "objects farther than this from the camera take the far field alone [m]",
+     [](S& s) -> void* { return &s.capture.nearField.objectRange_m; }, false},
+};
+
 std::vector<SettingInfo> makeTable() {
-    std::vector<SettingInfo> t = {
-        // store (lighting/AnchorStore.h)
-        {"store.coarsestSpacing_m", Kind::Number, 27.0, 2187.0, true,
-         "spacing of the coarsest lattice level [m]; level L has s_0 / 3^L",
-         [](S& s) -> void* { return &s.store.coarsestSpacing_m; }, false},
-        {"store.levels", Kind::Integer, 1, 8, false, "lattice levels (the finest is s_0 / 3^(levels - 1))",
-         [](S& s) -> void* { return &s.store.levels; }, false},
-        {"store.blendTime_s", Kind::Number, 0.0, 10.0, false,
-         "a refreshed anchor blends, a new one fades in, over this time [s]",
-         [](S& s) -> void* { return &s.store.blendTime_s; }, false},
-        {"store.allowedSunAngle_rad", Kind::Number, 0.001, 0.5, true,
-         "a capture is out of date once the sun has moved this far [rad]",
-         [](S& s) -> void* { return &s.store.allowedSunAngle_rad; }, false},
-        {"store.minLifetime_s", Kind::Number, 0.1, 600.0, true, "shortest anchor lifetime [s]",
-         [](S& s) -> void* { return &s.store.minLifetime_s; }, false},
-        {"store.maxLifetime_s", Kind::Number, 1.0, 3600.0, true,
-         "longest anchor lifetime (also while time stands still) [s]",
-         [](S& s) -> void* { return &s.store.maxLifetime_s; }, false},
-        {"store.regenerateFraction", Kind::Number, 0.0, 1.0, false,
-         "an anchor asks for a new capture after this fraction of its lifetime",
-         [](S& s) -> void* { return &s.store.regenerateFraction; }, false},
-        {"store.searchCells", Kind::Integer, 1, 16, false, "nearest-anchor search, in cells",
-         [](S& s) -> void* { return &s.store.searchCells; }, false},
-        {"store.reachCells", Kind::Integer, 1, 16, false,
-         "a hole takes the residuals of the anchors within this many cells",
-         [](S& s) -> void* { return &s.store.reachCells; }, false},
-        {"store.coarseReachCells", Kind::Integer, 1, 16, false, "the same at the coarsest level",
-         [](S& s) -> void* { return &s.store.coarseReachCells; }, false},
-        {"store.finerWeight", Kind::Number, 0.0, 1.0, false,
-         "weight of the finer levels' anchors in a hole's fill",
-         [](S& s) -> void* { return &s.store.finerWeight; }, false},
-        {"store.smoothInterpolation", Kind::Boolean, 0, 1, false,
-         "bicubic Hermite cells (C1); off: bilinear",
-         [](S& s) -> void* { return &s.store.smoothInterpolation; }, false},
-        {"store.bilinearFixedPoints", Kind::Boolean, 0, 1, false,
-         "terrain corners and road vertices read bilinear cells",
-         [](S& s) -> void* { return &s.store.bilinearFixedPoints; }, false},
-        // scheduler (lighting/ProbeScheduler.h)
-        {"scheduler.velocityTimeConstant_s", Kind::Number, 0.0, 5.0, false,
-         "inertia of the velocity filter [s]",
-         [](S& s) -> void* { return &s.scheduler.velocityTimeConstant_s; }, false},
-        {"scheduler.horizon_s", Kind::Number, 0.0, 10.0, false, "how far ahead the path is predicted [s]",
-         [](S& s) -> void* { return &s.scheduler.horizon_s; }, false},
-        {"scheduler.pathStep_s", Kind::Number, 0.01, 2.0, true, "spacing of the path samples [s]",
-         [](S& s) -> void* { return &s.scheduler.pathStep_s; }, false},
-        {"scheduler.historyLength_s", Kind::Number, 0.0, 10.0, false, "position history kept [s]",
-         [](S& s) -> void* { return &s.scheduler.historyLength_s; }, false},
-        {"scheduler.roadSnap_m", Kind::Number, 0.0, 50.0, false,
-         "within the road's half width + this the camera is on it [m]",
-         [](S& s) -> void* { return &s.scheduler.roadSnap_m; }, false},
-        {"scheduler.roadAlignment", Kind::Number, 0.0, 1.0, false,
-         "|cos| between motion and road needed to follow the road",
-         [](S& s) -> void* { return &s.scheduler.roadAlignment; }, false},
-        {"scheduler.corridorCells", Kind::Number, 0.1, 16.0, true,
-         "width of the finest-level corridor along the path [cells]",
-         [](S& s) -> void* { return &s.scheduler.corridorCells; }, false},
-        {"scheduler.maxLevel", Kind::Integer, 0, 7, false, "never capture finer than this level",
-         [](S& s) -> void* { return &s.scheduler.maxLevel; }, false},
-        {"scheduler.finestRingCells", Kind::Number, 0.0, 8.0, false,
-         "finest-level candidates within this many cells of the path",
-         [](S& s) -> void* { return &s.scheduler.finestRingCells; }, false},
-        {"scheduler.coarseRingCells", Kind::Number, 0.0, 8.0, false,
-         "coarser-level candidates within this many cells of the path",
-         [](S& s) -> void* { return &s.scheduler.coarseRingCells; }, false},
-        {"scheduler.maxWiden", Kind::Integer, 0, 8, false,
-         "doublings of the rings when everything near is fresh",
-         [](S& s) -> void* { return &s.scheduler.maxWiden; }, false},
-        {"scheduler.minReachSpeed_mps", Kind::Number, 0.1, 100.0, true,
-         "speed assumed for the time to reach a point when slower [m/s]",
-         [](S& s) -> void* { return &s.scheduler.minReachSpeed_mps; }, false},
-        {"scheduler.gapBonus_s", Kind::Number, -5.0, 5.0, false,
-         "priority of a point with no anchor of its level near it [s]",
-         [](S& s) -> void* { return &s.scheduler.gapBonus_s; }, false},
-        {"scheduler.staleBias_s", Kind::Number, -5.0, 5.0, false,
-         "cost of refreshing an anchor that asks for it, at urgency 0 [s]",
-         [](S& s) -> void* { return &s.scheduler.staleBias_s; }, false},
-        {"scheduler.adaptiveThreshold", Kind::Number, 0.0, 1.0, false,
-         "adaptive density: skip a finer point where the coarser anchors agree within this (0: off)",
-         [](S& s) -> void* { return &s.scheduler.adaptiveThreshold; }, false},
-        // capture, shared by every capturing method (lighting/CaptureCore.h)
-        {"facesPerFrame", Kind::Integer, 1, kMaxFacesPerFrame, false,
-         "capture budget: cube faces per frame (a probe is 6)",
-         [](S& s) -> void* { return &s.capture.facesPerFrame; }, false},
-        {"sunThreshold", Kind::Number, 100.0, 1e7, true,
-         "texels brighter than this are the sun disc, left out of the SH [W sr^-1 m^-2]",
-         [](S& s) -> void* { return &s.capture.sunThreshold; }, false},
-        {"maxAside_m", Kind::Number, 0.0, 20.0, false, "how far a probe may move out of solids [m]",
-         [](S& s) -> void* { return &s.capture.maxAside_m; }, false},
-        {"defaultTimeRate_hPerS", Kind::Number, -0.01, 0.01, false,
-         "rate of the time of day before it is measured [h/s] (at the start only)",
-         [](S& s) -> void* { return &s.capture.defaultTimeRate_hPerS; }, false},
-        {"timeJump_h", Kind::Number, 0.0, 12.0, false,
-         "a larger change of the time of day in one frame is a jump [h]",
-         [](S& s) -> void* { return &s.capture.timeJump_h; }, false},
-        {"teleportDistance_m", Kind::Number, 0.0, 1000.0, false,
-         "a camera step longer than this + 3 x speed x dt is a teleport [m]",
-         [](S& s) -> void* { return &s.capture.teleportDistance_m; }, false},
-        {"fallbackFaceSize", Kind::Integer, 1, 64, false, "cube map size of the sky fallback",
-         [](S& s) -> void* { return &s.capture.fallbackFaceSize; }, false},
-        {"fallbackRefresh_h", Kind::Number, 0.0, 1.0, false,
-         "recompute the fallback after this much day time [h]",
-         [](S& s) -> void* { return &s.capture.fallbackRefresh_h; }, false},
-        // the volume's own (lighting/AmbienceVolume.h)
-        {"nominalFrameTime_s", Kind::Number, 0.001, 0.1, true,
-         "frame time assumed before one is seen [s] (at the start only)",
-         [](S& s) -> void* { return &s.nominalFrameTime_s; }, false},
-        {"asideFraction", Kind::Number, 0.0, 2.0, false,
-         "a probe may move aside this x its level's spacing (and at most maxAside_m)",
-         [](S& s) -> void* { return &s.asideFraction; }, false},
-        {"relightBySkyLevel", Kind::Boolean, 0, 1, false,
-         "read stale anchors scaled by the sky level now over the sky level at their capture",
-         [](S& s) -> void* { return &s.relightBySkyLevel; }, false},
-        // the near field (lighting/NearField.h)
-        {"nearField.enabled", Kind::Boolean, 0, 1, false, "the two-scale ambience",
-         [](S& s) -> void* { return &s.capture.nearField.enabled; }, false},
-        {"nearField.radius_m", Kind::Number, 0.0, 60.0, false,
-         "occluders this close to a shading point are put back there [m]",
-         [](S& s) -> void* { return &s.capture.nearField.radius_m; }, false},
-        {"nearField.captureRadius_m", Kind::Number, 0.0, 60.0, false,
-         "probes leave out the plants this close to them [m]",
-         [](S& s) -> void* { return &s.capture.nearField.captureRadius_m; }, false},
-        {"nearField.plants", Kind::Boolean, 0, 1, false, "trees, bushes and rocks as spheres",
-         [](S& s) -> void* { return &s.capture.nearField.plants; }, false},
-        {"nearField.smallRadius_m", Kind::Number, 0.0, 200.0, false,
-         "bushes and rocks (never captured) are near out to this [m]",
-         [](S& s) -> void* { return &s.capture.nearField.smallRadius_m; }, false},
-        {"nearField.terrain", Kind::Boolean, 0, 1, false, "the terrain's near horizon",
-         [](S& s) -> void* { return &s.capture.nearField.terrain; }, false},
-        {"nearField.terrainRadius_m", Kind::Number, 1.0, 200.0, false,
-         "how far the near horizon is searched [m]",
-         [](S& s) -> void* { return &s.capture.nearField.terrainRadius_m; }, false},
-        {"nearField.cacheEntries", Kind::Integer, 1, 1 << 20, true,
-         "points cached with their transfer before the cache is emptied",
-         [](S& s) -> void* { return &s.capture.nearField.cacheEntries; }, false},
-        {"nearField.objectRange_m", Kind::Number, 0.0, 1000.0, false,
-         "objects farther than this from the camera take the far field alone [m]",
-         [](S& s) -> void* { return &s.capture.nearField.objectRange_m; }, false},
-    };
+    std::vector<SettingInfo> t(std::begin(kRows), std::end(kRows));
     // Whether a change rebuilds: ask the volume (one truth), with each field moved alone.
     const AmbienceVolumeSettings defaults;
     for (SettingInfo& info : t) {
@@ -243,9 +248,12 @@ const SettingInfo* findSetting(const std::string& key) {
 double settingValue(const AmbienceVolumeSettings& settings, const SettingInfo& info) {
     void* p = info.field(const_cast<AmbienceVolumeSettings&>(settings));
     switch (info.kind) {
-        case Kind::Number: return *static_cast<double*>(p);
-        case Kind::Integer: return double(*static_cast<int*>(p));
-        case Kind::Boolean: return *static_cast<bool*>(p) ? 1.0 : 0.0;
+        case Kind::Number:
+            return *static_cast<double*>(p);
+        case Kind::Integer:
+            return double(*static_cast<int*>(p));
+        case Kind::Boolean:
+            return *static_cast<bool*>(p) ? 1.0 : 0.0;
     }
     return 0.0;
 }
@@ -253,9 +261,15 @@ double settingValue(const AmbienceVolumeSettings& settings, const SettingInfo& i
 void setSettingValue(AmbienceVolumeSettings& settings, const SettingInfo& info, double value) {
     void* p = info.field(settings);
     switch (info.kind) {
-        case Kind::Number: *static_cast<double*>(p) = value; break;
-        case Kind::Integer: *static_cast<int*>(p) = int(std::lround(value)); break;
-        case Kind::Boolean: *static_cast<bool*>(p) = value != 0.0; break;
+        case Kind::Number:
+            *static_cast<double*>(p) = value;
+            break;
+        case Kind::Integer:
+            *static_cast<int*>(p) = int(std::lround(value));
+            break;
+        case Kind::Boolean:
+            *static_cast<bool*>(p) = value != 0.0;
+            break;
     }
 }
 
@@ -268,15 +282,22 @@ std::string settingsToJson(const AmbienceVolumeSettings& settings) {
         const double v = settingValue(settings, info);
         nlohmann::ordered_json& slot = (*at)[parts.back()];
         switch (info.kind) {
-            case Kind::Number: slot = v; break;
-            case Kind::Integer: slot = int(v); break;
-            case Kind::Boolean: slot = v != 0.0; break;
+            case Kind::Number:
+                slot = v;
+                break;
+            case Kind::Integer:
+                slot = int(v);
+                break;
+            case Kind::Boolean:
+                slot = v != 0.0;
+                break;
         }
     }
     return root.dump(2) + "\n";
 }
 
-// ---- [SECTION] TuningPanel: construction and the frame -------------------------------------------
+// ---- [SECTION] TuningPanel: construction and the frame
+// -------------------------------------------
 
 TuningPanel::TuningPanel(void* window, LiveMethod& method, std::string configPath,
                          double replayDuration_s)
@@ -319,7 +340,8 @@ void TuningPanel::build(ViewControls& controls) {
         ImGui::Text("method %s, frame %d, %.1f ms (%.0f fps)", method_.name().c_str(), last_.index,
                     last_.frame_ms, last_.frame_ms > 0.0 ? 1000.0 / last_.frame_ms : 0.0);
         ImGui::TextDisabled("the panel: %.2f ms a frame (in no stage)", panel_ms_);
-        if (!error_.empty()) ImGui::TextColored(ImVec4(1.0f, 0.4f, 0.3f, 1.0f), "%s", error_.c_str());
+        if (!error_.empty())
+            ImGui::TextColored(ImVec4(1.0f, 0.4f, 0.3f, 1.0f), "%s", error_.c_str());
         if (!notice_.empty()) ImGui::TextDisabled("%s", notice_.c_str());
         drawReplay(controls);
         drawView(controls);
@@ -331,14 +353,16 @@ void TuningPanel::build(ViewControls& controls) {
     ImGui::End();
     ImGui::Render();
     built_ = true;
-    build_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    build_ms_ =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
 void TuningPanel::frameDone(const FrameRecord& record, const CameraSample& camera,
                             double timeOfDay_h) {
     last_ = record;
     for (int s = 0; s < kFrameStages; ++s)
-        stageHistory_[std::size_t(s)][std::size_t(historyNext_)] = float(record.stage_ms[std::size_t(s)]);
+        stageHistory_[std::size_t(s)][std::size_t(historyNext_)] =
+            float(record.stage_ms[std::size_t(s)]);
     stageHistory_[kFrameStages][std::size_t(historyNext_)] = float(record.frame_ms);
     historyNext_ = (historyNext_ + 1) % kHistory;
     historyCount_ = std::min(historyCount_ + 1, kHistory);
@@ -356,12 +380,14 @@ int TuningPanel::render(int windowWidth, int windowHeight) {
     ImDrawData* data = ImGui::GetDrawData();
     renderer_->draw(data, windowWidth, windowHeight);
     // (The draw's GL work finishes with the frame's swap; this is its CPU part.)
-    panel_ms_ = build_ms_ +
-                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    panel_ms_ =
+        build_ms_ +
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return data ? data->TotalVtxCount : 0;
 }
 
-// ---- [SECTION] TuningPanel: the setters ------------------------------------------------------------
+// ---- [SECTION] TuningPanel: the setters
+// ------------------------------------------------------------
 
 // Every candidate goes through the settings reader (ranges, lifetimes, the finest spacing) by
 // way of the file it would be saved as: what it refuses is shown, and nothing changes.
@@ -425,7 +451,8 @@ bool TuningPanel::load() {
     AmbienceVolumeSettings loaded;
     try {
         loaded = ambienceSettingsFromJson(
-            readTextFile(configPath_, "ambience settings file", kMaxSettingsFileBytes), configPath_);
+            readTextFile(configPath_, "ambience settings file", kMaxSettingsFileBytes),
+            configPath_);
     } catch (const InputError& e) {
         error_ = e.what();
         return false;
@@ -434,7 +461,8 @@ bool TuningPanel::load() {
     return true;
 }
 
-// ---- [SECTION] TuningPanel: the error measurement ------------------------------------------------
+// ---- [SECTION] TuningPanel: the error measurement
+// ------------------------------------------------
 
 // As `ambience run --measure-every` measures (lighting/Metrics.h, ErrorMeter::frame): the
 // witnesses of a measured frame, each read the way the draw reads it (appliedAt) against a fresh
@@ -459,13 +487,15 @@ void TuningPanel::measure(const CameraSample& camera, double timeOfDay_h, int fr
     }
     measurement_.frame = frame;
     measurement_.ringsError = measureRings_ ? sum / double(witnesses.size()) : -1.0;
-    measurement_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    measurement_.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     errorHistory_[std::size_t(errorNext_)] = float(measurement_.groundError);
     errorNext_ = (errorNext_ + 1) % kHistory;
     errorCount_ = std::min(errorCount_ + 1, kHistory);
 }
 
-// ---- [SECTION] TuningPanel: the widgets ----------------------------------------------------------
+// ---- [SECTION] TuningPanel: the widgets
+// ----------------------------------------------------------
 
 namespace {
 
@@ -518,7 +548,8 @@ void TuningPanel::drawView(ViewControls& controls) {
         ImGui::SameLine();
     }
     ImGui::Checkbox("ambient alone", &controls.ambientView);
-    tooltip("the ambient term alone: every surface white, lit by the ambient only (--view ambient)");
+    tooltip(
+        "the ambient term alone: every surface white, lit by the ambient only (--view ambient)");
 }
 
 void TuningPanel::drawTimings() {
@@ -565,8 +596,9 @@ void TuningPanel::drawAnchors() {
 void TuningPanel::drawError() {
     if (!ImGui::CollapsingHeader("Error", ImGuiTreeNodeFlags_DefaultOpen)) return;
     if (ImGui::Button("measure now")) measureNextFrame();
-    tooltip("the relative irradiance error at the camera's ground point against a fresh 6-face "
-            "capture there (the self-oracle of `ambience run --measure-every`)");
+    tooltip(
+        "the relative irradiance error at the camera's ground point against a fresh 6-face "
+        "capture there (the self-oracle of `ambience run --measure-every`)");
     ImGui::SameLine();
     ImGui::Checkbox("rings too", &measureRings_);
     tooltip("also the 12 terrain corners of the rings 16-432 m (13 captures a measurement)");
@@ -609,9 +641,9 @@ bool TuningPanel::settingWidget(const SettingInfo& info) {
             break;
         }
         case Kind::Number:
-            changed = ImGui::SliderScalar(info.key, ImGuiDataType_Double, &v, &info.lo, &info.hi,
-                                          "%.4g",
-                                          info.logarithmic ? ImGuiSliderFlags_Logarithmic : 0);
+            changed =
+                ImGui::SliderScalar(info.key, ImGuiDataType_Double, &v, &info.lo, &info.hi, "%.4g",
+                                    info.logarithmic ? ImGuiSliderFlags_Logarithmic : 0);
             break;
     }
     std::string help = info.help;

@@ -69,7 +69,7 @@ struct SettingInfo {
     bool logarithmic;  // the slider moves in ratios
     const char* help;
     void* (*field)(AmbienceVolumeSettings&);  // the double, int or bool it sets
-    bool rebuilds;     // a change cannot apply in place (AmbienceVolume::retunable)
+    bool rebuilds;  // a change cannot apply in place (AmbienceVolume::retunable)
 };
 // Every key ambienceSettingsFromJson reads, in the file's order.
 const std::vector<SettingInfo>& tunableSettings();
@@ -95,8 +95,7 @@ class TuningPanel {
   public:
     // Needs the window's GL context current; `window` is the GLFWwindow. `configPath`: the file
     // Save writes and Load reads; `replayDuration_s` bounds the scrub slider (0: no replay).
-    TuningPanel(void* window, LiveMethod& method, std::string configPath,
-                double replayDuration_s);
+    TuningPanel(void* window, LiveMethod& method, std::string configPath, double replayDuration_s);
     ~TuningPanel();
     TuningPanel(const TuningPanel&) = delete;
     TuningPanel& operator=(const TuningPanel&) = delete;
@@ -127,10 +126,10 @@ class TuningPanel {
     void measureNextFrame() { measureNext_ = true; }
     void setMeasureEvery(int frames) { measureEvery_ = frames; }
     struct Measurement {
-        int frame = -1;             // -1: none yet
-        double groundError = 0.0;   // at the camera's ground point
-        double ringsError = -1.0;   // mean over the ring witnesses as well (-1: not taken)
-        double seconds = 0.0;       // wall time of the oracle captures
+        int frame = -1;            // -1: none yet
+        double groundError = 0.0;  // at the camera's ground point
+        double ringsError = -1.0;  // mean over the ring witnesses as well (-1: not taken)
+        double seconds = 0.0;      // wall time of the oracle captures
     };
     const Measurement& lastMeasurement() const { return measurement_; }
     // The panel's own CPU time in the latest frame (widgets and draw) [ms]; not a stage's.
@@ -152,7 +151,7 @@ class TuningPanel {
     std::string configPath_;
     double replayDuration_s_;
     std::unique_ptr<PanelRenderer> renderer_;
-    bool built_ = false;  // build() ran since the last render()
+    bool built_ = false;                      // build() ran since the last render()
     double build_ms_ = 0.0, panel_ms_ = 0.0;  // its own CPU time: widgets, and widgets + draw
     std::string error_, notice_;
     // The draft of a setting that rebuilds the method while its slider is held (set() when let go).
