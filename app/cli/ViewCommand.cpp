@@ -84,6 +84,29 @@ bool keyDown(GLFWwindow* w, int key) {
     return glfwGetKey(w, key) == GLFW_PRESS;
 }
 
+// Key presses (down now, up at the last look), while `enabled` (not while the panel types).
+struct KeyEdges {
+    GLFWwindow* window;
+    bool enabled = true;
+    bool prev[GLFW_KEY_LAST + 1] = {};
+    bool pressed(int key) {
+        const bool now = keyDown(window, key);
+        const bool edge = now && !prev[key];
+        prev[key] = now;
+        return edge && enabled;
+    }
+};
+
+// The camera on the replay, which advances by `step_s` unless paused (and starts over at its
+// end); the time of day follows it when `followDay` (no --time).
+CameraSample followReplay(const Replay& replay, ViewControls& controls, double step_s,
+                          bool followDay, double& timeOfDay_h) {
+    if (!controls.paused) controls.replayTime_s += step_s;
+    if (controls.replayTime_s > replay.duration_s()) controls.replayTime_s = 0.0;
+    if (followDay && !controls.paused) timeOfDay_h = replay.timeOfDayAt_h(controls.replayTime_s);
+    return replay.sampleAt(controls.replayTime_s);
+}
+
 // Checks every option and the files before any work; returns the window size.
 Size checkViewOptions(const ViewOptions& o) {
     const Size size = parseSize(o.size, "--size");
@@ -121,9 +144,10 @@ std::unique_ptr<Platform> openWindow(const Size& size) {
 }
 
 // Free flight: W A S D move, Q E down / up, Shift faster, right mouse button + drag looks
-// around (unless the panel has the mouse); never below 1 m above the ground.
+// around (the keys and the mouse only when the panel does not take them); never below 1 m
+// above the ground.
 CameraSample flyFree(GLFWwindow* window, const World& world, FreeCamera& free, double& lastX,
-                     double& lastY, bool mouse) {
+                     double& lastY, bool keys, bool mouse) {
     double x = 0.0, y = 0.0;
     glfwGetCursorPos(window, &x, &y);
     if (mouse && glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS) {
@@ -136,6 +160,7 @@ CameraSample flyFree(GLFWwindow* window, const World& world, FreeCamera& free, d
     const glm::dvec3 right = glm::normalize(glm::cross(s.forward, glm::dvec3(0, 1, 0)));
     const double speed = (keyDown(window, GLFW_KEY_LEFT_SHIFT) ? 120.0 : 20.0) * kStep_s;
     glm::dvec3 move(0.0);
+    if (!keys) return s;
     if (keyDown(window, GLFW_KEY_W)) move += s.forward;
     if (keyDown(window, GLFW_KEY_S)) move -= s.forward;
     if (keyDown(window, GLFW_KEY_D)) move += right;
@@ -190,6 +215,24 @@ class CameraRecorder {
     bool on_ = false;
 };
 
+// The P key's screenshot (the scene), and on the last frame of --frames the --screenshot and
+// the --window-shot (the window as shown, the panel included).
+void saveShots(const ViewOptions& o, bool pKey, bool last, Renderer& renderer, Platform& platform,
+               int& screenshots) {
+    if (pKey || (last && !o.screenshot.empty())) {
+        char name[64];
+        std::snprintf(name, sizeof(name), "screenshot-%03d.png", screenshots++);
+        const std::string path = last && !o.screenshot.empty() ? o.screenshot : name;
+        writeImageRgb8(path, renderer.width(), renderer.height(), renderer.readRgb8());
+        std::fprintf(stderr, "view: screenshot %s\n", path.c_str());
+    }
+    if (last && !o.windowShot.empty()) {
+        writeImageRgb8(o.windowShot, platform.width(), platform.height(),
+                       readWindowRgb8(platform.width(), platform.height()));
+        std::fprintf(stderr, "view: window %s\n", o.windowShot.c_str());
+    }
+}
+
 // The view's settings: --config, read as `ambience run --config` reads it.
 AmbienceVolumeSettings viewSettings(const ViewOptions& o) {
     if (o.config.empty()) return {};
@@ -237,14 +280,8 @@ void runView(const ViewOptions& o) {
     }
     CameraRecorder recorder(replay.world, o.record);
     int screenshots = 0;
-    bool prev[GLFW_KEY_LAST + 1] = {};
-    bool keysToView = true;  // false while the panel takes the keyboard
-    auto pressed = [&](int key) {
-        const bool now = keyDown(window, key);
-        const bool edge = now && !prev[key];
-        prev[key] = now;
-        return edge && keysToView;
-    };
+    KeyEdges keys{window};
+    auto pressed = [&](int key) { return keys.pressed(key); };
     double lastX = 0.0, lastY = 0.0;
     glfwGetCursorPos(window, &lastX, &lastY);
     std::fprintf(stderr,
@@ -256,7 +293,7 @@ void runView(const ViewOptions& o) {
         platform->pollEvents();
         // The panel's widgets first: what they change applies to this frame.
         if (panel && showPanel) panel->build(controls);
-        keysToView = !(panel && showPanel && panel->wantsKeyboard());
+        keys.enabled = !(panel && showPanel && panel->wantsKeyboard());
         const bool mouseToView = !(panel && showPanel && panel->wantsMouse());
         if (pressed(GLFW_KEY_ESCAPE)) break;
         if (pressed(GLFW_KEY_TAB) && panel) showPanel = !showPanel;
@@ -276,14 +313,9 @@ void runView(const ViewOptions& o) {
         const double step_s = kStep_s * controls.speed;
         CameraSample cam;
         if (follow) {
-            if (!controls.paused) replayTime_s += step_s;
-            if (replayTime_s > replay.duration_s()) replayTime_s = 0.0;
-            cam = replay.sampleAt(replayTime_s);
-            if (haveReplay && !controls.paused && o.time_h < 0.0) {
-                timeOfDay_h = replay.timeOfDayAt_h(replayTime_s);
-            }
+            cam = followReplay(replay, controls, step_s, o.time_h < 0.0, timeOfDay_h);
         } else {
-            cam = flyFree(window, world, free, lastX, lastY, mouseToView);
+            cam = flyFree(window, world, free, lastX, lastY, keys.enabled, mouseToView);
         }
 
         // Record the camera at the fixed step.
@@ -310,18 +342,7 @@ void runView(const ViewOptions& o) {
         if (panel && showPanel) panel->render(platform->width(), platform->height());
 
         const bool last = o.frames > 0 && frame + 1 >= o.frames;
-        if (pressed(GLFW_KEY_P) || (last && !o.screenshot.empty())) {
-            char name[64];
-            std::snprintf(name, sizeof(name), "screenshot-%03d.png", screenshots++);
-            const std::string path = last && !o.screenshot.empty() ? o.screenshot : name;
-            writeImageRgb8(path, size.width, size.height, renderer.readRgb8());
-            std::fprintf(stderr, "view: screenshot %s\n", path.c_str());
-        }
-        if (last && !o.windowShot.empty()) {
-            writeImageRgb8(o.windowShot, platform->width(), platform->height(),
-                           readWindowRgb8(platform->width(), platform->height()));
-            std::fprintf(stderr, "view: window %s\n", o.windowShot.c_str());
-        }
+        saveShots(o, pressed(GLFW_KEY_P), last, renderer, *platform, screenshots);
         platform->swapBuffers();
         if (last) break;
     }
