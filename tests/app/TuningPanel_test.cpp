@@ -5,8 +5,9 @@
 // `tuning_panel_xvfb` (tests/CMakeLists.txt). There the panel draws over the scene (ImGui's draw
 // data has vertices, and the window's pixels under the panel differ from the scene's while the
 // rest is the scene's copy), a setting set through the panel's own setter (the one its widget
-// calls) changes the running method, in place or by a rebuild, and what Save writes Load reads
-// back equal and `ambience run --config` accepts.
+// calls, and a click through ImGui's input on one of its switches) changes the running method,
+// in place or by a rebuild, and what Save writes Load reads back equal and `ambience run
+// --config` accepts.
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -14,6 +15,9 @@
 #include <string>
 
 #include <gtest/gtest.h>
+#include <imgui.h>
+#include <imgui_impl_glfw.h>
+#include <imgui_internal.h>
 #include <nlohmann/json.hpp>
 
 #include "RunAmbience.h"
@@ -25,6 +29,9 @@
 #include "lighting/AmbienceVolume.h"
 #include "world/Error.h"
 #include "world/World.h"
+// GLFW after glad (app/render/Renderer.h), with no GL header of its own.
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
 
 namespace amb {
 namespace {
@@ -107,7 +114,7 @@ TEST(TuningPanel, OnlyTheLatticeTheSunThresholdAndTheNearFieldRebuild) {
 
 class TuningPanelWindow : public ::testing::Test {
   protected:
-    static constexpr int kW = 640, kH = 360;
+    static constexpr int kW = 640, kH = 420;
     void SetUp() override {
         if (!std::getenv("DISPLAY"))
             GTEST_SKIP() << "needs a display; ctest runs these as tuning_panel_xvfb (xvfb-run)";
@@ -222,6 +229,40 @@ TEST_F(TuningPanelWindow, ASettingChangesTheRunningMethod) {
     EXPECT_FALSE(panel_->set("store.noSuchKey", 1.0));
     EXPECT_FALSE(panel_->set("store.blendTime_s", std::nan("")));
     EXPECT_EQ(volume->store().settings().blendTime_s, 2.5);
+}
+
+TEST_F(TuningPanelWindow, AClickOnASettingsSwitchChangesTheRunningMethod) {
+    // Through Dear ImGui's own input: the pointer moved onto the panel's "nearField.enabled"
+    // switch and its left button pressed and let go, as the GLFW backend hears them.
+    frame();
+    EXPECT_GT(last_.ambience.nearFieldPoints, 0u) << "the near field is on by default";
+    GLFWwindow* window = static_cast<GLFWwindow*>(platform_->nativeWindow());
+    ImGuiWindow* tuning = ImGui::FindWindowByName("Tuning (Tab hides)");
+    ASSERT_NE(tuning, nullptr);
+    // The other parts folded and the near field's group open, so that the switch is in view.
+    for (const char* header : {"Replay", "View", "Stage times", "Anchors and memory", "Error"})
+        tuning->StateStorage.SetInt(tuning->GetIDNoKeepAlive(header), 0);
+    const ImGuiID group = tuning->GetIDNoKeepAlive("nearField");
+    tuning->StateStorage.SetInt(group, 1);
+    const ImGuiID target = ImHashStr("nearField.enabled", 0, group);
+    ImGui_ImplGlfw_CursorEnterCallback(window, GLFW_TRUE);
+    // Find the switch: the pointer down the panel, over the switches' labels, until ImGui says
+    // it hovers this one.
+    bool found = false;
+    for (int y = 20; y < kH && !found; y += 3) {
+        glfwSetCursorPos(window, 120.0, double(y));
+        panel_->build(controls_);
+        found = GImGui->HoveredId == target;
+    }
+    ASSERT_TRUE(found) << "the switch is not under the pointer anywhere in the panel";
+    EXPECT_TRUE(live_->settings().capture.nearField.enabled);
+    ImGui_ImplGlfw_MouseButtonCallback(window, GLFW_MOUSE_BUTTON_LEFT, GLFW_PRESS, 0);
+    panel_->build(controls_);  // pressed
+    panel_->build(controls_);  // let go over it: a click
+    EXPECT_FALSE(live_->settings().capture.nearField.enabled);
+    EXPECT_EQ(live_->rebuilds(), 1) << "the near field cannot change in place";
+    frame();
+    EXPECT_EQ(last_.ambience.nearFieldPoints, 0u);
 }
 
 TEST_F(TuningPanelWindow, TheErrorIsMeasuredOnDemandAndEveryNFrames) {
