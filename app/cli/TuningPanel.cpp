@@ -516,9 +516,9 @@ void plotRing(const char* label, const float* values, int count, int next, int c
     const int offset = count < capacity ? 0 : next;
     float hi = 0.0f;
     for (int i = 0; i < count; ++i) hi = std::max(hi, values[i]);
-    // (A negative width fills the window.)
+    // The window's width (a width of -1 collapses the plot in ImGui 1.86's auto-fit windows).
     ImGui::PlotLines(label, values, count, offset, overlay, 0.0f, std::max(hi * 1.1f, 1e-3f),
-                     ImVec2(-1.0f, height));
+                     ImVec2(ImGui::GetContentRegionAvail().x, height));
 }
 
 }  // namespace
