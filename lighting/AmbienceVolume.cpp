@@ -113,6 +113,34 @@ AmbienceVolume::AmbienceVolume(CubeCapture& capture, const ProbeEnvironment& env
 
 AmbienceVolume::~AmbienceVolume() = default;
 
+namespace {
+
+bool sameNearField(const NearFieldSettings& a, const NearFieldSettings& b) {
+    return a.enabled == b.enabled && a.radius_m == b.radius_m &&
+           a.captureRadius_m == b.captureRadius_m && a.plants == b.plants &&
+           a.smallRadius_m == b.smallRadius_m && a.terrain == b.terrain &&
+           a.terrainRadius_m == b.terrainRadius_m && a.cacheEntries == b.cacheEntries &&
+           a.objectRange_m == b.objectRange_m;
+}
+
+}  // namespace
+
+bool AmbienceVolume::retunable(const AmbienceVolumeSettings& from,
+                               const AmbienceVolumeSettings& to) {
+    return from.store.coarsestSpacing_m == to.store.coarsestSpacing_m &&
+           from.store.levels == to.store.levels &&
+           from.capture.sunThreshold == to.capture.sunThreshold &&
+           sameNearField(from.capture.nearField, to.capture.nearField);
+}
+
+void AmbienceVolume::retune(const AmbienceVolumeSettings& settings) {
+    AMB_CHECK(retunable(settings_, settings));
+    settings_ = settings;
+    store_.retune(settings.store);
+    scheduler_.setSettings(settings.scheduler);
+    core_.retune(settings.capture);
+}
+
 std::optional<ProbeInProgress> AmbienceVolume::probeInProgress() const {
     const std::optional<ProbeJob>& job = core_.job();
     if (!job) return std::nullopt;

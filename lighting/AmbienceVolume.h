@@ -136,6 +136,12 @@ class AmbienceVolume final : public AmbienceMethod {
     AnchorStore& store() { return store_; }
     const ProbeScheduler& scheduler() const { return scheduler_; }
     const AmbienceVolumeSettings& settings() const { return settings_; }
+    // True when every change from `from` to `to` can apply to a running volume (retune): all
+    // but the lattice (store.coarsestSpacing_m, store.levels), the sun threshold and the near
+    // field, which a volume is built with.
+    static bool retunable(const AmbienceVolumeSettings& from, const AmbienceVolumeSettings& to);
+    // Applies `settings` from the next frame on; retunable(settings(), settings) must hold.
+    void retune(const AmbienceVolumeSettings& settings);
     std::optional<ProbeInProgress> probeInProgress() const;
     double simulationTime_s() const { return core_.time_s(); }
     double timeRate_hPerS() const { return core_.timeRate_hPerS(); }

@@ -211,6 +211,19 @@ AnchorStore& AnchorStore::operator=(AnchorStore&&) noexcept = default;
 const AnchorStoreSettings& AnchorStore::settings() const {
     return impl_->settings;
 }
+
+void AnchorStore::retune(const AnchorStoreSettings& settings) {
+    AMB_CHECK(settings.searchCells >= 1 && settings.reachCells >= 1 &&
+              settings.coarseReachCells >= 1);
+    AMB_CHECK(settings.finerWeight >= 0.0 && settings.finerWeight <= 1.0);
+    AnchorStoreSettings& s = impl_->settings;
+    const double coarsest_m = s.coarsestSpacing_m;
+    const int levels = s.levels;
+    s = settings;
+    s.coarsestSpacing_m = coarsest_m;
+    s.levels = levels;
+    impl_->touchField();
+}
 int AnchorStore::levels() const {
     return impl_->levels;
 }

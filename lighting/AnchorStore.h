@@ -185,6 +185,10 @@ class AnchorStore {
     AnchorStore& operator=(const AnchorStore&) = delete;
 
     const AnchorStoreSettings& settings() const;
+    // New settings in place, but for the lattice (coarsestSpacing_m and levels keep theirs):
+    // blends, fades and lifetimes read them from the next advance on, and the field is rebuilt
+    // with the new reach and interpolation by the next lookup.
+    void retune(const AnchorStoreSettings& settings);
     int levels() const;
     int finestLevel() const { return levels() - 1; }
     double spacing_m(int level) const;

@@ -162,6 +162,13 @@ class CaptureCore {
     bool fallbackChanged() const { return fallbackChanged_; }
 
     const CaptureSettings& settings() const { return settings_; }
+    // New settings from the next frame on, but for the two the core was built with: the sun
+    // threshold (its projector) and the near field (what its probes leave out) keep theirs.
+    void retune(CaptureSettings settings) {
+        settings.sunThreshold = settings_.sunThreshold;
+        settings.nearField = settings_.nearField;
+        settings_ = settings;
+    }
     // Counters since construction and this frame's stage times; methods add their own work to
     // the times (addPredictTime, addStoreTime) and fill probes and bytes.
     const MethodStatistics& statistics() const { return stats_; }

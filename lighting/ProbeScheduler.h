@@ -80,6 +80,8 @@ class ProbeScheduler {
     explicit ProbeScheduler(const ProbeSchedulerSettings& settings = {});
 
     const ProbeSchedulerSettings& settings() const { return settings_; }
+    // Every setting is read where it is used, so new ones apply from the next observe/choose.
+    void setSettings(const ProbeSchedulerSettings& settings) { settings_ = settings; }
     // Roads to follow when the camera drives on one (may be null; must outlive the scheduler).
     void setRoads(const RoadNetwork* roads) { roads_ = roads; }
 

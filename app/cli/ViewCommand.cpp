@@ -1,10 +1,13 @@
-// ViewCommand.cpp — `ambience view`: the world in a window (GLFW).
+// ViewCommand.cpp — `ambience view`: the world in a window (GLFW), with the tuning panel
+// (app/cli/TuningPanel.h) unless --no-panel.
 //
 // Keys: F toggles follow-replay / free-fly; free-fly: W A S D move, Q E down / up, Shift faster,
 // right mouse button + drag looks around; follow: Space pauses, Left / Right scrub 5 s;
 // [ and ] change the time of day by half an hour; R starts / stops recording the camera to a new
-// replay file; P saves a screenshot; Esc quits. `--frames N --screenshot FILE` renders N frames,
-// saves the last and exits (used by the tests under Xvfb).
+// replay file; P saves a screenshot; Tab hides / shows the panel; Esc quits. While the panel
+// takes the keyboard (a text field) or the mouse (over it), the view leaves them alone.
+// `--frames N --screenshot FILE` renders N frames, saves the last and exits (used by the tests
+// under Xvfb); `--window-shot FILE` saves the window as shown, the panel included.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -25,9 +28,12 @@
 #include "app/render/Renderer.h"
 #include "app/platform/Platform.h"
 #include "app/cli/RunReport.h"
+#include "app/cli/TuningPanel.h"
+#include "app/render/PanelRenderer.h"
 #include "app/frame/MethodStages.h"
 #include "lighting/Baselines.h"
 #include "world/Error.h"
+#include "world/TextFile.h"
 #include "world/World.h"
 // GLFW after glad (app/render/Gl.h).
 #include <GLFW/glfw3.h>
@@ -47,6 +53,9 @@ struct ViewOptions {
     std::string view = "shaded";
     std::string shaders;
     double time_h = -1.0;
+    std::string config;      // the volume's settings (as `run --config`)
+    bool noPanel = false;
+    std::string windowShot;  // with --frames: the window as shown, the panel included
 };
 
 constexpr double kStep_s = 1.0 / 30.0;  // the viewer's fixed simulation step
@@ -75,6 +84,29 @@ bool keyDown(GLFWwindow* w, int key) {
     return glfwGetKey(w, key) == GLFW_PRESS;
 }
 
+// Key presses (down now, up at the last look), while `enabled` (not while the panel types).
+struct KeyEdges {
+    GLFWwindow* window;
+    bool enabled = true;
+    bool prev[GLFW_KEY_LAST + 1] = {};
+    bool pressed(int key) {
+        const bool now = keyDown(window, key);
+        const bool edge = now && !prev[key];
+        prev[key] = now;
+        return edge && enabled;
+    }
+};
+
+// The camera on the replay, which advances by `step_s` unless paused (and starts over at its
+// end); the time of day follows it when `followDay` (no --time).
+CameraSample followReplay(const Replay& replay, ViewControls& controls, double step_s,
+                          bool followDay, double& timeOfDay_h) {
+    if (!controls.paused) controls.replayTime_s += step_s;
+    if (controls.replayTime_s > replay.duration_s()) controls.replayTime_s = 0.0;
+    if (followDay && !controls.paused) timeOfDay_h = replay.timeOfDayAt_h(controls.replayTime_s);
+    return replay.sampleAt(controls.replayTime_s);
+}
+
 // Checks every option and the files before any work; returns the window size.
 Size checkViewOptions(const ViewOptions& o) {
     const Size size = parseSize(o.size, "--size");
@@ -86,9 +118,14 @@ Size checkViewOptions(const ViewOptions& o) {
     if (!o.screenshot.empty() && o.frames == 0) {
         throw InputError("--screenshot", "needs --frames N (the frame to save)");
     }
+    if (!o.windowShot.empty() && o.frames == 0) {
+        throw InputError("--window-shot", "needs --frames N (the frame to save)");
+    }
     FilePlan files;
     files.input("--replay", o.replay);
+    files.input("--config", o.config);
     files.output("--screenshot", o.screenshot);
+    files.output("--window-shot", o.windowShot);
     files.check();
     if (!o.replay.empty() && resolvedPath(o.record) == resolvedPath(o.replay))
         throw InputError("--record", "'" + o.record + "' is also the input --replay");
@@ -107,12 +144,13 @@ std::unique_ptr<Platform> openWindow(const Size& size) {
 }
 
 // Free flight: W A S D move, Q E down / up, Shift faster, right mouse button + drag looks
-// around; never below 1 m above the ground.
+// around (the keys and the mouse only when the panel does not take them); never below 1 m
+// above the ground.
 CameraSample flyFree(GLFWwindow* window, const World& world, FreeCamera& free, double& lastX,
-                     double& lastY) {
+                     double& lastY, bool keys, bool mouse) {
     double x = 0.0, y = 0.0;
     glfwGetCursorPos(window, &x, &y);
-    if (glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS) {
+    if (mouse && glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS) {
         free.yaw_rad += (x - lastX) * 0.004;
         free.pitch_rad = std::clamp(free.pitch_rad - (y - lastY) * 0.004, -1.5, 1.5);
     }
@@ -122,6 +160,7 @@ CameraSample flyFree(GLFWwindow* window, const World& world, FreeCamera& free, d
     const glm::dvec3 right = glm::normalize(glm::cross(s.forward, glm::dvec3(0, 1, 0)));
     const double speed = (keyDown(window, GLFW_KEY_LEFT_SHIFT) ? 120.0 : 20.0) * kStep_s;
     glm::dvec3 move(0.0);
+    if (!keys) return s;
     if (keyDown(window, GLFW_KEY_W)) move += s.forward;
     if (keyDown(window, GLFW_KEY_S)) move -= s.forward;
     if (keyDown(window, GLFW_KEY_D)) move += right;
@@ -176,11 +215,37 @@ class CameraRecorder {
     bool on_ = false;
 };
 
+// The P key's screenshot (the scene), and on the last frame of --frames the --screenshot and
+// the --window-shot (the window as shown, the panel included).
+void saveShots(const ViewOptions& o, bool pKey, bool last, Renderer& renderer, Platform& platform,
+               int& screenshots) {
+    if (pKey || (last && !o.screenshot.empty())) {
+        char name[64];
+        std::snprintf(name, sizeof(name), "screenshot-%03d.png", screenshots++);
+        const std::string path = last && !o.screenshot.empty() ? o.screenshot : name;
+        writeImageRgb8(path, renderer.width(), renderer.height(), renderer.readRgb8());
+        std::fprintf(stderr, "view: screenshot %s\n", path.c_str());
+    }
+    if (last && !o.windowShot.empty()) {
+        writeImageRgb8(o.windowShot, platform.width(), platform.height(),
+                       readWindowRgb8(platform.width(), platform.height()));
+        std::fprintf(stderr, "view: window %s\n", o.windowShot.c_str());
+    }
+}
+
+// The view's settings: --config, read as `ambience run --config` reads it.
+AmbienceVolumeSettings viewSettings(const ViewOptions& o) {
+    if (o.config.empty()) return {};
+    return ambienceSettingsFromJson(
+        readTextFile(o.config, "ambience settings file", kMaxSettingsFileBytes), o.config);
+}
+
 void runView(const ViewOptions& o) {
     const Size size = checkViewOptions(o);
     Replay replay;
     const bool haveReplay = !o.replay.empty();
     if (haveReplay) replay = readReplay(o.replay);
+    const AmbienceVolumeSettings settings = viewSettings(o);
 
     std::unique_ptr<Platform> platform = openWindow(size);
     GLFWwindow* window = static_cast<GLFWwindow*>(platform->nativeWindow());
@@ -190,16 +255,23 @@ void runView(const ViewOptions& o) {
     rs.height = size.height;
     rs.viewOutput = parseViewOutput(o.view, "--view");
     Renderer renderer(world, rs);
-    auto stages =
-        makeMethodStages(renderer, o.ambient, AmbienceVolumeSettings{}, BaselineSettings{});
-    AmbienceVolume* volume = stages->volume();
-    // The frame of `run`, with the camera and the clocks from the keyboard and the mouse.
-    FrameLoop loop(renderer, *stages);
+    // The frame of `run`, with the camera and the clocks from the keyboard, the mouse and the
+    // panel; the panel may rebuild the method (LiveMethod).
+    LiveMethod live(renderer, o.ambient, settings);
+    std::unique_ptr<TuningPanel> panel;
+    if (!o.noPanel) {
+        panel = std::make_unique<TuningPanel>(
+            window, live, o.config.empty() ? "ambience-settings.json" : o.config,
+            haveReplay ? replay.duration_s() : 0.0);
+    }
+    bool showPanel = panel != nullptr;
+    ViewControls controls;
+    controls.debugOverlay = o.debugOverlay;
+    controls.ambientView = rs.viewOutput == RenderOutput::Ambient;
     double simulation_s = 0.0;  // the volume's clock: fixed steps, stops while paused
 
-    double replayTime_s = 0.0;
     double timeOfDay_h = o.time_h >= 0.0 ? o.time_h : replay.timeOfDayStart_h;
-    bool follow = haveReplay, paused = false;
+    bool follow = haveReplay;
     FreeCamera free;
     if (haveReplay) {
         free.lookAlong(replay.sampleAt(0.0));
@@ -208,44 +280,42 @@ void runView(const ViewOptions& o) {
     }
     CameraRecorder recorder(replay.world, o.record);
     int screenshots = 0;
-    bool prev[GLFW_KEY_LAST + 1] = {};
-    auto pressed = [&](int key) {
-        const bool now = keyDown(window, key);
-        const bool edge = now && !prev[key];
-        prev[key] = now;
-        return edge;
-    };
+    KeyEdges keys{window};
+    auto pressed = [&](int key) { return keys.pressed(key); };
     double lastX = 0.0, lastY = 0.0;
     glfwGetCursorPos(window, &lastX, &lastY);
     std::fprintf(stderr,
                  "view: %s; F follow/free, WASD+QE, right mouse look, Space pause, "
-                 "arrows scrub, [ ] time, R record, P screenshot, Esc quit\n",
+                 "arrows scrub, [ ] time, R record, P screenshot, Tab panel, Esc quit\n",
                  platform->glRenderer().c_str());
 
     for (int frame = 0; !platform->shouldClose(); ++frame) {
         platform->pollEvents();
+        // The panel's widgets first: what they change applies to this frame.
+        if (panel && showPanel) panel->build(controls);
+        keys.enabled = !(panel && showPanel && panel->wantsKeyboard());
+        const bool mouseToView = !(panel && showPanel && panel->wantsMouse());
         if (pressed(GLFW_KEY_ESCAPE)) break;
+        if (pressed(GLFW_KEY_TAB) && panel) showPanel = !showPanel;
         if (pressed(GLFW_KEY_F) && haveReplay) {
             follow = !follow;
-            if (!follow) free.lookAlong(replay.sampleAt(replayTime_s));
+            if (!follow) free.lookAlong(replay.sampleAt(controls.replayTime_s));
         }
-        if (pressed(GLFW_KEY_SPACE)) paused = !paused;
+        double& replayTime_s = controls.replayTime_s;
+        if (pressed(GLFW_KEY_SPACE)) controls.paused = !controls.paused;
         if (pressed(GLFW_KEY_LEFT)) replayTime_s = std::max(0.0, replayTime_s - 5.0);
         if (pressed(GLFW_KEY_RIGHT)) replayTime_s += 5.0;
         if (pressed(GLFW_KEY_LEFT_BRACKET)) timeOfDay_h = std::fmod(timeOfDay_h + 23.5, 24.0);
         if (pressed(GLFW_KEY_RIGHT_BRACKET)) timeOfDay_h = std::fmod(timeOfDay_h + 0.5, 24.0);
+        renderer.setViewOutput(controls.ambientView ? RenderOutput::Ambient : RenderOutput::Shaded);
 
         // Camera for this frame.
+        const double step_s = kStep_s * controls.speed;
         CameraSample cam;
         if (follow) {
-            if (!paused) replayTime_s += kStep_s;
-            if (replayTime_s > replay.duration_s()) replayTime_s = 0.0;
-            cam = replay.sampleAt(replayTime_s);
-            if (haveReplay && !paused && o.time_h < 0.0) {
-                timeOfDay_h = replay.timeOfDayAt_h(replayTime_s);
-            }
+            cam = followReplay(replay, controls, step_s, o.time_h < 0.0, timeOfDay_h);
         } else {
-            cam = flyFree(window, world, free, lastX, lastY);
+            cam = flyFree(window, world, free, lastX, lastY, keys.enabled, mouseToView);
         }
 
         // Record the camera at the fixed step.
@@ -254,28 +324,25 @@ void runView(const ViewOptions& o) {
 
         // Every stage of the frame (FrameLoop), on the window's camera and clocks.
         FrameInput input;
-        if (!paused) simulation_s += kStep_s;
+        if (!controls.paused) simulation_s += step_s;
         input.time_s = simulation_s;
         input.replayTime_s = replayTime_s;
         input.timeOfDay_h = timeOfDay_h;
         input.camera = cam;
-        loop.step(input);
-        if (o.debugOverlay && volume) {
+        const FrameRecord record = live.loop().step(input);
+        if (panel) panel->frameDone(record, cam, timeOfDay_h);
+        AmbienceVolume* volume = live.stages().volume();
+        if (controls.debugOverlay && volume) {
             auto pixels = renderer.readRgb8();
             drawAnchorOverlay(pixels, size.width, size.height, renderer.viewProjection(cam),
                               cam.position_m, *volume);
             renderer.replaceLdr(pixels);
         }
         renderer.blitToWindow(platform->width(), platform->height());
+        if (panel && showPanel) panel->render(platform->width(), platform->height());
 
         const bool last = o.frames > 0 && frame + 1 >= o.frames;
-        if (pressed(GLFW_KEY_P) || (last && !o.screenshot.empty())) {
-            char name[64];
-            std::snprintf(name, sizeof(name), "screenshot-%03d.png", screenshots++);
-            const std::string path = last && !o.screenshot.empty() ? o.screenshot : name;
-            writeImageRgb8(path, size.width, size.height, renderer.readRgb8());
-            std::fprintf(stderr, "view: screenshot %s\n", path.c_str());
-        }
+        saveShots(o, pressed(GLFW_KEY_P), last, renderer, *platform, screenshots);
         platform->swapBuffers();
         if (last) break;
     }
@@ -299,6 +366,12 @@ void addViewCommand(CLI::App& app) {
     cmd->add_option("--record", o->record, "file the R key records to (default recorded.json)");
     cmd->add_option("--frames", o->frames, "render N frames, then exit (non-interactive)");
     cmd->add_option("--screenshot", o->screenshot, "with --frames: save the last frame here");
+    cmd->add_option("--config,--ambience-config", o->config,
+                    "the volume's settings (JSON, as `run --config`); the panel's Save writes "
+                    "and Load reads this file (default ambience-settings.json)");
+    cmd->add_flag("--no-panel", o->noPanel, "no tuning panel (Tab hides it while running)");
+    cmd->add_option("--window-shot", o->windowShot,
+                    "with --frames: save the window as shown (the panel included) here");
     cmd->add_option("--shaders", o->shaders,
                     "GLSL folder (default <exe>/../shaders or $AMBIENCE_SHADER_DIR)");
     cmd->callback([o] {

@@ -61,6 +61,9 @@ class Renderer final : public MainView {
     // MainView (the frame loop's stages 1 and 6): setTimeOfDay, and render + glFinish.
     void setViewTimeOfDay(double timeOfDay_h) override { setTimeOfDay(timeOfDay_h); }
     RenderStats drawView(const CameraSample& camera, const AmbientSource& ambient) override;
+    // What drawView shows from the next frame on (the viewer's panel switches it).
+    void setViewOutput(RenderOutput output) { settings_.viewOutput = output; }
+    RenderOutput viewOutput() const { return settings_.viewOutput; }
 
     // The sky for a time of day (re-evaluated only when the time changes).
     const SkyLighting& setTimeOfDay(double timeOfDay_h);

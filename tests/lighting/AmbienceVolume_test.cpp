@@ -1,7 +1,8 @@
 // AmbienceVolume_test.cpp — the per-frame pipeline with a CPU fake capture: the face budget,
 // anchors equal to the projection of their own captures, NaN/Inf/negative captures never
 // entering the store, insertion changing nothing at its instant, dt = 0, a 10 s hitch, the
-// time-of-day wrap and jumps, the fallback, probe placement in the generated world, JSON settings.
+// time-of-day wrap and jumps, the fallback, probe placement in the generated world, JSON settings,
+// new settings applied to a running volume (retune).
 #include "lighting/AmbienceVolume.h"
 
 #include <cmath>
@@ -59,6 +60,35 @@ TEST(AmbienceVolume, OneFacePerFrameOneProbePerSixFrames) {
     fast.run(20, {10.0, 1.7, 20.0});
     EXPECT_EQ(fast.volume.statistics().probesCompleted, 10);
     EXPECT_GT(s.store.bytes(), 0u);
+}
+
+TEST(AmbienceVolume, RetuneAppliesNewSettingsToTheRunningVolume) {
+    Rig rig;
+    rig.run(60, {10.0, 1.7, 20.0});
+    ASSERT_EQ(rig.volume.store().size(), 10u);
+    AmbienceVolumeSettings s = rig.volume.settings();
+    s.capture.facesPerFrame = 3;
+    s.store.blendTime_s = 4.0;
+    s.scheduler.corridorCells = 6.0;
+    ASSERT_TRUE(AmbienceVolume::retunable(rig.volume.settings(), s));
+    rig.volume.retune(s);
+    // The anchors stay; from the next frame on a probe takes two frames, not six.
+    EXPECT_EQ(rig.volume.store().size(), 10u);
+    rig.run(10, {10.0, 1.7, 20.0});
+    EXPECT_EQ(rig.volume.statistics().facesCaptured, 60 + 30);
+    EXPECT_EQ(rig.volume.statistics().probesCompleted, 10 + 5);
+    EXPECT_EQ(rig.volume.store().settings().blendTime_s, 4.0);
+    EXPECT_EQ(rig.volume.scheduler().settings().corridorCells, 6.0);
+    EXPECT_EQ(rig.volume.settings().capture.facesPerFrame, 3);
+    // What a volume is built with cannot change in place.
+    const AmbienceVolumeSettings base;
+    AmbienceVolumeSettings levels = base, spacing = base, sun = base, near = base;
+    levels.store.levels = 4;
+    spacing.store.coarsestSpacing_m = 81.0;
+    sun.capture.sunThreshold = 1000.0;
+    near.capture.nearField.radius_m = 30.0;
+    for (const AmbienceVolumeSettings* t : {&levels, &spacing, &sun, &near})
+        EXPECT_FALSE(AmbienceVolume::retunable(base, *t));
 }
 
 TEST(AmbienceVolume, AnchorsHoldTheProjectionOfTheirOwnCaptures) {
