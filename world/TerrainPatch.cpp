@@ -7,11 +7,13 @@
 // [SECTION] Stitching: a vertex's rendered value comes from the coarsest patch containing it;
 //           so does a corner's value (corner stitching)
 // [SECTION] Packing into plain arrays
+// [SECTION] Drawn surface: heights of the packed triangles at any point
 // [SECTION] Terrain proxy for probe capture
 #include "world/TerrainPatch.h"
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 #include <tbb/parallel_for.h>
@@ -423,6 +425,56 @@ TerrainMesh TerrainPatchCache::build(const std::vector<PatchKey>& leaves,
         }
     }
     return out;
+}
+
+// ---- [SECTION] Drawn surface -----------------------------------------------------------------
+
+TerrainSurface::TerrainSurface(const TerrainMesh& mesh) : mesh_(&mesh) {
+    minLevel_ = std::numeric_limits<int>::max();
+    for (std::size_t p = 0; p < mesh.patches.size(); ++p) {
+        index_[mesh.patches[p].key] = p;
+        minLevel_ = std::min(minLevel_, mesh.patches[p].key.level);
+        maxLevel_ = std::max(maxLevel_, mesh.patches[p].key.level);
+    }
+}
+
+// Inside patch `patch` (no check): the quad's triangle holding (x, z), as build() packs them:
+// (v00, v01, v10) below the diagonal from v10 to v01, (v10, v01, v11) above it.
+double TerrainSurface::heightIn(std::size_t patch, double x_m, double z_m) const {
+    const TerrainPatchDraw& p = mesh_->patches[patch];
+    const double s = TerrainPatch::spacing_m(p.key.level);
+    const double u = (x_m - TerrainPatch::originX_m(p.key)) / s;
+    const double w = (z_m - TerrainPatch::originZ_m(p.key)) / s;
+    const int a = std::clamp(int(std::floor(u)), 0, kQ - 1);
+    const int b = std::clamp(int(std::floor(w)), 0, kQ - 1);
+    const double fu = u - a, fw = w - b;
+    const auto y = [&](int da, int db) {
+        return double(mesh_->mesh.positions[3 * (p.firstVertex + (b + db) * kV + a + da) + 1]) +
+               mesh_->origin_m.y;
+    };
+    if (fu + fw <= 1.0) return y(0, 0) + fu * (y(1, 0) - y(0, 0)) + fw * (y(0, 1) - y(0, 0));
+    return y(1, 1) + (1.0 - fu) * (y(0, 1) - y(1, 1)) + (1.0 - fw) * (y(1, 0) - y(1, 1));
+}
+
+double TerrainSurface::heightAt(double x_m, double z_m) const {
+    if (!mesh_ || index_.empty()) return std::numeric_limits<double>::quiet_NaN();
+    const auto inside = [&](const PatchKey& key) {
+        const double size = TerrainPatch::size_m(key.level);
+        const double x0 = TerrainPatch::originX_m(key), z0 = TerrainPatch::originZ_m(key);
+        return x_m >= x0 && x_m <= x0 + size && z_m >= z0 && z_m <= z0 + size;
+    };
+    if (last_ < mesh_->patches.size() && inside(mesh_->patches[last_].key))
+        return heightIn(last_, x_m, z_m);
+    for (int level = minLevel_; level <= maxLevel_; ++level) {
+        const double size = TerrainPatch::size_m(level);
+        const PatchKey key{level, std::int64_t(std::floor(x_m / size)),
+                           std::int64_t(std::floor(z_m / size))};
+        if (auto it = index_.find(key); it != index_.end()) {
+            last_ = it->second;
+            return heightIn(last_, x_m, z_m);
+        }
+    }
+    return std::numeric_limits<double>::quiet_NaN();
 }
 
 // ---- [SECTION] Terrain proxy -----------------------------------------------------------------

@@ -111,6 +111,25 @@ std::vector<std::uint32_t> cornersToEvaluate(const TerrainMesh& mesh,
 // ones (in list order, so chains along ever coarser edges resolve). O(corners).
 void stitchCornerValues(const std::vector<TerrainCorner>& corners, glm::vec3* values);
 
+// The drawn terrain surface of a TerrainMesh (stitched heights, two triangles per quad as packed)
+// at any (x, z) inside its leaves: where objects placed on the terrain must stand, since far
+// patches are coarse and their surface lies up to metres off the true height.
+class TerrainSurface {
+  public:
+    TerrainSurface() = default;
+    explicit TerrainSurface(const TerrainMesh& mesh);
+    // Height of the drawn surface [m]; NaN outside every leaf. Remembers the last leaf it used
+    // (not thread-safe), so nearby queries in a row are cheap.
+    double heightAt(double x_m, double z_m) const;
+
+  private:
+    const TerrainMesh* mesh_ = nullptr;
+    std::unordered_map<PatchKey, std::size_t, PatchKeyHash> index_;
+    int minLevel_ = 0, maxLevel_ = -1;
+    mutable std::size_t last_ = 0;
+    double heightIn(std::size_t patch, double x_m, double z_m) const;
+};
+
 struct TerrainLodSettings {
     int coarsestLevel = 8;             // patch size 32 m * 2^8 = 8192 m
     double splitFactor = 1.5;          // split a patch while its distance < splitFactor * size

@@ -45,6 +45,7 @@ struct ViewOptions {
     std::string ambient = "volume";
     bool debugOverlay = false;
     std::string view = "shaded";
+    std::string camera = "chase";  // following a drive replay: chase or hood
     std::string shaders;
     double time_h = -1.0;
 };
@@ -80,6 +81,7 @@ Size checkViewOptions(const ViewOptions& o) {
     const Size size = parseSize(o.size, "--size");
     checkAmbienceMethod(o.ambient, "--ambient");
     parseViewOutput(o.view, "--view");
+    parseCarView(o.camera, "--camera");
     if (o.debugOverlay && o.ambient != "volume")
         throw InputError("--debug-overlay", "needs --ambient volume");
     if (o.frames < 0) throw InputError("--frames", "must be >= 0");
@@ -259,11 +261,16 @@ void runView(const ViewOptions& o) {
         input.replayTime_s = replayTime_s;
         input.timeOfDay_h = timeOfDay_h;
         input.camera = cam;
-        loop.step(input);
+        // Following a drive: the car, seen as --camera says; flying free: no car.
+        const CarView carView = follow && replay.mode == ReplayMode::Drive
+                                    ? parseCarView(o.camera, "--camera") : CarView::None;
+        if (carView != loop.carView())
+            loop.setCarView(carView, [&world](double x, double z) { return world.height(x, z); });
+        const CameraSample eye = loop.step(input).view;  // the eye the view rendered from
         if (o.debugOverlay && volume) {
             auto pixels = renderer.readRgb8();
-            drawAnchorOverlay(pixels, size.width, size.height, renderer.viewProjection(cam),
-                              cam.position_m, *volume);
+            drawAnchorOverlay(pixels, size.width, size.height, renderer.viewProjection(eye),
+                              eye.position_m, *volume);
             renderer.replaceLdr(pixels);
         }
         renderer.blitToWindow(platform->width(), platform->height());
@@ -296,6 +303,8 @@ void addViewCommand(CLI::App& app) {
                   "mark anchors and the probe being captured on screen and on screenshots");
     cmd->add_option("--view", o->view,
                     "shaded (default) or ambient: the ambient term alone, every surface white");
+    cmd->add_option("--camera", o->camera,
+                    "following a drive replay: chase (default; behind and above the car) or hood");
     cmd->add_option("--record", o->record, "file the R key records to (default recorded.json)");
     cmd->add_option("--frames", o->frames, "render N frames, then exit (non-interactive)");
     cmd->add_option("--screenshot", o->screenshot, "with --frames: save the last frame here");

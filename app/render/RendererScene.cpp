@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include <glm/geometric.hpp>
 
@@ -135,7 +136,8 @@ RendererScene::RendererScene(const World& world, const RendererSceneSettings& se
             top = std::max(top, full.positions[i]);
         plantHeight_m_[k] = top;
     }
-    vehicleMesh_ = uploadMesh(makeVehicleMesh());
+    vehicleLevel_ = makeVehicleMesh();
+    vehicleMesh_ = uploadMesh(vehicleLevel_);
 }
 
 RendererScene::~RendererScene() = default;
@@ -152,6 +154,7 @@ void RendererScene::updateTerrain(const glm::dvec3& eye_m) {
                             std::floor(eye_m.z / snap) * snap);
     terrainMesh_ = terrainCache_.build(terrainLeaves_, origin);
     terrainGl_ = uploadMesh(terrainMesh_.mesh);
+    terrainSurface_ = TerrainSurface(terrainMesh_);
     terrainBounds_.clear();
     const auto& pos = terrainMesh_.mesh.positions;
     for (const TerrainPatchDraw& p : terrainMesh_.patches) {
@@ -226,8 +229,15 @@ void RendererScene::buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj
     if (vehicle_) {
         // The camera's own car (docs/ARCHITECTURE.md "Terrain and objects": vegetation and vehicle
         // get per-pixel SH).
+        // Pitched on the CPU (the object shader turns about +Y only); on the road ribbon, which
+        // floats roadLift_m above the terrain the replay's eye height counts from.
+        if (std::abs(vehicle_->pitch_rad - vehicleMeshPitch_rad_) > 1e-4) {
+            vehicleMesh_ = uploadMesh(pitchedMesh(vehicleLevel_, vehicle_->pitch_rad));
+            vehicleMeshPitch_rad_ = vehicle_->pitch_rad;
+        }
         ObjectInstance inst;
-        const glm::dvec3 rel = vehicle_->position_m - eye_m;
+        const glm::dvec3 rel =
+            vehicle_->position_m + glm::dvec3(0.0, settings_.roadLift_m, 0.0) - eye_m;
         inst.positionScale = glm::vec4(float(rel.x), float(rel.y), float(rel.z), 1.0f);
         inst.rotationSet = glm::vec2(float(vehicle_->heading_rad),
                                      float(ambient.objectSet(vehicle_->position_m, out.ambientSets)));
@@ -278,6 +288,26 @@ void RendererScene::addRoads(const glm::dvec3& eye_m, const glm::mat4* viewProj,
 
 // ---- [SECTION] Plants ------------------------------------------------------------------------
 
+// Far patches are coarse: their surface lies up to metres above or below a plant's true base
+// (World::height), and a plant placed there floats or sinks. The main view stands each plant on
+// the drawn surface instead: at the lowest of it under the plant's centre and at four points
+// around it (a trunk's width for trees, half the footprint for bushes and rocks), so no side of
+// its base hangs above the ground on a slope. Where no leaf is drawn, the true base.
+static constexpr double kPlantSinkMargin_m = 12.0;  // bounds drawn - true base, for culling
+
+static double drawnBase_m(const TerrainSurface& surface, const Plant& p) {
+    const bool small = p.kind == PlantKind::Bush || p.kind == PlantKind::Rock;
+    const double r = p.scale * (small ? 0.5 * Vegetation::footprintRadius_m(p.kind) : 0.3);
+    double base = surface.heightAt(p.position_m.x, p.position_m.z);
+    if (!std::isfinite(base)) return p.position_m.y;
+    for (const auto& [dx, dz] : {std::pair{r, 0.0}, {-r, 0.0}, {0.0, r}, {0.0, -r}}) {
+        const double h = surface.heightAt(p.position_m.x + dx, p.position_m.z + dz);
+        if (std::isfinite(h)) base = std::min(base, h);
+    }
+    return std::clamp(base, p.position_m.y - kPlantSinkMargin_m,
+                      p.position_m.y + kPlantSinkMargin_m);
+}
+
 void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewProj, bool capture,
                               const AmbientSource& ambient, DrawList& out, std::size_t* drawn,
                               double nearRadius_m) {
@@ -312,6 +342,9 @@ void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewP
                     ylo = std::min(ylo, p.position_m.y);
                     yhi = std::max(yhi, p.position_m.y + p.scale * maxHeight);
                 }
+                // Plants stand on the drawn terrain, up to a few metres below their true base.
+                ylo -= kPlantSinkMargin_m;
+                yhi += kPlantSinkMargin_m;
                 const glm::vec3 lo(float(x0 - 4 - centre_m.x), float(ylo - centre_m.y),
                                    float(z0 - 4 - centre_m.z));
                 const glm::vec3 hi(float(x0 + Vegetation::kTile_m + 4 - centre_m.x),
@@ -341,7 +374,8 @@ void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewP
                                                                 : 2;
                 }
                 ObjectInstance inst;
-                const glm::dvec3 rel = p.position_m - centre_m;
+                glm::dvec3 rel = p.position_m - centre_m;
+                if (!capture) rel.y = drawnBase_m(terrainSurface_, p) - centre_m.y;
                 inst.positionScale = glm::vec4(float(rel.x), float(rel.y), float(rel.z), p.scale);
                 std::uint32_t set;
                 if (lod == 2) {
