@@ -30,11 +30,30 @@
 
 #include <glm/vec3.hpp>
 
+#include "world/Heightfield.h"
 #include "world/WorldMesh.h"
 
 namespace amb {
 
 class World;
+
+// Ground albedo as the terrain draws it, in the patches and in the capture's proxy alike
+// (docs/ARCHITECTURE.md "Terrain and objects"): World::classify's blend of grass, rock, sand,
+// snow, water and road, with its edges made ragged by noise (the slope where rock shows, the snow
+// line, the beach), stone that varies in strata and tint, scree on high ground, and a brightness
+// that varies on three scales, so that no slope is one flat colour. Noise finer than two vertex
+// spacings fades out, so coarse patches do not alias it. Thread-safe.
+class TerrainAlbedo {
+  public:
+    explicit TerrainAlbedo(const World& world);
+    // At (x, z) of height h, road weight `road` and unit normal n, drawn `spacing_m` apart.
+    glm::vec3 at(double x_m, double z_m, double height_m, double road, const glm::dvec3& normal,
+                 double spacing_m) const;
+
+  private:
+    const World& world_;
+    Heightfield::Octave broad_, mid_, fine_;  // 90 m, 23 m, 7 m
+};
 
 struct PatchKey {
     int level = 0;       // 0 = finest

@@ -65,8 +65,10 @@ static constexpr int kRoadChunkSegments = 48;
 
 // The far LOD of a plant: an octahedron (6 vertices, 8 triangles) spanning the bounding box of
 // the upper part of the mesh (the crown, or the whole of a bush or rock), with its mean albedo
-// and ellipsoid normals, so it shades like a rounded crown at a few pixels' size.
-static WorldMesh farPlantMesh(const WorldMesh& full) {
+// and ellipsoid normals, so it shades like a rounded crown at a few pixels' size. A bush or a
+// rock (`mound`) is the whole mesh's box with its widest ring low, at a fifth of its height, and
+// its lowest point below the ground: a mound sitting on the ground, not a diamond on its tip.
+static WorldMesh farPlantMesh(const WorldMesh& full, bool mound) {
     float top = 0.0f;
     for (size_t i = 1; i < full.positions.size(); i += 3) top = std::max(top, full.positions[i]);
     glm::vec3 lo(1e30f), hi(-1e30f), albedo(0.0f);
@@ -74,20 +76,22 @@ static WorldMesh farPlantMesh(const WorldMesh& full) {
     for (size_t v = 0; v < full.vertexCount(); ++v) {
         const glm::vec3 p(full.positions[3 * v], full.positions[3 * v + 1],
                           full.positions[3 * v + 2]);
-        if (p.y < 0.35f * top) continue;
+        if (!mound && p.y < 0.35f * top) continue;
         lo = glm::min(lo, p);
         hi = glm::max(hi, p);
         albedo += glm::vec3(full.albedo[3 * v], full.albedo[3 * v + 1], full.albedo[3 * v + 2]);
         ++n;
     }
     albedo /= float(std::max(n, 1));
-    const glm::vec3 c = 0.5f * (lo + hi), r = glm::max(0.5f * (hi - lo), glm::vec3(0.05f));
+    glm::vec3 c = 0.5f * (lo + hi), r = glm::max(0.5f * (hi - lo), glm::vec3(0.05f));
+    if (mound) c.y = std::max(0.0f, lo.y) + 0.2f * (hi.y - std::max(0.0f, lo.y));
     // Reach down to the ground so the far tree stands on it.
     const glm::vec3 dirs[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
     WorldMesh m;
     for (const glm::vec3& d : dirs) {
         glm::vec3 p = c + d * r;
-        if (d.y < 0.0f) p.y = 0.0f;
+        if (d.y < 0.0f) p.y = mound ? std::min(lo.y, 0.0f) : 0.0f;
+        if (d.y > 0.0f) p.y = hi.y;
         m.positions.insert(m.positions.end(), {p.x, p.y, p.z});
         m.normals.insert(m.normals.end(), {d.x, d.y, d.z});
         m.albedo.insert(m.albedo.end(), {albedo.r, albedo.g, albedo.b});
@@ -130,7 +134,8 @@ RendererScene::RendererScene(const World& world, const RendererSceneSettings& se
         const WorldMesh& full = Vegetation::mesh(PlantKind(k));
         plantMeshes_[k] = uploadMesh(full);
         plantProxies_[k] = uploadMesh(Vegetation::proxyMesh(PlantKind(k)));
-        plantFar_[k] = uploadMesh(farPlantMesh(full));
+        plantFar_[k] = uploadMesh(
+            farPlantMesh(full, PlantKind(k) == PlantKind::Bush || PlantKind(k) == PlantKind::Rock));
         float top = 0.0f;
         for (size_t i = 1; i < full.positions.size(); i += 3)
             top = std::max(top, full.positions[i]);
