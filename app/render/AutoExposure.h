@@ -24,8 +24,8 @@ namespace amb {
 struct AutoExposureSettings {
     bool enabled = true;       // false: the fixed exposure of the sky (exposureFor)
     double tau_s = 1.0;        // time constant of the adaptation [s of simulation time]
-    double key = 0.18;         // the mean before the tone curve of a scene as bright as noon
-    double darkening = 0.25;   // how much of a darker scene's darkness stays, in [0, 1)
+    double key = 0.10;         // the mean before the tone curve of a scene as bright as noon
+    double darkening = 0.08;   // how much of a darker scene's darkness stays, in [0, 1)
     double minRelative = 1e-7, maxRelative = 100.0;  // range of L / L_ref
 };
 
