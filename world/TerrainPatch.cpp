@@ -543,6 +543,17 @@ double TerrainSurface::heightAt(double x_m, double z_m) const {
     return std::numeric_limits<double>::quiet_NaN();
 }
 
+double TerrainSurface::baseUnder(double x_m, double z_m, double radius_m) const {
+    double base = heightAt(x_m, z_m);
+    if (!std::isfinite(base)) return base;
+    const double r = radius_m;
+    for (const auto& [dx, dz] : {std::pair{r, 0.0}, {-r, 0.0}, {0.0, r}, {0.0, -r}}) {
+        const double h = heightAt(x_m + dx, z_m + dz);
+        if (std::isfinite(h)) base = std::min(base, h);
+    }
+    return base;
+}
+
 // ---- [SECTION] Terrain proxy -----------------------------------------------------------------
 
 WorldMesh makeTerrainProxy(const World& world, const glm::dvec3& centre_m, double radius_m,

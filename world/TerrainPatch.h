@@ -140,6 +140,10 @@ class TerrainSurface {
     // Height of the drawn surface [m]; NaN outside every leaf. Remembers the last leaf it used
     // (not thread-safe), so nearby queries in a row are cheap.
     double heightAt(double x_m, double z_m) const;
+    // Where an object of footprint radius_m centred at (x, z) stands on the drawn surface: the
+    // lowest of it at the centre and at four points radius_m away along x and z, so that no side
+    // of its base hangs above a slope. NaN where the centre is outside every leaf.
+    double baseUnder(double x_m, double z_m, double radius_m) const;
 
   private:
     const TerrainMesh* mesh_ = nullptr;

@@ -295,20 +295,16 @@ void RendererScene::addRoads(const glm::dvec3& eye_m, const glm::mat4* viewProj,
 
 // Far patches are coarse: their surface lies up to metres above or below a plant's true base
 // (World::height), and a plant placed there floats or sinks. The main view stands each plant on
-// the drawn surface instead: at the lowest of it under the plant's centre and at four points
-// around it (a trunk's width for trees, half the footprint for bushes and rocks), so no side of
-// its base hangs above the ground on a slope. Where no leaf is drawn, the true base.
-static constexpr double kPlantSinkMargin_m = 12.0;  // bounds drawn - true base, for culling
+// the drawn surface instead (TerrainSurface::baseUnder: the lowest of it under a trunk's width
+// for trees, under half the footprint for bushes and rocks). Where no leaf is drawn, the true
+// base; never more than kPlantSinkMargin_m from it (which the culling boxes allow for).
+static constexpr double kPlantSinkMargin_m = 12.0;
 
 static double drawnBase_m(const TerrainSurface& surface, const Plant& p) {
     const bool small = p.kind == PlantKind::Bush || p.kind == PlantKind::Rock;
     const double r = p.scale * (small ? 0.5 * Vegetation::footprintRadius_m(p.kind) : 0.3);
-    double base = surface.heightAt(p.position_m.x, p.position_m.z);
+    const double base = surface.baseUnder(p.position_m.x, p.position_m.z, r);
     if (!std::isfinite(base)) return p.position_m.y;
-    for (const auto& [dx, dz] : {std::pair{r, 0.0}, {-r, 0.0}, {0.0, r}, {0.0, -r}}) {
-        const double h = surface.heightAt(p.position_m.x + dx, p.position_m.z + dz);
-        if (std::isfinite(h)) base = std::min(base, h);
-    }
     return std::clamp(base, p.position_m.y - kPlantSinkMargin_m,
                       p.position_m.y + kPlantSinkMargin_m);
 }
