@@ -54,8 +54,9 @@ CameraSample ChaseCamera::update(const VehiclePose& car, double dt_s, bool cut,
     const glm::dvec3 toCar = lookAt(car, settings_) - eye.position_m;
     eye.forward = glm::length(toCar) > 1e-9 ? glm::normalize(toCar) : sample.forward;
     const glm::dvec3 right = glm::cross(eye.forward, glm::dvec3(0.0, 1.0, 0.0));
-    eye.up = glm::length(right) > 1e-9 ? glm::normalize(glm::cross(glm::normalize(right), eye.forward))
-                                       : sample.up;
+    eye.up = glm::length(right) > 1e-9
+                 ? glm::normalize(glm::cross(glm::normalize(right), eye.forward))
+                 : sample.up;
     return eye;
 }
 

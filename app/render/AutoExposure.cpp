@@ -44,8 +44,8 @@ float AutoExposure::update(double time_s, double timeOfDay_h, bool cut,
                          !std::isfinite(target);
     const double floorLog = std::log(settings_.minRelative * reference_);
     const double ceilLog = std::log(settings_.maxRelative * reference_);
-    const double targetLog = std::isfinite(target) ? std::clamp(target, floorLog, ceilLog)
-                                                   : std::log(reference_);
+    const double targetLog =
+        std::isfinite(target) ? std::clamp(target, floorLog, ceilLog) : std::log(reference_);
     const double adaptedLog =
         restart ? targetLog
                 : adaptLog(std::log(adapted_), targetLog, time_s - time_s_, settings_.tau_s);
@@ -90,7 +90,8 @@ double LuminanceMeter::logMeanLuminance(GLuint framebuffer) {
                            midHeight_, GL_COLOR_BUFFER_BIT, GL_LINEAR);
     glBlitNamedFramebuffer(midFbo_.id(), smallFbo_.id(), 0, 0, midWidth_, midHeight_, 0, 0,
                            smallWidth_, smallHeight_, GL_COLOR_BUFFER_BIT, GL_LINEAR);
-    const std::vector<float> rgb = readPixelsRgb32f(smallFbo_.id(), 0, 0, smallWidth_, smallHeight_);
+    const std::vector<float> rgb =
+        readPixelsRgb32f(smallFbo_.id(), 0, 0, smallWidth_, smallHeight_);
     glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
     double sum = 0.0;
     const std::size_t n = rgb.size() / 3;

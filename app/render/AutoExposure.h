@@ -22,10 +22,10 @@
 namespace amb {
 
 struct AutoExposureSettings {
-    bool enabled = true;       // false: the fixed exposure of the sky (exposureFor)
-    double tau_s = 1.0;        // time constant of the adaptation [s of simulation time]
-    double key = 0.10;         // the mean before the tone curve of a scene as bright as noon
-    double darkening = 0.08;   // how much of a darker scene's darkness stays, in [0, 1)
+    bool enabled = true;      // false: the fixed exposure of the sky (exposureFor)
+    double tau_s = 1.0;       // time constant of the adaptation [s of simulation time]
+    double key = 0.10;        // the mean before the tone curve of a scene as bright as noon
+    double darkening = 0.08;  // how much of a darker scene's darkness stays, in [0, 1)
     double minRelative = 1e-7, maxRelative = 100.0;  // range of L / L_ref
 };
 
@@ -43,8 +43,7 @@ class AutoExposure {
     // clock's step since the last frame; later calls for the same frame return the same
     // exposure. The first frame, a cut, a clock that went back or a time of day that changed
     // while the clock stood still start the adaptation afresh at the metered luminance.
-    float update(double time_s, double timeOfDay_h, bool cut,
-                 const std::function<double()>& meter);
+    float update(double time_s, double timeOfDay_h, bool cut, const std::function<double()>& meter);
     // The fixed exposure, held as this frame's (auto exposure off).
     float hold(float exposure) { return exposure_ = exposure; }
     // The exposure of the last frame (the fixed noon exposure before any).

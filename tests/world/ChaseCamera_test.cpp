@@ -52,8 +52,8 @@ TEST(ChaseCamera, StaysBehindAndAboveTheCarAndAboveTheTerrain) {
         // Behind: at least 3 m behind the car's middle along its heading (the target is 7.5 m).
         minBehind = std::min(minBehind, -glm::dot(fromCar, ahead) + VehicleShape::centreZ_m());
         EXPECT_GT(fromCar.y, 1.5) << "sample " << i;  // above the car's ground point
-        minClearance = std::min(minClearance, eye.position_m.y -
-                                                  world.height(eye.position_m.x, eye.position_m.z));
+        minClearance = std::min(
+            minClearance, eye.position_m.y - world.height(eye.position_m.x, eye.position_m.z));
         // It looks at the car: the middle of the car lies straight ahead.
         const glm::dvec3 look = glm::normalize(ChaseCamera::lookAt(car, settings) - eye.position_m);
         EXPECT_GT(glm::dot(look, eye.forward), 1.0 - 1e-9);

@@ -536,30 +536,31 @@ TEST(TerrainAlbedo, RockOnSteepSlopesAndNoFlatColour) {
     double grassSum = 0.0, grassSq = 0.0, rockSum = 0.0, rockSq = 0.0;
     int grass = 0;
     for (const glm::dvec3& spot : {steepSpot(world), flatSpot(world)}) {
-    const std::int64_t i0 = std::int64_t(std::floor(spot.x / 32.0)), k0 = std::int64_t(std::floor(spot.z / 32.0));
-    for (std::int64_t i = i0 - 6; i <= i0 + 6; ++i)
-        for (std::int64_t k = k0 - 6; k <= k0 + 6; ++k) {
-            const PatchKey key{0, i, k};
-            const TerrainPatch p = TerrainPatch::generate(world, key);
-            for (int v = 0; v < kV * kV; ++v) {
-                const double ny = p.normals[3 * v + 1];
-                const double x = vertexX(key, v % kV), z = vertexZ(key, v / kV);
-                double road = 0.0;
-                world.heightAndRoad(x, z, &road);
-                if (road > 0.0 || p.heights_m[v] < 5.0 || p.heights_m[v] > 450.0) continue;
-                const glm::dvec3 a(p.albedo[3 * v], p.albedo[3 * v + 1], p.albedo[3 * v + 2]);
-                const double lum = luminance(a);
-                if (1.0 - ny > World::kRockSlope + 0.1) {
-                    ++steep;
-                    // Stone: grey to warm, never green (g <= r) nor straw (b >= 0.45 r).
-                    if (a.g <= 1.0 * a.r + 1e-6 && a.b >= 0.45 * a.r) ++rockLike;
-                    rockSum += lum, rockSq += lum * lum;
-                } else if (1.0 - ny < 0.03) {
-                    ++grass;
-                    grassSum += lum, grassSq += lum * lum;
+        const std::int64_t i0 = std::int64_t(std::floor(spot.x / 32.0)),
+                           k0 = std::int64_t(std::floor(spot.z / 32.0));
+        for (std::int64_t i = i0 - 6; i <= i0 + 6; ++i)
+            for (std::int64_t k = k0 - 6; k <= k0 + 6; ++k) {
+                const PatchKey key{0, i, k};
+                const TerrainPatch p = TerrainPatch::generate(world, key);
+                for (int v = 0; v < kV * kV; ++v) {
+                    const double ny = p.normals[3 * v + 1];
+                    const double x = vertexX(key, v % kV), z = vertexZ(key, v / kV);
+                    double road = 0.0;
+                    world.heightAndRoad(x, z, &road);
+                    if (road > 0.0 || p.heights_m[v] < 5.0 || p.heights_m[v] > 450.0) continue;
+                    const glm::dvec3 a(p.albedo[3 * v], p.albedo[3 * v + 1], p.albedo[3 * v + 2]);
+                    const double lum = luminance(a);
+                    if (1.0 - ny > World::kRockSlope + 0.1) {
+                        ++steep;
+                        // Stone: grey to warm, never green (g <= r) nor straw (b >= 0.45 r).
+                        if (a.g <= 1.0 * a.r + 1e-6 && a.b >= 0.45 * a.r) ++rockLike;
+                        rockSum += lum, rockSq += lum * lum;
+                    } else if (1.0 - ny < 0.03) {
+                        ++grass;
+                        grassSum += lum, grassSq += lum * lum;
+                    }
                 }
             }
-        }
     }
     ASSERT_GT(steep, 200);
     ASSERT_GT(grass, 200);

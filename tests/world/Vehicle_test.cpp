@@ -29,14 +29,15 @@ TEST(Vehicle, MeshIsAFewHundredTrianglesOfClosedOutwardSurfaces) {
     // vertices. Closed and consistently wound: every directed edge once, and its reverse once.
     std::map<std::tuple<float, float, float>, int> weld;
     auto id = [&](std::uint32_t i) {
-        const auto key = std::make_tuple(m.positions[3 * i], m.positions[3 * i + 1],
-                                         m.positions[3 * i + 2]);
+        const auto key =
+            std::make_tuple(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]);
         return weld.emplace(key, int(weld.size())).first->second;
     };
     std::map<std::pair<int, int>, int> edges;
     double volume = 0.0;
     for (std::size_t t = 0; t < m.triangleCount(); ++t) {
-        const std::uint32_t a = m.indices[3 * t], b = m.indices[3 * t + 1], c = m.indices[3 * t + 2];
+        const std::uint32_t a = m.indices[3 * t], b = m.indices[3 * t + 1],
+                            c = m.indices[3 * t + 2];
         const int ia = id(a), ib = id(b), ic = id(c);
         ++edges[{ia, ib}], ++edges[{ib, ic}], ++edges[{ic, ia}];
         const glm::dvec3 pa = position(m, a), pb = position(m, b), pc = position(m, c);
