@@ -1,5 +1,6 @@
 // FrameLoop.h — the frame, its stages listed once, in order (docs/ARCHITECTURE.md, "The frame"):
-//   1. advance      the replay camera (fixed dt) and the time of day
+//   1. advance      the replay camera (fixed dt) and the time of day; on drives the car under it
+//                   and the main view's eye (the chase camera, world/ChaseCamera.h)
 //   2. predict      the scheduler's motion model picks the next probe position(s)
 //   3. capture      this frame's share of cube faces of the static coarse scene
 //   4. store        insert / refresh anchors; expire, prune; advance blending
