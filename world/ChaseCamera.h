@@ -18,8 +18,8 @@
 namespace amb {
 
 struct ChaseSettings {
-    double distance_m = 7.5;       // behind the middle of the car, horizontally
-    double height_m = 2.6;         // above the car's ground point
+    double distance_m = 6.5;       // behind the middle of the car, horizontally
+    double height_m = 2.4;         // above the car's ground point
     double lookHeight_m = 1.0;     // looks at the middle of the car this high
     double frequency_per_s = 3.0;  // the spring's natural angular frequency (1 / time constant)
     double clearance_m = 1.0;      // never lower above the terrain

@@ -19,13 +19,13 @@ namespace {
 
 using Vec3 = glm::dvec3;
 
-const glm::vec3 kPaint(0.50f, 0.05f, 0.04f);
+const glm::vec3 kPaint(0.05f, 0.14f, 0.45f);
 const glm::vec3 kGlass(0.02f, 0.025f, 0.03f);
 const glm::vec3 kUnderside(0.04f, 0.04f, 0.04f);
 const glm::vec3 kTyre(0.02f, 0.02f, 0.02f);
 const glm::vec3 kRim(0.45f, 0.45f, 0.47f);
 const glm::vec3 kHeadlight(0.90f, 0.88f, 0.78f);
-const glm::vec3 kTaillight(0.55f, 0.02f, 0.02f);
+const glm::vec3 kTaillight(0.80f, 0.04f, 0.03f);
 
 // Appends one triangle with its own flat normal. If `inside` is given and the winding would make
 // the normal face it, the winding is turned round (so every part's normals face outward).

@@ -49,7 +49,7 @@ TEST(ChaseCamera, StaysBehindAndAboveTheCarAndAboveTheTerrain) {
         const CameraSample eye = chase.update(car, drive.step_s, i == 0, path[i]);
         const glm::dvec3 fromCar = eye.position_m - car.position_m;
         const glm::dvec3 ahead(std::sin(car.heading_rad), 0.0, std::cos(car.heading_rad));
-        // Behind: at least 3 m behind the car's middle along its heading (the target is 7.5 m).
+        // Behind: at least 3 m behind the car's middle along its heading (the target is 6.5 m).
         minBehind = std::min(minBehind, -glm::dot(fromCar, ahead) + VehicleShape::centreZ_m());
         EXPECT_GT(fromCar.y, 1.5) << "sample " << i;  // above the car's ground point
         minClearance = std::min(
