@@ -487,6 +487,9 @@ void runReplay(RunOptions o) {
     report.width = size.width;
     report.height = size.height;
     report.ambient = o.ambient;
+    if (plan.autoExposure)
+        report.toneMapping = "auto exposure (eye adaptation to the mean log luminance in "
+                             "simulation time), ACES filmic fit (Narkowicz 2015), sRGB";
     report.frameStep_s = loop.frameStep_s();
     report.loops = o.loops;
     // Rows in one block from the start: no copy of them all when a long run outgrows it.
