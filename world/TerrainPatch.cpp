@@ -78,6 +78,7 @@ double smoothstep(double e0, double e1, double x) {
 
 TerrainAlbedo::TerrainAlbedo(const World& world)
     : world_(world),
+      vast_(Heightfield::makeOctave(world.settings().seed, 0xA1BDu, 400.0)),
       broad_(Heightfield::makeOctave(world.settings().seed, 0xA1BEu, 90.0)),
       mid_(Heightfield::makeOctave(world.settings().seed, 0xA1BFu, 23.0)),
       fine_(Heightfield::makeOctave(world.settings().seed, 0xA1C0u, 7.0)) {}
@@ -87,6 +88,7 @@ glm::vec3 TerrainAlbedo::at(double x_m, double z_m, double height_m, double road
     const auto fade = [&](double wavelength_m) {
         return smoothstep(2.0 * spacing_m, 4.0 * spacing_m, wavelength_m);
     };
+    const double n0 = Heightfield::octaveNoise(vast_, x_m, z_m) * fade(400.0);
     const double n1 = Heightfield::octaveNoise(broad_, x_m, z_m) * fade(90.0);
     const double n2 = Heightfield::octaveNoise(mid_, x_m, z_m) * fade(23.0);
     const double n3 = Heightfield::octaveNoise(fine_, x_m, z_m) * fade(7.0);
@@ -118,12 +120,14 @@ glm::vec3 TerrainAlbedo::at(double x_m, double z_m, double height_m, double road
     const double scree = 0.6 * smoothstep(0.1, 0.6, n2) * smoothstep(380.0, 520.0, height_m) *
                          (1.0 - snowy) * (1.0 - paved) * (1.0 - rocky);
     a = glm::mix(a, rock, scree);
-    // (4) Grass turns drier or lusher, and everything but the road varies in brightness.
-    if (a.g > 1.2 * a.r) {
-        a.r *= 1.0 + 0.25 * n1;
-        a.b *= 1.0 - 0.15 * n1;
-    }
-    a *= 1.0 + (0.16 * n2 + 0.08 * n3 + 0.06 * n1) * (1.0 - 0.8 * paved);
+    // (4) Meadows turn lusher or drier in broad patches (not on rock, snow, sand or road), and
+    // everything but the road varies in brightness.
+    const double meadow = (1.0 - rocky) * (1.0 - snowy) * (1.0 - paved) * (1.0 - scree / 0.6) *
+                          smoothstep(3.0, 6.0, height_m - water_m);
+    const double lush = std::clamp(0.9 * n0 + 0.5 * n1, -1.0, 1.0) * meadow;
+    a *= lush > 0.0 ? glm::mix(glm::dvec3(1.0), glm::dvec3(0.62, 1.0, 0.7), lush)
+                    : glm::mix(glm::dvec3(1.0), glm::dvec3(1.2, 1.02, 0.75), -lush);
+    a *= 1.0 + (0.16 * n2 + 0.08 * n3 + 0.08 * n1 + 0.1 * n0) * (1.0 - 0.8 * paved);
     return glm::vec3(glm::clamp(a, 0.0, 1.0));
 }
 

@@ -52,7 +52,7 @@ class TerrainAlbedo {
 
   private:
     const World& world_;
-    Heightfield::Octave broad_, mid_, fine_;  // 90 m, 23 m, 7 m
+    Heightfield::Octave vast_, broad_, mid_, fine_;  // 400 m, 90 m, 23 m, 7 m
 };
 
 struct PatchKey {

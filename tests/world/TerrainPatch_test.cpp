@@ -533,7 +533,9 @@ glm::dvec3 flatSpot(const World& world) {
 TEST(TerrainAlbedo, RockOnSteepSlopesAndNoFlatColour) {
     const World& world = defaultWorld();
     int steep = 0, rockLike = 0;
-    double grassSum = 0.0, grassSq = 0.0, rockSum = 0.0, rockSq = 0.0;
+    // Colour statistics: sums of the albedo and of its squared length, per class.
+    glm::dvec3 grassSum(0.0), rockSum(0.0);
+    double grassSq = 0.0, rockSq = 0.0;
     int grass = 0;
     for (const glm::dvec3& spot : {steepSpot(world), flatSpot(world)}) {
         const std::int64_t i0 = std::int64_t(std::floor(spot.x / 32.0)),
@@ -549,15 +551,14 @@ TEST(TerrainAlbedo, RockOnSteepSlopesAndNoFlatColour) {
                     world.heightAndRoad(x, z, &road);
                     if (road > 0.0 || p.heights_m[v] < 5.0 || p.heights_m[v] > 450.0) continue;
                     const glm::dvec3 a(p.albedo[3 * v], p.albedo[3 * v + 1], p.albedo[3 * v + 2]);
-                    const double lum = luminance(a);
-                    if (1.0 - ny > World::kRockSlope + 0.1) {
+                        if (1.0 - ny > World::kRockSlope + 0.1) {
                         ++steep;
                         // Stone: grey to warm, never green (g <= r) nor straw (b >= 0.45 r).
                         if (a.g <= 1.0 * a.r + 1e-6 && a.b >= 0.45 * a.r) ++rockLike;
-                        rockSum += lum, rockSq += lum * lum;
+                        rockSum += a, rockSq += glm::dot(a, a);
                     } else if (1.0 - ny < 0.03) {
                         ++grass;
-                        grassSum += lum, grassSq += lum * lum;
+                        grassSum += a, grassSq += glm::dot(a, a);
                     }
                 }
             }
@@ -565,10 +566,11 @@ TEST(TerrainAlbedo, RockOnSteepSlopesAndNoFlatColour) {
     ASSERT_GT(steep, 200);
     ASSERT_GT(grass, 200);
     EXPECT_GE(double(rockLike) / steep, 0.95);
-    // Not one flat colour: the luminance varies by a relative standard deviation of 8 % or more.
-    const auto relStd = [](double sum, double sq, int n) {
-        const double mean = sum / n;
-        return std::sqrt(std::max(0.0, sq / n - mean * mean)) / mean;
+    // Not one flat colour: the albedo's RMS distance from its mean colour is 8 % of the mean's
+    // length or more, on rock and on grass alike.
+    const auto relStd = [](const glm::dvec3& sum, double sq, int n) {
+        const glm::dvec3 mean = sum / double(n);
+        return std::sqrt(std::max(0.0, sq / n - glm::dot(mean, mean))) / glm::length(mean);
     };
     EXPECT_GT(relStd(rockSum, rockSq, steep), 0.08);
     EXPECT_GT(relStd(grassSum, grassSq, grass), 0.08);
