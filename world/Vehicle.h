@@ -1,5 +1,5 @@
 // Vehicle.h — the camera's own car on drives: a low-poly car as a plain mesh (body lofted through
-// cross-sections, glass, four wheels, lights; about 350 triangles), and where it stands given the
+// cross-sections, glass, four wheels, lights; 332 triangles), and where it stands given the
 // replay's camera sample.
 //
 // Local frame: +Z forward, +Y up, origin on the ground under the driver's eye, which the replay
