@@ -2,21 +2,26 @@
 // the coarse terrain proxy for probe capture.
 //
 // [SECTION] Lattice helpers
+// [SECTION] Albedo: the material blend with noise
 // [SECTION] Patch sampling (cached per key)
 // [SECTION] LOD selection
 // [SECTION] Stitching: a vertex's rendered value comes from the coarsest patch containing it;
 //           so does a corner's value (corner stitching)
 // [SECTION] Packing into plain arrays
+// [SECTION] Drawn surface: heights of the packed triangles at any point
 // [SECTION] Terrain proxy for probe capture
 #include "world/TerrainPatch.h"
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 #include <tbb/parallel_for.h>
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
+#include "world/Conventions.h"
 #include "world/Error.h"
 #include "world/World.h"
 
@@ -60,6 +65,72 @@ double TerrainPatch::size_m(int level) {
     return spacing_m(level) * kPatchQuads;
 }
 
+// ---- [SECTION] Albedo ------------------------------------------------------------------------
+
+namespace {
+
+double smoothstep(double e0, double e1, double x) {
+    const double t = std::clamp((x - e0) / (e1 - e0), 0.0, 1.0);
+    return t * t * (3.0 - 2.0 * t);
+}
+
+}  // namespace
+
+TerrainAlbedo::TerrainAlbedo(const World& world)
+    : world_(world),
+      vast_(Heightfield::makeOctave(world.settings().seed, 0xA1BDu, 400.0)),
+      broad_(Heightfield::makeOctave(world.settings().seed, 0xA1BEu, 90.0)),
+      mid_(Heightfield::makeOctave(world.settings().seed, 0xA1BFu, 23.0)),
+      fine_(Heightfield::makeOctave(world.settings().seed, 0xA1C0u, 7.0)) {}
+
+glm::vec3 TerrainAlbedo::at(double x_m, double z_m, double height_m, double road,
+                            const glm::dvec3& normal, double spacing_m) const {
+    const auto fade = [&](double wavelength_m) {
+        return smoothstep(2.0 * spacing_m, 4.0 * spacing_m, wavelength_m);
+    };
+    const double n0 = Heightfield::octaveNoise(vast_, x_m, z_m) * fade(400.0);
+    const double n1 = Heightfield::octaveNoise(broad_, x_m, z_m) * fade(90.0);
+    const double n2 = Heightfield::octaveNoise(mid_, x_m, z_m) * fade(23.0);
+    const double n3 = Heightfield::octaveNoise(fine_, x_m, z_m) * fade(7.0);
+    const double water_m = world_.settings().waterLevel_m;
+    // (1) The material blend with ragged edges: the slope where rock shows moves by +-0.06, the
+    // snow line by +-30 m on high ground, the beach by +-0.8 m; land stays land.
+    const double slope = std::clamp(1.0 - normal.y + 0.06 * n2, 0.0, 1.0);
+    const double horizontal = std::sqrt(std::max(0.0, 1.0 - normal.y * normal.y));
+    const double ny = 1.0 - slope, nh = std::sqrt(std::max(0.0, 1.0 - ny * ny));
+    const glm::dvec3 tilted = horizontal > 1e-9
+                                  ? glm::dvec3(normal.x * nh / horizontal, ny, normal.z * nh / horizontal)
+                                  : glm::dvec3(0.0, 1.0, 0.0);
+    double h = height_m + 30.0 * n1 * smoothstep(300.0, 500.0, height_m) +
+               0.8 * n2 * (1.0 - smoothstep(3.0, 8.0, height_m - water_m));
+    if (height_m >= water_m) h = std::max(h, water_m + 0.01);
+    glm::dvec3 a(world_.classify(x_m, z_m, h, road, tilted).albedo);
+    if (height_m < water_m) return glm::vec3(a);
+    // (2) Stone: light and dark strata across the height, a warm tint in places, grain.
+    const double strata = 0.5 + 0.5 * std::sin(height_m / 7.0 + 2.5 * n1 + 1.5 * n2);
+    glm::dvec3 rock = glm::mix(glm::dvec3(0.34, 0.32, 0.29), glm::dvec3(0.17, 0.16, 0.155), strata);
+    rock = glm::mix(rock, glm::dvec3(0.36, 0.27, 0.19), 0.5 * smoothstep(0.0, 0.8, n1));
+    rock *= 1.0 + 0.15 * n3;
+    const double paved = smoothstep(0.35, 0.65, road);
+    const double snowy = smoothstep(0.45, 0.75, luminance(a));
+    const double rocky = smoothstep(World::kRockSlope - 0.06, World::kRockSlope + 0.02, slope) *
+                         (1.0 - snowy) * (1.0 - paved);
+    a += rocky * (rock - glm::dvec3(World::materialAlbedo(Material::Rock)));
+    // (3) Scree on gentle high ground, in patches.
+    const double scree = 0.6 * smoothstep(0.1, 0.6, n2) * smoothstep(380.0, 520.0, height_m) *
+                         (1.0 - snowy) * (1.0 - paved) * (1.0 - rocky);
+    a = glm::mix(a, rock, scree);
+    // (4) Meadows turn lusher or drier in broad patches (not on rock, snow, sand or road), and
+    // everything but the road varies in brightness.
+    const double meadow = (1.0 - rocky) * (1.0 - snowy) * (1.0 - paved) * (1.0 - scree / 0.6) *
+                          smoothstep(3.0, 6.0, height_m - water_m);
+    const double lush = std::clamp(0.9 * n0 + 0.5 * n1, -1.0, 1.0) * meadow;
+    a *= lush > 0.0 ? glm::mix(glm::dvec3(1.0), glm::dvec3(0.62, 1.0, 0.7), lush)
+                    : glm::mix(glm::dvec3(1.0), glm::dvec3(1.2, 1.02, 0.75), -lush);
+    a *= 1.0 + (0.16 * n2 + 0.08 * n3 + 0.08 * n1 + 0.1 * n0) * (1.0 - 0.8 * paved);
+    return glm::vec3(glm::clamp(a, 0.0, 1.0));
+}
+
 // ---- [SECTION] Patch sampling ----------------------------------------------------------------
 
 TerrainPatch TerrainPatch::generate(const World& world, const PatchKey& key) {
@@ -80,6 +151,7 @@ TerrainPatch TerrainPatch::generate(const World& world, const PatchKey& key) {
     p.heights_m.resize(kV * kV);
     p.normals.resize(3 * kV * kV);
     p.albedo.resize(3 * kV * kV);
+    const TerrainAlbedo material(world);
     for (int b = 0; b <= kQ; ++b) {
         for (int a = 0; a <= kQ; ++a) {
             const int c = (b + 1) * kB + (a + 1);
@@ -88,12 +160,12 @@ TerrainPatch TerrainPatch::generate(const World& world, const PatchKey& key) {
             const glm::dvec3 n = glm::normalize(glm::dvec3(-dhdx, 1.0, -dhdz));
             const double x = latticeToWorld(vertexLattice(key.i, key.level, a));
             const double z = latticeToWorld(vertexLattice(key.k, key.level, b));
-            const GroundSample g = world.classify(x, z, h[c], road[c], n);
+            const glm::vec3 albedo = material.at(x, z, h[c], road[c], n, s);
             const int v = b * kV + a;
             p.heights_m[v] = h[c];
             for (int j = 0; j < 3; ++j) {
                 p.normals[3 * v + j] = static_cast<float>(n[j]);
-                p.albedo[3 * v + j] = g.albedo[j];
+                p.albedo[3 * v + j] = albedo[j];
             }
         }
     }
@@ -425,6 +497,67 @@ TerrainMesh TerrainPatchCache::build(const std::vector<PatchKey>& leaves,
     return out;
 }
 
+// ---- [SECTION] Drawn surface -----------------------------------------------------------------
+
+TerrainSurface::TerrainSurface(const TerrainMesh& mesh) : mesh_(&mesh) {
+    minLevel_ = std::numeric_limits<int>::max();
+    for (std::size_t p = 0; p < mesh.patches.size(); ++p) {
+        index_[mesh.patches[p].key] = p;
+        minLevel_ = std::min(minLevel_, mesh.patches[p].key.level);
+        maxLevel_ = std::max(maxLevel_, mesh.patches[p].key.level);
+    }
+}
+
+// Inside patch `patch` (no check): the quad's triangle holding (x, z), as build() packs them:
+// (v00, v01, v10) below the diagonal from v10 to v01, (v10, v01, v11) above it.
+double TerrainSurface::heightIn(std::size_t patch, double x_m, double z_m) const {
+    const TerrainPatchDraw& p = mesh_->patches[patch];
+    const double s = TerrainPatch::spacing_m(p.key.level);
+    const double u = (x_m - TerrainPatch::originX_m(p.key)) / s;
+    const double w = (z_m - TerrainPatch::originZ_m(p.key)) / s;
+    const int a = std::clamp(int(std::floor(u)), 0, kQ - 1);
+    const int b = std::clamp(int(std::floor(w)), 0, kQ - 1);
+    const double fu = u - a, fw = w - b;
+    const auto y = [&](int da, int db) {
+        return double(mesh_->mesh.positions[3 * (p.firstVertex + (b + db) * kV + a + da) + 1]) +
+               mesh_->origin_m.y;
+    };
+    if (fu + fw <= 1.0) return y(0, 0) + fu * (y(1, 0) - y(0, 0)) + fw * (y(0, 1) - y(0, 0));
+    return y(1, 1) + (1.0 - fu) * (y(0, 1) - y(1, 1)) + (1.0 - fw) * (y(1, 0) - y(1, 1));
+}
+
+double TerrainSurface::heightAt(double x_m, double z_m) const {
+    if (!mesh_ || index_.empty()) return std::numeric_limits<double>::quiet_NaN();
+    const auto inside = [&](const PatchKey& key) {
+        const double size = TerrainPatch::size_m(key.level);
+        const double x0 = TerrainPatch::originX_m(key), z0 = TerrainPatch::originZ_m(key);
+        return x_m >= x0 && x_m <= x0 + size && z_m >= z0 && z_m <= z0 + size;
+    };
+    if (last_ < mesh_->patches.size() && inside(mesh_->patches[last_].key))
+        return heightIn(last_, x_m, z_m);
+    for (int level = minLevel_; level <= maxLevel_; ++level) {
+        const double size = TerrainPatch::size_m(level);
+        const PatchKey key{level, std::int64_t(std::floor(x_m / size)),
+                           std::int64_t(std::floor(z_m / size))};
+        if (auto it = index_.find(key); it != index_.end()) {
+            last_ = it->second;
+            return heightIn(last_, x_m, z_m);
+        }
+    }
+    return std::numeric_limits<double>::quiet_NaN();
+}
+
+double TerrainSurface::baseUnder(double x_m, double z_m, double radius_m) const {
+    double base = heightAt(x_m, z_m);
+    if (!std::isfinite(base)) return base;
+    const double r = radius_m;
+    for (const auto& [dx, dz] : {std::pair{r, 0.0}, {-r, 0.0}, {0.0, r}, {0.0, -r}}) {
+        const double h = heightAt(x_m + dx, z_m + dz);
+        if (std::isfinite(h)) base = std::min(base, h);
+    }
+    return base;
+}
+
 // ---- [SECTION] Terrain proxy -----------------------------------------------------------------
 
 WorldMesh makeTerrainProxy(const World& world, const glm::dvec3& centre_m, double radius_m,
@@ -462,6 +595,7 @@ WorldMesh makeTerrainProxy(const World& world, const glm::dvec3& centre_m, doubl
         }
     }
     WorldMesh m;
+    const TerrainAlbedo material(world);
     for (int b = 0; b < n; ++b) {
         for (int a = 0; a < n; ++a) {
             // Differences over the (non-uniform) neighbours; one-sided at the rim.
@@ -471,12 +605,14 @@ WorldMesh makeTerrainProxy(const World& world, const glm::dvec3& centre_m, doubl
             const double dhdz = (h[b1 * n + a] - h[b0 * n + a]) / (offsets[b1] - offsets[b0]);
             const glm::dvec3 nn = glm::normalize(glm::dvec3(-dhdx, 1.0, -dhdz));
             const double x = centre_m.x + offsets[a], z = centre_m.z + offsets[b];
-            const GroundSample g = world.classify(x, z, h[b * n + a], road[b * n + a], nn);
+            // The proxy's spacing here: the larger of its two neighbour gaps.
+            const double spacing = std::max(offsets[a1] - offsets[a0], offsets[b1] - offsets[b0]) / 2.0;
+            const glm::vec3 albedo = material.at(x, z, h[b * n + a], road[b * n + a], nn, spacing);
             m.positions.insert(
                 m.positions.end(),
                 {float(offsets[a]), float(h[b * n + a] - centre_m.y), float(offsets[b])});
             m.normals.insert(m.normals.end(), {float(nn.x), float(nn.y), float(nn.z)});
-            m.albedo.insert(m.albedo.end(), {g.albedo.r, g.albedo.g, g.albedo.b});
+            m.albedo.insert(m.albedo.end(), {albedo.r, albedo.g, albedo.b});
         }
     }
     for (int b = 0; b + 1 < n; ++b) {

@@ -30,11 +30,30 @@
 
 #include <glm/vec3.hpp>
 
+#include "world/Heightfield.h"
 #include "world/WorldMesh.h"
 
 namespace amb {
 
 class World;
+
+// Ground albedo as the terrain draws it, in the patches and in the capture's proxy alike
+// (docs/ARCHITECTURE.md "Terrain and objects"): World::classify's blend of grass, rock, sand,
+// snow, water and road, with its edges made ragged by noise (the slope where rock shows, the snow
+// line, the beach), stone that varies in strata and tint, scree on high ground, and a brightness
+// that varies on three scales, so that no slope is one flat colour. Noise finer than two vertex
+// spacings fades out, so coarse patches do not alias it. Thread-safe.
+class TerrainAlbedo {
+  public:
+    explicit TerrainAlbedo(const World& world);
+    // At (x, z) of height h, road weight `road` and unit normal n, drawn `spacing_m` apart.
+    glm::vec3 at(double x_m, double z_m, double height_m, double road, const glm::dvec3& normal,
+                 double spacing_m) const;
+
+  private:
+    const World& world_;
+    Heightfield::Octave vast_, broad_, mid_, fine_;  // 400 m, 90 m, 23 m, 7 m
+};
 
 struct PatchKey {
     int level = 0;       // 0 = finest
@@ -110,6 +129,29 @@ std::vector<std::uint32_t> cornersToEvaluate(const TerrainMesh& mesh,
 // values[c] for every corner of `corners`, the evaluated ones set: fills in the interpolated
 // ones (in list order, so chains along ever coarser edges resolve). O(corners).
 void stitchCornerValues(const std::vector<TerrainCorner>& corners, glm::vec3* values);
+
+// The drawn terrain surface of a TerrainMesh (stitched heights, two triangles per quad as packed)
+// at any (x, z) inside its leaves: where objects placed on the terrain must stand, since far
+// patches are coarse and their surface lies up to metres off the true height.
+class TerrainSurface {
+  public:
+    TerrainSurface() = default;
+    explicit TerrainSurface(const TerrainMesh& mesh);
+    // Height of the drawn surface [m]; NaN outside every leaf. Remembers the last leaf it used
+    // (not thread-safe), so nearby queries in a row are cheap.
+    double heightAt(double x_m, double z_m) const;
+    // Where an object of footprint radius_m centred at (x, z) stands on the drawn surface: the
+    // lowest of it at the centre and at four points radius_m away along x and z, so that no side
+    // of its base hangs above a slope. NaN where the centre is outside every leaf.
+    double baseUnder(double x_m, double z_m, double radius_m) const;
+
+  private:
+    const TerrainMesh* mesh_ = nullptr;
+    std::unordered_map<PatchKey, std::size_t, PatchKeyHash> index_;
+    int minLevel_ = 0, maxLevel_ = -1;
+    mutable std::size_t last_ = 0;
+    double heightIn(std::size_t patch, double x_m, double z_m) const;
+};
 
 struct TerrainLodSettings {
     int coarsestLevel = 8;             // patch size 32 m * 2^8 = 8192 m

@@ -50,6 +50,7 @@ namespace fs = std::filesystem;
 struct CompareOptions {
     std::string replay, ambient = "volume", config, out, size = "640x360", backend = "auto";
     std::string shaders;
+    std::string camera = "chase", exposure = "auto";  // --camera, --exposure (as in run)
     int frame = -1;  // default: the middle of the replay
     int grid = 16;
     int referenceSize = CubeCaptureGl::kReferenceFaceSize;
@@ -94,6 +95,8 @@ CompareInputs checkInputs(const CompareOptions& o) {
                          : o.replay;
     Replay replay = readReplay(replayPath);
     checkAmbienceMethod(o.ambient, "--ambient");
+    parseCarView(o.camera, "--camera");
+    parseExposure(o.exposure, "--exposure");
     AmbienceVolumeSettings volumeSettings;
     if (!o.config.empty())
         volumeSettings = ambienceSettingsFromJson(
@@ -139,11 +142,11 @@ struct TargetFrame {
 
 // (1) the frames up to and including the target, as a run without the main view plays them; the
 // target's own stand-in lookups only feed a next frame that never comes.
-TargetFrame playToTarget(FrameLoop& loop, const Replay& replay, int target) {
+TargetFrame playToTarget(FrameLoop& loop, int target) {
     TargetFrame frame;
     for (int i = 0; i <= target; ++i) {
         frame.rec = loop.step();
-        frame.camera = replay.sampleAt(frame.rec.replayTime_s);
+        frame.camera = frame.rec.view;  // the eye the main view draws from (the chase eye)
     }
     return frame;
 }
@@ -388,17 +391,20 @@ void runCompare(const CompareOptions& o) {
     RenderSettings rs;
     rs.width = in.size.width;
     rs.height = in.size.height;
-    rs.drawVehicle = in.replay.mode == ReplayMode::Drive;
+    rs.exposure.enabled = parseExposure(o.exposure, "--exposure");
     Renderer renderer(world, rs);
     const auto stagesOwner =
         makeMethodStages(renderer, o.ambient, in.volumeSettings, in.baselines);
     MethodAmbienceStages& stages = *stagesOwner;
     FrameLoop loop(in.replay, renderer, stages, o.stride, 1);
     loop.setDrawMainView(false);
+    loop.setCarView(in.replay.mode == ReplayMode::Drive ? parseCarView(o.camera, "--camera")
+                                                        : CarView::None,
+                    [&world](double x, double z) { return world.height(x, z); });
     stages.setLookupStandIn(true);
     std::fprintf(stderr, "compare: playing %d frames of %s with %s\n", in.target + 1,
                  in.stem.c_str(), o.ambient.c_str());
-    const TargetFrame frame = playToTarget(loop, in.replay, in.target);
+    const TargetFrame frame = playToTarget(loop, in.target);
 
     const FrameImages images = renderFrame(renderer, frame.camera, stages.ambient());
     CubeCaptureGl reference(world, o.referenceSize, CaptureScene::Full);
@@ -426,6 +432,10 @@ void addCompareCommand(CLI::App& app) {
     cmd->add_option("--faces-per-frame", o->facesPerFrame, "capture budget (default 1)");
     cmd->add_option("--stride", o->stride, "replay steps per frame (default 2)");
     cmd->add_option("--size", o->size, "image size WxH (default 640x360)");
+    cmd->add_option("--camera", o->camera,
+                    "drive replays: chase (default; behind and above the car) or hood (first "
+                    "person, the replay's eye)");
+    cmd->add_option("--exposure", o->exposure, "auto (default: eye adaptation) or fixed");
     cmd->add_option("--out", o->out, "output folder (default out/compare-<replay name>)");
     cmd->add_option("--backend", o->backend, "auto, egl or osmesa (default auto)");
     cmd->add_option("--shaders", o->shaders,

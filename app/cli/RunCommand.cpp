@@ -60,6 +60,8 @@ struct RunOptions {
     int facesPerFrame = 1;
     bool debugOverlay = false;
     bool noVehicle = false;
+    std::string camera = "chase";     // drive replays: chase or hood (--camera)
+    std::string exposure = "auto";    // auto (eye adaptation) or fixed (--exposure)
     std::string view = "shaded";
     std::string contactSheet;  // empty: <out>/contact-sheet.png; "none": none
     int sheetCells = 12;
@@ -192,6 +194,8 @@ struct RunPlan {
     Size size;
     std::string name;  // the replay's label
     RenderOutput view = RenderOutput::Shaded;
+    CarView carView = CarView::None;  // the car on drive replays (--camera, --no-vehicle)
+    bool autoExposure = true;
 };
 
 // Stage (1) of a run: reads the replay and the settings files, checks every option, completes
@@ -208,6 +212,9 @@ RunPlan planRun(RunOptions& o) {
     // "volume" is the dynamic ambience volume; the others are the baselines (app/frame/MethodStages.h).
     checkAmbienceMethod(o.ambient, "--ambient");
     plan.view = parseViewOutput(o.view, "--view");
+    plan.carView = parseCarView(o.camera, "--camera");
+    if (replay.mode != ReplayMode::Drive || o.noVehicle) plan.carView = CarView::None;
+    plan.autoExposure = parseExposure(o.exposure, "--exposure");
     const bool useVolume = o.ambient == "volume";
     AmbienceVolumeSettings& volumeSettings = plan.volumeSettings;
     if (!o.ambienceConfig.empty()) {
@@ -452,8 +459,8 @@ void runReplay(RunOptions o) {
     RenderSettings rs;
     rs.width = size.width;
     rs.height = size.height;
-    rs.drawVehicle = replay.mode == ReplayMode::Drive && !o.noVehicle;
     rs.viewOutput = plan.view;
+    rs.exposure.enabled = plan.autoExposure;
     Renderer renderer(world, rs);
     auto stages =
         makeMethodStages(renderer, o.ambient, plan.volumeSettings, plan.baselines, o.faceSize);
@@ -461,6 +468,7 @@ void runReplay(RunOptions o) {
     if (volume && !o.loadAnchors.empty()) volume->loadAnchors(o.loadAnchors);
     FrameLoop loop(replay, renderer, *stages, o.stride, o.loops);
     loop.setDrawMainView(!o.noFrames);
+    loop.setCarView(plan.carView, [&world](double x, double z) { return world.height(x, z); });
     stages->setLookupStandIn(o.noFrames);
 
     // The error measurement: the oracle's captures use the same capture as the method.
@@ -480,6 +488,9 @@ void runReplay(RunOptions o) {
     report.width = size.width;
     report.height = size.height;
     report.ambient = o.ambient;
+    if (plan.autoExposure)
+        report.toneMapping = "auto exposure (eye adaptation to the mean log luminance in "
+                             "simulation time), ACES filmic fit (Narkowicz 2015), sRGB";
     report.frameStep_s = loop.frameStep_s();
     report.loops = o.loops;
     // Rows in one block from the start: no copy of them all when a long run outgrows it.
@@ -507,7 +518,7 @@ void runReplay(RunOptions o) {
                 std::max(t.nonFiniteAnchorsMax, nonFiniteAnchors(volume->store()));
             ++t.storeScans;
         }
-        const CameraSample camera = replay.sampleAt(rec.replayTime_s);
+        const CameraSample& camera = rec.view;  // the eye the main view rendered from
         if (meter && o.screenWitnesses > 0 && meter->referenceFrameNow())
             takeScreenWitnesses(renderer, camera, stages->ambient(), o.screenWitnesses, rec.index,
                                 rec.timeOfDay_h, *meter);
@@ -625,6 +636,11 @@ void addRunCommand(CLI::App& app) {
     cmd->add_option("--save-anchors", o->saveAnchors, "write the anchor store at the end (.vdb)");
     cmd->add_option("--load-anchors", o->loadAnchors, "warm-start from an anchor store (.vdb)");
     cmd->add_flag("--no-vehicle", o->noVehicle, "do not draw the car on drive replays");
+    cmd->add_option("--camera", o->camera,
+                    "drive replays: chase (default; the main view behind and above the car) or "
+                    "hood (first person, the replay's eye)");
+    cmd->add_option("--exposure", o->exposure,
+                    "auto (default: eye adaptation in simulation time) or fixed (the sky's)");
     cmd->add_option("--view", o->view,
                     "shaded (default) or ambient: the ambient term alone, every surface white");
     cmd->add_option("--contact-sheet", o->contactSheet,

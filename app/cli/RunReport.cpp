@@ -336,7 +336,7 @@ void addRunSettingsJson(json& j, const RunReport& report) {
     j["loops"] = report.loops;
     j["wall_s"] = report.wall_s;
     j["shadows"] = "none";
-    j["toneMapping"] = "exposure (white Lambertian at 0.6), ACES filmic fit (Narkowicz 2015), sRGB";
+    j["toneMapping"] = report.toneMapping;
 }
 
 // Timing statistics per frame stage and of whole frames, triangle counts and the median fps.

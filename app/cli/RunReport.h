@@ -109,6 +109,9 @@ void writeReferenceCsv(const ErrorMeter& meter, const std::string& path);
 
 struct RunReport {
     std::string replay, backend, glVersion, glRenderer, ambient;
+    // How the frames were tone mapped (the exposure and the curve), as the report states it.
+    std::string toneMapping =
+        "exposure (white Lambertian at 0.6), ACES filmic fit (Narkowicz 2015), sRGB";
     int width = 0, height = 0;
     double frameStep_s = 0.0;
     double wall_s = 0.0;

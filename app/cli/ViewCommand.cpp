@@ -51,6 +51,7 @@ struct ViewOptions {
     std::string ambient = "volume";
     bool debugOverlay = false;
     std::string view = "shaded";
+    std::string camera = "chase";  // following a drive replay: chase or hood
     std::string shaders;
     double time_h = -1.0;
     std::string config;      // the volume's settings (as `run --config`)
@@ -112,6 +113,7 @@ Size checkViewOptions(const ViewOptions& o) {
     const Size size = parseSize(o.size, "--size");
     checkAmbienceMethod(o.ambient, "--ambient");
     parseViewOutput(o.view, "--view");
+    parseCarView(o.camera, "--camera");
     if (o.debugOverlay && o.ambient != "volume")
         throw InputError("--debug-overlay", "needs --ambient volume");
     if (o.frames < 0) throw InputError("--frames", "must be >= 0");
@@ -329,13 +331,21 @@ void runView(const ViewOptions& o) {
         input.replayTime_s = replayTime_s;
         input.timeOfDay_h = timeOfDay_h;
         input.camera = cam;
+        // Following a drive: the car, seen as --camera says; flying free: no car. Set on the
+        // loop each frame, since the panel may rebuild the method and its loop.
+        const CarView carView = follow && replay.mode == ReplayMode::Drive
+                                    ? parseCarView(o.camera, "--camera") : CarView::None;
+        if (carView != live.loop().carView())
+            live.loop().setCarView(carView,
+                                   [&world](double x, double z) { return world.height(x, z); });
         const FrameRecord record = live.loop().step(input);
+        const CameraSample eye = record.view;  // the eye the view rendered from
         if (panel) panel->frameDone(record, cam, timeOfDay_h);
         AmbienceVolume* volume = live.stages().volume();
         if (controls.debugOverlay && volume) {
             auto pixels = renderer.readRgb8();
-            drawAnchorOverlay(pixels, size.width, size.height, renderer.viewProjection(cam),
-                              cam.position_m, *volume);
+            drawAnchorOverlay(pixels, size.width, size.height, renderer.viewProjection(eye),
+                              eye.position_m, *volume);
             renderer.replaceLdr(pixels);
         }
         renderer.blitToWindow(platform->width(), platform->height());
@@ -363,6 +373,8 @@ void addViewCommand(CLI::App& app) {
                   "mark anchors and the probe being captured on screen and on screenshots");
     cmd->add_option("--view", o->view,
                     "shaded (default) or ambient: the ambient term alone, every surface white");
+    cmd->add_option("--camera", o->camera,
+                    "following a drive replay: chase (default; behind and above the car) or hood");
     cmd->add_option("--record", o->record, "file the R key records to (default recorded.json)");
     cmd->add_option("--frames", o->frames, "render N frames, then exit (non-interactive)");
     cmd->add_option("--screenshot", o->screenshot, "with --frames: save the last frame here");

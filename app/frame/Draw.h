@@ -6,12 +6,14 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
 #include "world/Replay.h"
+#include "world/Vehicle.h"
 
 namespace amb {
 
@@ -51,13 +53,25 @@ struct RenderStats {
     double draw_ms = 0.0;   // submitting GL commands (CPU)
 };
 
+// What the main view needs to know about the frame besides its eye: the run's clock (the eye
+// adaptation of the tone mapping runs in simulation time) and the camera's own car, if drawn.
+struct ViewState {
+    double time_s = 0.0;  // the run's clock
+    bool cut = false;     // the camera was cut before this frame (adaptation starts afresh)
+    std::optional<VehiclePose> vehicle;
+};
+
 // The main view as the frame loop sees it.
 class MainView {
   public:
     virtual ~MainView() = default;
     // Stage 1: the sky for the frame's time of day.
     virtual void setViewTimeOfDay(double timeOfDay_h) = 0;
-    // Stage 6: draws the view from `camera` with `ambient` and waits until it is drawn.
+    // Stage 6, before drawView (also on frames that draw nothing, so that a later render of the
+    // frame sees the same car and clock).
+    virtual void setViewState(const ViewState& state) { (void)state; }
+    // Stage 6: draws the view from `camera` (the eye the main view renders from: the replay's
+    // camera, or the chase camera's eye) with `ambient` and waits until it is drawn.
     virtual RenderStats drawView(const CameraSample& camera, const AmbientSource& ambient) = 0;
 };
 

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
@@ -82,6 +83,34 @@ FrameRecord FrameLoop::step(const FrameInput& input) {
     return run(frame, start);
 }
 
+CarView parseCarView(const std::string& name, const std::string& option) {
+    if (name == "hood") return CarView::Hood;
+    if (name == "chase") return CarView::Chase;
+    throw InputError(option, "unknown camera '" + name + "' (expected hood or chase)");
+}
+
+void FrameLoop::setCarView(CarView view, ChaseCamera::GroundHeight groundHeight,
+                           double eyeHeight_m, const ChaseSettings& chase) {
+    carView_ = view;
+    groundHeight_ = std::move(groundHeight);
+    eyeHeight_m_ = eyeHeight_m;
+    chase_.reset();
+    if (view == CarView::Chase) chase_.emplace(chase, groundHeight_);
+}
+
+// Stage 1's last part: the car under the replay's eye and the eye the main view renders from.
+// The chase eye moves on the run's clock, so it is placed on every frame, drawn or not.
+void FrameLoop::placeView(FrameState& frame) {
+    frame.view = frame.camera;
+    const bool first = frame.index == 0;
+    const double dt_s = first ? 0.0 : std::max(0.0, frame.time_s - lastTime_s_);
+    lastTime_s_ = frame.time_s;
+    if (carView_ == CarView::None) return;
+    frame.vehicle = vehiclePoseFromEye(frame.camera, eyeHeight_m_, groundHeight_);
+    if (chase_) frame.view = chase_->update(*frame.vehicle, dt_s, frame.camera.cut || first,
+                                            frame.camera);
+}
+
 FrameRecord FrameLoop::run(FrameState& frame, Clock::time_point start) {
     FrameRecord rec;
     Clock::time_point mark = start;
@@ -91,6 +120,7 @@ FrameRecord FrameLoop::run(FrameState& frame, Clock::time_point start) {
         mark = now;
     };
     view_.setViewTimeOfDay(frame.timeOfDay_h);
+    placeView(frame);
     lap(FrameStage::Advance);
     // 2. predict
     ambience_.predict(frame);
@@ -105,7 +135,8 @@ FrameRecord FrameLoop::run(FrameState& frame, Clock::time_point start) {
     const AmbientSource& ambient = ambience_.interpolate(frame);
     lap(FrameStage::Interpolate);
     // 6. draw
-    if (drawMainView_) rec.render = view_.drawView(frame.camera, ambient);
+    view_.setViewState({frame.time_s, frame.camera.cut || frame.index == 0, frame.vehicle});
+    if (drawMainView_) rec.render = view_.drawView(frame.view, ambient);
     lap(FrameStage::Draw);
     // 7. measure
     rec.index = frame.index;
@@ -114,6 +145,7 @@ FrameRecord FrameLoop::run(FrameState& frame, Clock::time_point start) {
     rec.replayTime_s = frame.replayTime_s;
     rec.timeOfDay_h = frame.timeOfDay_h;
     rec.cut = frame.camera.cut;
+    rec.view = frame.view;
     lap(FrameStage::Measure);
     rec.frame_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     // The method's state and its error, outside the frame's time.

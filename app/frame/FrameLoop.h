@@ -1,5 +1,6 @@
 // FrameLoop.h — the frame, its stages listed once, in order (docs/ARCHITECTURE.md, "The frame"):
-//   1. advance      the replay camera (fixed dt) and the time of day
+//   1. advance      the replay camera (fixed dt) and the time of day; on drives the car under it
+//                   and the main view's eye (the chase camera, world/ChaseCamera.h)
 //   2. predict      the scheduler's motion model picks the next probe position(s)
 //   3. capture      this frame's share of cube faces of the static coarse scene
 //   4. store        insert / refresh anchors; expire, prune; advance blending
@@ -17,10 +18,13 @@
 #include <chrono>
 #include <limits>
 #include <memory>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "app/frame/Draw.h"
 #include "lighting/AnchorStore.h"
+#include "world/ChaseCamera.h"
 #include "world/Replay.h"
 
 namespace amb {
@@ -44,8 +48,16 @@ struct FrameState {
     double replayTime_s = 0.0;  // position in the replay (time_s less the loops before)
     int loop = 0;               // which pass over the replay, from 0
     double timeOfDay_h = 12.0;
-    CameraSample camera;
+    CameraSample camera;  // the replay's (or the viewer's) camera: what the ambience uses
+    CameraSample view;    // the eye the main view renders from (the chase eye, or `camera`)
+    std::optional<VehiclePose> vehicle;  // the camera's own car, when drawn
 };
+
+// How the main view shows the camera's own car on drives (--camera): none; from its hood (the
+// replay's eye, the car under it); or from behind and above (the chase camera, world/ChaseCamera.h).
+enum class CarView { None, Hood, Chase };
+// "hood" or "chase"; anything else is an InputError naming `option`.
+CarView parseCarView(const std::string& name, const std::string& option);
 
 struct FrameRecord;
 
@@ -78,6 +90,7 @@ struct FrameRecord {
     int index = 0, loop = 0;
     double time_s = 0.0, replayTime_s = 0.0, timeOfDay_h = 0.0;
     bool cut = false;            // the camera was cut (teleported) before this frame
+    CameraSample view;           // the eye the main view rendered from (or would have)
     double popMove = std::numeric_limits<double>::quiet_NaN();  // pop along the camera's ground
                                                                 // point (measured runs; NaN: none)
     std::size_t rss_kB = 0;      // resident memory of the process after the frame (0: unknown)
@@ -131,6 +144,12 @@ class FrameLoop {
     // Without the main view the draw stage renders nothing (captures still render); for runs
     // that measure the ambience alone.
     void setDrawMainView(bool draw) { drawMainView_ = draw; }
+    // The camera's own car (drive replays): `view` says how the main view shows it; the car
+    // stands eyeHeight_m under the replay's eye, pitched to `groundHeight` (the terrain height
+    // at x, z, which also keeps the chase eye above the ground). CarView::None by default.
+    void setCarView(CarView view, ChaseCamera::GroundHeight groundHeight,
+                    double eyeHeight_m = 1.5, const ChaseSettings& chase = {});
+    CarView carView() const { return carView_; }
 
   private:
     using Clock = std::chrono::steady_clock;
@@ -145,6 +164,13 @@ class FrameLoop {
     int next_ = 0;
     long lastSample_ = 0;  // replay sample index of the previous frame
     bool drawMainView_ = true;
+    // The car and the chase eye (setCarView); the clock of the previous frame, for its dt.
+    CarView carView_ = CarView::None;
+    ChaseCamera::GroundHeight groundHeight_;
+    double eyeHeight_m_ = 1.5;
+    std::optional<ChaseCamera> chase_;
+    double lastTime_s_ = 0.0;
+    void placeView(FrameState& frame);
 };
 
 // Where the draw would look up ambience, for a run without the main view: points of an 8 m

@@ -29,7 +29,11 @@ static GlFramebuffer makeFramebuffer(GLuint colour, GLuint depth) {
 }
 
 Renderer::Renderer(const World& world, const RenderSettings& settings)
-    : world_(world), settings_(settings) {
+    : world_(world),
+      settings_(settings),
+      noon_(evaluateSky(world.sky(), 12.0)),
+      exposure_(settings.exposure, exposureFor(noon_, noon_)),
+      meter_(std::max(settings.width, 1), std::max(settings.height, 1)) {
     if (settings.width <= 0 || settings.height <= 0 || settings.width > 16384 ||
         settings.height > 16384) {
         throw InputError("--size", "image size must be between 1x1 and 16384x16384");
@@ -50,7 +54,6 @@ Renderer::Renderer(const World& world, const RenderSettings& settings)
     hdrFbo_ = makeFramebuffer(hdr_.id(), depth_.id());
     ldrFbo_ = makeFramebuffer(ldr_.id(), 0);
     glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
-    noon_ = evaluateSky(world.sky(), 12.0);
 }
 
 Renderer::~Renderer() = default;
@@ -77,14 +80,6 @@ RenderStats Renderer::render(const CameraSample& camera, const AmbientSource& am
     using Clock = std::chrono::steady_clock;
     RenderStats stats;
     const auto t0 = Clock::now();
-    if (settings_.drawVehicle) {
-        const glm::dvec3 f = camera.forward;
-        scene_->setVehicle(VehiclePose{
-            camera.position_m - glm::dvec3(0.0, settings_.vehicleEyeHeight_m, 0.0),
-            std::atan2(f.x, f.z)});
-    } else {
-        scene_->setVehicle(std::nullopt);
-    }
     FrameConstants fc;
     fc.viewProj = viewProjection(camera);
     fc.invViewProj = glm::inverse(fc.viewProj);
@@ -105,7 +100,7 @@ RenderStats Renderer::render(const CameraSample& camera, const AmbientSource& am
 
     if (output == RenderOutput::Shaded || output == RenderOutput::Ambient) {
         glBindFramebuffer(GL_FRAMEBUFFER, ldrFbo_.id());
-        drawer_->drawTonemap(hdr_.id(), exposureFor(sky_, noon_));
+        drawer_->drawTonemap(hdr_.id(), adaptExposure());
     }
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     const auto t2 = Clock::now();
@@ -148,7 +143,7 @@ std::vector<unsigned char> Renderer::tonemap(const std::vector<float>& hdrRgb) {
     glTextureSubImage2D(hdr_.id(), 0, 0, 0, w, h, GL_RGBA, GL_FLOAT, rgba.data());
     glBindFramebuffer(GL_FRAMEBUFFER, ldrFbo_.id());
     glViewport(0, 0, w, h);
-    drawer_->drawTonemap(hdr_.id(), exposureFor(sky_, noon_));
+    drawer_->drawTonemap(hdr_.id(), exposure_.exposure());
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     return readRgb8();
 }
@@ -205,6 +200,20 @@ RenderOutput parseViewOutput(const std::string& name, const std::string& option)
     if (name == "shaded") return RenderOutput::Shaded;
     if (name == "ambient") return RenderOutput::Ambient;
     throw InputError(option, "unknown view '" + name + "' (expected shaded or ambient)");
+}
+
+void Renderer::setViewState(const ViewState& state) {
+    viewState_ = state;
+    scene_->setVehicle(state.vehicle);
+}
+
+float Renderer::adaptExposure() {
+    if (!settings_.exposure.enabled) return exposure_.hold(exposureFor(sky_, noon_));
+    return exposure_.update(viewState_.time_s, sky_.timeOfDay_h, viewState_.cut, [&] {
+        const double logMean = meter_.logMeanLuminance(hdrFbo_.id());
+        glBindFramebuffer(GL_FRAMEBUFFER, ldrFbo_.id());
+        return logMean;
+    });
 }
 
 RenderStats Renderer::drawView(const CameraSample& camera, const AmbientSource& ambient) {

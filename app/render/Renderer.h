@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "app/render/AutoExposure.h"
 #include "app/render/RendererCore.h"
 #include "app/render/RendererScene.h"
 #include "lighting/SH.h"
@@ -38,9 +39,8 @@ struct RenderSettings {
     float near_m = 0.3f;
     float fogExtinction_perM = 1.0f / 4000.0f;
     RendererSceneSettings scene{};
-    // Draw the camera's own car under the eye (drives): eye 1.5 m above the car's ground point.
-    bool drawVehicle = false;
-    double vehicleEyeHeight_m = 1.5;
+    // Eye adaptation of the tone mapping (app/render/AutoExposure.h); off: the sky's fixed one.
+    AutoExposureSettings exposure{};
     // What the main view (drawView) shows: Shaded, or Ambient (--view ambient).
     RenderOutput viewOutput = RenderOutput::Shaded;
 };
@@ -60,6 +60,8 @@ class Renderer final : public MainView {
 
     // MainView (the frame loop's stages 1 and 6): setTimeOfDay, and render + glFinish.
     void setViewTimeOfDay(double timeOfDay_h) override { setTimeOfDay(timeOfDay_h); }
+    // The car (drawn by the next renders) and the clock the exposure adapts on.
+    void setViewState(const ViewState& state) override;
     RenderStats drawView(const CameraSample& camera, const AmbientSource& ambient) override;
     // What drawView shows from the next frame on (the viewer's panel switches it).
     void setViewOutput(RenderOutput output) { settings_.viewOutput = output; }
@@ -77,7 +79,8 @@ class Renderer final : public MainView {
     // The HDR target of the last render() with its surface positions (after a non-shaded output).
     SurfaceImage readSurface(const CameraSample& camera);
     // Tone maps a linear HDR image of the view's size (top row first, RGB float, e.g. readHdr()
-    // changed on the CPU) with the current exposure and returns it as readRgb8 does.
+    // changed on the CPU) with the exposure of the last shaded render and returns it as readRgb8
+    // does.
     std::vector<unsigned char> tonemap(const std::vector<float>& hdrRgb);
     // The tone-mapped image, top row first, RGB 8-bit (waits for the GPU).
     std::vector<unsigned char> readRgb8();
@@ -104,6 +107,10 @@ class Renderer final : public MainView {
     GlTexture hdr_, depth_, ldr_;
     GlFramebuffer hdrFbo_, ldrFbo_;
     DrawList list_;
+    ViewState viewState_;
+    AutoExposure exposure_;
+    LuminanceMeter meter_;
+    float adaptExposure();  // this frame's exposure (metered once per frame)
 };
 
 }  // namespace amb

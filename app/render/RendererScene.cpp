@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include <glm/geometric.hpp>
 
@@ -64,8 +65,10 @@ static constexpr int kRoadChunkSegments = 48;
 
 // The far LOD of a plant: an octahedron (6 vertices, 8 triangles) spanning the bounding box of
 // the upper part of the mesh (the crown, or the whole of a bush or rock), with its mean albedo
-// and ellipsoid normals, so it shades like a rounded crown at a few pixels' size.
-static WorldMesh farPlantMesh(const WorldMesh& full) {
+// and ellipsoid normals, so it shades like a rounded crown at a few pixels' size. A bush or a
+// rock (`mound`) is the whole mesh's box with its widest ring low, at a fifth of its height, and
+// its lowest point below the ground: a mound sitting on the ground, not a diamond on its tip.
+static WorldMesh farPlantMesh(const WorldMesh& full, bool mound) {
     float top = 0.0f;
     for (size_t i = 1; i < full.positions.size(); i += 3) top = std::max(top, full.positions[i]);
     glm::vec3 lo(1e30f), hi(-1e30f), albedo(0.0f);
@@ -73,20 +76,22 @@ static WorldMesh farPlantMesh(const WorldMesh& full) {
     for (size_t v = 0; v < full.vertexCount(); ++v) {
         const glm::vec3 p(full.positions[3 * v], full.positions[3 * v + 1],
                           full.positions[3 * v + 2]);
-        if (p.y < 0.35f * top) continue;
+        if (!mound && p.y < 0.35f * top) continue;
         lo = glm::min(lo, p);
         hi = glm::max(hi, p);
         albedo += glm::vec3(full.albedo[3 * v], full.albedo[3 * v + 1], full.albedo[3 * v + 2]);
         ++n;
     }
     albedo /= float(std::max(n, 1));
-    const glm::vec3 c = 0.5f * (lo + hi), r = glm::max(0.5f * (hi - lo), glm::vec3(0.05f));
+    glm::vec3 c = 0.5f * (lo + hi), r = glm::max(0.5f * (hi - lo), glm::vec3(0.05f));
+    if (mound) c.y = std::max(0.0f, lo.y) + 0.2f * (hi.y - std::max(0.0f, lo.y));
     // Reach down to the ground so the far tree stands on it.
     const glm::vec3 dirs[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
     WorldMesh m;
     for (const glm::vec3& d : dirs) {
         glm::vec3 p = c + d * r;
-        if (d.y < 0.0f) p.y = 0.0f;
+        if (d.y < 0.0f) p.y = mound ? std::min(lo.y, 0.0f) : 0.0f;
+        if (d.y > 0.0f) p.y = hi.y;
         m.positions.insert(m.positions.end(), {p.x, p.y, p.z});
         m.normals.insert(m.normals.end(), {d.x, d.y, d.z});
         m.albedo.insert(m.albedo.end(), {albedo.r, albedo.g, albedo.b});
@@ -129,13 +134,15 @@ RendererScene::RendererScene(const World& world, const RendererSceneSettings& se
         const WorldMesh& full = Vegetation::mesh(PlantKind(k));
         plantMeshes_[k] = uploadMesh(full);
         plantProxies_[k] = uploadMesh(Vegetation::proxyMesh(PlantKind(k)));
-        plantFar_[k] = uploadMesh(farPlantMesh(full));
+        plantFar_[k] = uploadMesh(
+            farPlantMesh(full, PlantKind(k) == PlantKind::Bush || PlantKind(k) == PlantKind::Rock));
         float top = 0.0f;
         for (size_t i = 1; i < full.positions.size(); i += 3)
             top = std::max(top, full.positions[i]);
         plantHeight_m_[k] = top;
     }
-    vehicleMesh_ = uploadMesh(makeVehicleMesh());
+    vehicleLevel_ = makeVehicleMesh();
+    vehicleMesh_ = uploadMesh(vehicleLevel_);
 }
 
 RendererScene::~RendererScene() = default;
@@ -152,6 +159,7 @@ void RendererScene::updateTerrain(const glm::dvec3& eye_m) {
                             std::floor(eye_m.z / snap) * snap);
     terrainMesh_ = terrainCache_.build(terrainLeaves_, origin);
     terrainGl_ = uploadMesh(terrainMesh_.mesh);
+    terrainSurface_ = TerrainSurface(terrainMesh_);
     terrainBounds_.clear();
     const auto& pos = terrainMesh_.mesh.positions;
     for (const TerrainPatchDraw& p : terrainMesh_.patches) {
@@ -226,8 +234,15 @@ void RendererScene::buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj
     if (vehicle_) {
         // The camera's own car (docs/ARCHITECTURE.md "Terrain and objects": vegetation and vehicle
         // get per-pixel SH).
+        // Pitched on the CPU (the object shader turns about +Y only); on the road ribbon, which
+        // floats roadLift_m above the terrain the replay's eye height counts from.
+        if (std::abs(vehicle_->pitch_rad - vehicleMeshPitch_rad_) > 1e-4) {
+            vehicleMesh_ = uploadMesh(pitchedMesh(vehicleLevel_, vehicle_->pitch_rad));
+            vehicleMeshPitch_rad_ = vehicle_->pitch_rad;
+        }
         ObjectInstance inst;
-        const glm::dvec3 rel = vehicle_->position_m - eye_m;
+        const glm::dvec3 rel =
+            vehicle_->position_m + glm::dvec3(0.0, settings_.roadLift_m, 0.0) - eye_m;
         inst.positionScale = glm::vec4(float(rel.x), float(rel.y), float(rel.z), 1.0f);
         inst.rotationSet = glm::vec2(float(vehicle_->heading_rad),
                                      float(ambient.objectSet(vehicle_->position_m, out.ambientSets)));
@@ -278,6 +293,22 @@ void RendererScene::addRoads(const glm::dvec3& eye_m, const glm::mat4* viewProj,
 
 // ---- [SECTION] Plants ------------------------------------------------------------------------
 
+// Far patches are coarse: their surface lies up to metres above or below a plant's true base
+// (World::height), and a plant placed there floats or sinks. The main view stands each plant on
+// the drawn surface instead (TerrainSurface::baseUnder: the lowest of it under a trunk's width
+// for trees, under half the footprint for bushes and rocks). Where no leaf is drawn, the true
+// base; never more than kPlantSinkMargin_m from it (which the culling boxes allow for).
+static constexpr double kPlantSinkMargin_m = 12.0;
+
+static double drawnBase_m(const TerrainSurface& surface, const Plant& p) {
+    const bool small = p.kind == PlantKind::Bush || p.kind == PlantKind::Rock;
+    const double r = p.scale * (small ? 0.5 * Vegetation::footprintRadius_m(p.kind) : 0.3);
+    const double base = surface.baseUnder(p.position_m.x, p.position_m.z, r);
+    if (!std::isfinite(base)) return p.position_m.y;
+    return std::clamp(base, p.position_m.y - kPlantSinkMargin_m,
+                      p.position_m.y + kPlantSinkMargin_m);
+}
+
 void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewProj, bool capture,
                               const AmbientSource& ambient, DrawList& out, std::size_t* drawn,
                               double nearRadius_m) {
@@ -312,6 +343,9 @@ void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewP
                     ylo = std::min(ylo, p.position_m.y);
                     yhi = std::max(yhi, p.position_m.y + p.scale * maxHeight);
                 }
+                // Plants stand on the drawn terrain, up to a few metres below their true base.
+                ylo -= kPlantSinkMargin_m;
+                yhi += kPlantSinkMargin_m;
                 const glm::vec3 lo(float(x0 - 4 - centre_m.x), float(ylo - centre_m.y),
                                    float(z0 - 4 - centre_m.z));
                 const glm::vec3 hi(float(x0 + Vegetation::kTile_m + 4 - centre_m.x),
@@ -341,7 +375,8 @@ void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewP
                                                                 : 2;
                 }
                 ObjectInstance inst;
-                const glm::dvec3 rel = p.position_m - centre_m;
+                glm::dvec3 rel = p.position_m - centre_m;
+                if (!capture) rel.y = drawnBase_m(terrainSurface_, p) - centre_m.y;
                 inst.positionScale = glm::vec4(float(rel.x), float(rel.y), float(rel.z), p.scale);
                 std::uint32_t set;
                 if (lod == 2) {

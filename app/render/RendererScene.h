@@ -16,6 +16,7 @@
 
 #include "app/render/RendererCore.h"
 #include "world/TerrainPatch.h"
+#include "world/Vehicle.h"  // VehiclePose
 
 namespace amb {
 
@@ -36,12 +37,6 @@ struct RendererSceneSettings {
     double captureTerrainRadius_m = 2000.0;
     double captureTreeRange_m = 150.0;  // tree proxies in a capture nearer than this
     double roadLift_m = 0.12;           // road ribbons float this far above the terrain
-};
-
-// The camera's own car (drives): where it stands this frame.
-struct VehiclePose {
-    glm::dvec3 position_m{0.0};  // ground point under the driver's eye
-    double heading_rad = 0.0;    // rotation about +Y taking the car's +Z to its forward
 };
 
 struct SceneStats {
@@ -92,8 +87,11 @@ class RendererScene {
     std::vector<RoadChunk> roads_;
     std::array<GlMesh, 4> plantMeshes_, plantProxies_, plantFar_;
     std::array<float, 4> plantHeight_m_{};
+    WorldMesh vehicleLevel_;  // the car's mesh, level; vehicleMesh_ is it pitched
     GlMesh vehicleMesh_;
+    double vehicleMeshPitch_rad_ = 0.0;
     std::optional<VehiclePose> vehicle_;
+    TerrainSurface terrainSurface_;  // the drawn terrain, where plants stand in the main view
 };
 
 }  // namespace amb

@@ -86,6 +86,9 @@ TEST(RunCommand, BadInputIsOneLineAndExitCode2) {
     expectInputError("run --replay " + (dir / "broken.json").string(), "broken.json");
     expectInputError("run --replay " + kReplay + " --out /proc/ambience-cannot-write", "--out");
     expectInputError("run --no-such-option", "no-such-option");
+    expectInputError("run --replay " + kReplay + " --camera drone", "--camera");
+    expectInputError("run --replay " + kReplay + " --exposure bright", "--exposure");
+    expectInputError("compare --replay " + kReplay + " --camera drone", "--camera");
     expectInputError("probe --at 1,2 --out " + (dir / "p.exr").string() + " --time 30", "--time");
     expectInputError("probe --at nowhere --out " + (dir / "p.exr").string(), "--at");
 }

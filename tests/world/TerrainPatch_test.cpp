@@ -1,7 +1,8 @@
 // TerrainPatch_test.cpp — patches are deterministic and cached by key, LOD selection refines
 // towards the camera, edges coincide across patch borders and LOD transitions (no cracks), near
 // and 10^6 m from the origin; corner colours meet across LOD transitions and a linear field is
-// left as it is; the terrain proxy stays small.
+// left as it is; the terrain proxy stays small; the drawn surface matches the packed triangles
+// and plants stand on it; the albedo shows rock on steep slopes and is nowhere one flat colour.
 #include "world/TerrainPatch.h"
 
 #include <algorithm>
@@ -16,6 +17,8 @@
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
 
+#include "world/Conventions.h"
+#include "world/Vegetation.h"
 #include "world/World.h"
 
 namespace amb {
@@ -444,6 +447,133 @@ TEST(TerrainPatch, CornersToEvaluateReachTheCoarserEdges) {
     EXPECT_EQ(places.size(), mesh.corners.size());
     EXPECT_LT(everything.size(), 4 * mesh.patches.size());
     EXPECT_LT(cornersToEvaluate(mesh, fine).size(), everything.size());
+}
+
+}  // namespace
+}  // namespace amb
+
+// ---- Drawn surface and albedo ----------------------------------------------------------------
+
+namespace amb {
+namespace {
+
+// The steepest spot below the snow line on a 250 m grid around the origin (mountainsides).
+glm::dvec3 steepSpot(const World& world) {
+    glm::dvec3 best(0.0);
+    double steepest = -1.0;
+    for (int i = -20; i <= 20; ++i)
+        for (int k = -20; k <= 20; ++k) {
+            const double x = 250.0 * i, z = 250.0 * k;
+            const GroundSample g = world.sample(x, z);
+            if (g.height_m > 450.0 || g.height_m < 20.0) continue;
+            if (1.0 - g.normal.y > steepest) steepest = 1.0 - g.normal.y, best = {x, g.height_m, z};
+        }
+    return best;
+}
+
+TEST(TerrainSurface, MatchesTheDrawnTrianglesAndPlantsStandOnThem) {
+    const World& world = defaultWorld();
+    TerrainPatchCache cache(world, smallLod());
+    const glm::dvec3 spot = steepSpot(world);
+    const glm::dvec3 eye = spot + glm::dvec3(0.0, 2.0, 0.0);
+    const TerrainMesh mesh = cache.build(eye, glm::dvec3(std::floor(eye.x), 0.0, std::floor(eye.z)));
+    const TerrainSurface surface(mesh);
+    // At every vertex of the packed mesh the surface is the vertex's height (to float rounding).
+    for (std::size_t p = 0; p < mesh.patches.size(); p += 7) {
+        const TerrainPatchDraw& d = mesh.patches[p];
+        for (std::uint32_t v = d.firstVertex; v < d.firstVertex + d.vertexCount; v += 5) {
+            const glm::dvec3 q = glm::dvec3(mesh.mesh.positions[3 * v], mesh.mesh.positions[3 * v + 1],
+                                            mesh.mesh.positions[3 * v + 2]) + mesh.origin_m;
+            ASSERT_NEAR(surface.heightAt(q.x, q.z), q.y, 1e-3 + 1e-6 * std::abs(q.y));
+        }
+    }
+    // Plants within 600 m: the base stands at or below the drawn surface at the centre and at
+    // the four footprint points (tolerance 1e-9 m), at the lowest of them, and sinks below the
+    // centre by less than twice the footprint radius (coarse triangles are steeper than the
+    // ground plants grow on, normal.y >= 0.65: a gradient of 1.17).
+    const double r = 1.1;
+    double worstOff = 0.0;
+    int plants = 0;
+    for (const Plant& p : world.vegetation().inDisc(spot.x, spot.z, 600.0)) {
+        const double centre = surface.heightAt(p.position_m.x, p.position_m.z);
+        if (!std::isfinite(centre)) continue;
+        const double base = surface.baseUnder(p.position_m.x, p.position_m.z, r);
+        EXPECT_LE(base, centre + 1e-9);
+        double lowest = centre;
+        for (const auto& [dx, dz] : {std::pair{r, 0.0}, {-r, 0.0}, {0.0, r}, {0.0, -r}}) {
+            const double h = surface.heightAt(p.position_m.x + dx, p.position_m.z + dz);
+            EXPECT_LE(base, h + 1e-9);
+            lowest = std::min(lowest, h);
+        }
+        EXPECT_GE(base, lowest - 1e-9);
+        EXPECT_GT(base, centre - 2.0 * r);
+        worstOff = std::max(worstOff, std::abs(centre - p.position_m.y));
+        ++plants;
+    }
+    EXPECT_GT(plants, 100);
+    // Why: far patches lie well off the true ground (World::height) where plants were placed.
+    EXPECT_GT(worstOff, 0.3);
+    EXPECT_TRUE(std::isnan(surface.heightAt(spot.x + 1e5, spot.z)));
+}
+
+// The flattest spot of lowland (20 to 300 m) on a 250 m grid around the origin.
+glm::dvec3 flatSpot(const World& world) {
+    glm::dvec3 best(0.0);
+    double flattest = 1e9;
+    for (int i = -20; i <= 20; ++i)
+        for (int k = -20; k <= 20; ++k) {
+            const double x = 250.0 * i, z = 250.0 * k;
+            const GroundSample g = world.sample(x, z);
+            if (g.height_m > 300.0 || g.height_m < 20.0 || g.roadWeight > 0.0) continue;
+            if (1.0 - g.normal.y < flattest) flattest = 1.0 - g.normal.y, best = {x, g.height_m, z};
+        }
+    return best;
+}
+
+TEST(TerrainAlbedo, RockOnSteepSlopesAndNoFlatColour) {
+    const World& world = defaultWorld();
+    int steep = 0, rockLike = 0;
+    // Colour statistics: sums of the albedo and of its squared length, per class.
+    glm::dvec3 grassSum(0.0), rockSum(0.0);
+    double grassSq = 0.0, rockSq = 0.0;
+    int grass = 0;
+    for (const glm::dvec3& spot : {steepSpot(world), flatSpot(world)}) {
+        const std::int64_t i0 = std::int64_t(std::floor(spot.x / 32.0)),
+                           k0 = std::int64_t(std::floor(spot.z / 32.0));
+        for (std::int64_t i = i0 - 6; i <= i0 + 6; ++i)
+            for (std::int64_t k = k0 - 6; k <= k0 + 6; ++k) {
+                const PatchKey key{0, i, k};
+                const TerrainPatch p = TerrainPatch::generate(world, key);
+                for (int v = 0; v < kV * kV; ++v) {
+                    const double ny = p.normals[3 * v + 1];
+                    const double x = vertexX(key, v % kV), z = vertexZ(key, v / kV);
+                    double road = 0.0;
+                    world.heightAndRoad(x, z, &road);
+                    if (road > 0.0 || p.heights_m[v] < 5.0 || p.heights_m[v] > 450.0) continue;
+                    const glm::dvec3 a(p.albedo[3 * v], p.albedo[3 * v + 1], p.albedo[3 * v + 2]);
+                        if (1.0 - ny > World::kRockSlope + 0.1) {
+                        ++steep;
+                        // Stone: grey to warm, never green (g <= r) nor straw (b >= 0.45 r).
+                        if (a.g <= 1.0 * a.r + 1e-6 && a.b >= 0.45 * a.r) ++rockLike;
+                        rockSum += a, rockSq += glm::dot(a, a);
+                    } else if (1.0 - ny < 0.03) {
+                        ++grass;
+                        grassSum += a, grassSq += glm::dot(a, a);
+                    }
+                }
+            }
+    }
+    ASSERT_GT(steep, 200);
+    ASSERT_GT(grass, 200);
+    EXPECT_GE(double(rockLike) / steep, 0.95);
+    // Not one flat colour: the albedo's RMS distance from its mean colour is 8 % of the mean's
+    // length or more, on rock and on grass alike.
+    const auto relStd = [](const glm::dvec3& sum, double sq, int n) {
+        const glm::dvec3 mean = sum / double(n);
+        return std::sqrt(std::max(0.0, sq / n - glm::dot(mean, mean))) / glm::length(mean);
+    };
+    EXPECT_GT(relStd(rockSum, rockSq, steep), 0.08);
+    EXPECT_GT(relStd(grassSum, grassSq, grass), 0.08);
 }
 
 }  // namespace
