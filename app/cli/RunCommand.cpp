@@ -60,6 +60,9 @@ struct RunOptions {
     bool debugOverlay = false;
     bool noVehicle = false;
     std::string view = "shaded";
+    std::string shadows = "on";
+    int shadowCascades = ShadowSettings{}.cascades, shadowSize = ShadowSettings{}.mapSize,
+        shadowPcf = ShadowSettings{}.pcf;
     std::string contactSheet;  // empty: <out>/contact-sheet.png; "none": none
     int sheetCells = 12;
     int faceSize = 16;
@@ -191,6 +194,7 @@ struct RunPlan {
     Size size;
     std::string name;  // the replay's label
     RenderOutput view = RenderOutput::Shaded;
+    ShadowSettings shadows;  // --shadows: the main view's, the captures' and the reference's
 };
 
 // Stage (1) of a run: reads the replay and the settings files, checks every option, completes
@@ -207,6 +211,11 @@ RunPlan planRun(RunOptions& o) {
     // "volume" is the dynamic ambience volume; the others are the baselines (app/frame/MethodStages.h).
     checkAmbienceMethod(o.ambient, "--ambient");
     plan.view = parseViewOutput(o.view, "--view");
+    plan.shadows.enabled = plan.shadows.captures = parseShadowSwitch(o.shadows, "--shadows");
+    plan.shadows.cascades = o.shadowCascades;
+    plan.shadows.mapSize = o.shadowSize;
+    plan.shadows.pcf = o.shadowPcf;
+    checkShadowSettings(plan.shadows, "--shadow-cascades/--shadow-size/--shadow-pcf");
     const bool useVolume = o.ambient == "volume";
     AmbienceVolumeSettings& volumeSettings = plan.volumeSettings;
     if (!o.ambienceConfig.empty()) {
@@ -318,7 +327,7 @@ RunMeasurement startMeasurement(const RunOptions& o, const RunPlan& plan, const 
         fs::path(o.replay).filename().string() + " stride=" + std::to_string(o.stride) +
         " every=" + std::to_string(o.measureEvery) + " face=" + std::to_string(o.faceSize) +
         " sunThreshold=" + std::to_string(measureSettings.sunThreshold) +
-        " frames=" + std::to_string(o.maxFrames) +
+        " frames=" + std::to_string(o.maxFrames) + " shadows=" + describeShadows(plan.shadows) +
         (o.loops > 1 ? " loops=" + std::to_string(o.loops) : std::string());
     if (o.measureEvery > 0) {
         m.meter = std::make_unique<ErrorMeter>(stages.cubeCapture(), stages.environment(),
@@ -334,7 +343,7 @@ RunMeasurement startMeasurement(const RunOptions& o, const RunPlan& plan, const 
         " every=" + std::to_string(ref.every) + " trees=" + std::to_string(ref.objectTrees);
     if (m.meter && o.referenceOn) {
         m.referenceCapture =
-            std::make_unique<CubeCaptureGl>(world, ref.faceSize, CaptureScene::Full);
+            std::make_unique<CubeCaptureGl>(world, ref.faceSize, CaptureScene::Full, plan.shadows);
         m.meter->attachReference(*m.referenceCapture, ref,
                                  plan.oracleKind == OracleKind::Reference);
         if (!o.reference.empty() && fs::exists(o.reference))
@@ -355,6 +364,11 @@ void addAmbienceTotals(const RunOptions& o, MethodAmbienceStages& stages, RunRep
         t.rejectedProbes = st.rejectedProbes;
         t.teleports = st.teleports;
         t.captureTriangles = stages.cubeCapture().lastTriangles();
+        if (const auto* gl = dynamic_cast<const CubeCaptureGl*>(&stages.cubeCapture())) {
+            t.captureShadowRenders = gl->shadowStats().renders;
+            t.captureShadowRender_ms = gl->shadowStats().render_ms;
+            t.captureShadowTriangles = gl->shadowStats().triangles;
+        }
     }
     if (volume) {
         const AmbienceStatistics& st = volume->statistics();
@@ -453,6 +467,7 @@ void runReplay(RunOptions o) {
     rs.height = size.height;
     rs.drawVehicle = replay.mode == ReplayMode::Drive && !o.noVehicle;
     rs.viewOutput = plan.view;
+    rs.shadows = plan.shadows;
     Renderer renderer(world, rs);
     auto stages =
         makeMethodStages(renderer, o.ambient, plan.volumeSettings, plan.baselines, o.faceSize);
@@ -479,6 +494,7 @@ void runReplay(RunOptions o) {
     report.width = size.width;
     report.height = size.height;
     report.ambient = o.ambient;
+    report.shadows = describeShadows(plan.shadows);
     report.frameStep_s = loop.frameStep_s();
     report.loops = o.loops;
     // Rows in one block from the start: no copy of them all when a long run outgrows it.
@@ -631,6 +647,15 @@ void addRunCommand(CLI::App& app) {
     cmd->add_flag("--no-vehicle", o->noVehicle, "do not draw the car on drive replays");
     cmd->add_option("--view", o->view,
                     "shaded (default) or ambient: the ambient term alone, every surface white");
+    cmd->add_option("--shadows", o->shadows,
+                    "on (default) or off: shadows of the sun and moon in the main view, the "
+                    "captures and the reference");
+    cmd->add_option("--shadow-cascades", o->shadowCascades,
+                    "cascades of the main view's shadow maps, 1 to 4 (default 3)");
+    cmd->add_option("--shadow-size", o->shadowSize,
+                    "texels per side of each cascade, 64 to 8192 (default 1024)");
+    cmd->add_option("--shadow-pcf", o->shadowPcf,
+                    "PCF taps per side, 1 to 3, each a bilinear 2 x 2 comparison (default 2)");
     cmd->add_option("--contact-sheet", o->contactSheet,
                     "PNG of frames across the run in a grid, or 'none' "
                     "(default <out>/contact-sheet.png)");

@@ -81,6 +81,7 @@ void writeReferenceCsv(const ErrorMeter& meter, const std::string& path);
 
 struct RunReport {
     std::string replay, backend, glVersion, glRenderer, ambient;
+    std::string shadows = "none";  // what shadows the main light (describeShadows)
     int width = 0, height = 0;
     double frameStep_s = 0.0;
     double wall_s = 0.0;
@@ -94,6 +95,10 @@ struct RunReport {
         // one): how many were made, and the most non-finite anchors one of them found.
         std::int64_t storeScans = 0;
         std::size_t nonFiniteAnchorsMax = 0;
+        // The captures' shadow map: renders, their total wall time [ms], triangles of the last.
+        std::int64_t captureShadowRenders = 0;
+        double captureShadowRender_ms = 0.0;
+        std::size_t captureShadowTriangles = 0;
     } ambienceTotals;
     int loops = 1;               // passes over the replay (run --loop)
     std::size_t rssPeak_kB = 0;  // the process's peak resident memory at the end

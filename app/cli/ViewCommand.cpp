@@ -45,6 +45,7 @@ struct ViewOptions {
     std::string ambient = "volume";
     bool debugOverlay = false;
     std::string view = "shaded";
+    std::string shadows = "on";
     std::string shaders;
     double time_h = -1.0;
 };
@@ -80,6 +81,7 @@ Size checkViewOptions(const ViewOptions& o) {
     const Size size = parseSize(o.size, "--size");
     checkAmbienceMethod(o.ambient, "--ambient");
     parseViewOutput(o.view, "--view");
+    parseShadowSwitch(o.shadows, "--shadows");
     if (o.debugOverlay && o.ambient != "volume")
         throw InputError("--debug-overlay", "needs --ambient volume");
     if (o.frames < 0) throw InputError("--frames", "must be >= 0");
@@ -189,6 +191,7 @@ void runView(const ViewOptions& o) {
     rs.width = size.width;
     rs.height = size.height;
     rs.viewOutput = parseViewOutput(o.view, "--view");
+    rs.shadows.enabled = rs.shadows.captures = parseShadowSwitch(o.shadows, "--shadows");
     Renderer renderer(world, rs);
     auto stages =
         makeMethodStages(renderer, o.ambient, AmbienceVolumeSettings{}, BaselineSettings{});
@@ -296,6 +299,8 @@ void addViewCommand(CLI::App& app) {
                   "mark anchors and the probe being captured on screen and on screenshots");
     cmd->add_option("--view", o->view,
                     "shaded (default) or ambient: the ambient term alone, every surface white");
+    cmd->add_option("--shadows", o->shadows,
+                    "on (default) or off: shadows of the sun and moon in the view and the captures");
     cmd->add_option("--record", o->record, "file the R key records to (default recorded.json)");
     cmd->add_option("--frames", o->frames, "render N frames, then exit (non-interactive)");
     cmd->add_option("--screenshot", o->screenshot, "with --frames: save the last frame here");

@@ -9,6 +9,7 @@
 #include "app/render/CubeCaptureGl.h"
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -50,7 +51,8 @@ glm::mat4 CubeCaptureGl::faceViewProj(int face, float near_m) {
     return reversedInfinitePerspective(0.5f * float(kPi), 1.0f, near_m) * view;
 }
 
-CubeCaptureGl::CubeCaptureGl(RendererScene& scene, int faceSize) : scene_(&scene), n_(faceSize) {
+CubeCaptureGl::CubeCaptureGl(RendererScene& scene, int faceSize, const ShadowSettings& shadows)
+    : scene_(&scene), n_(faceSize), shadows_(shadows) {
     init();
 }
 
@@ -83,11 +85,13 @@ static std::unique_ptr<RendererScene> ownScene(const World& world, int faceSize,
     return std::make_unique<RendererScene>(world);
 }
 
-CubeCaptureGl::CubeCaptureGl(const World& world, int faceSize, CaptureScene scene)
+CubeCaptureGl::CubeCaptureGl(const World& world, int faceSize, CaptureScene scene,
+                             const ShadowSettings& shadows)
     : ownedScene_(ownScene(world, faceSize, scene)),
       scene_(ownedScene_.get()),
       n_(faceSize),
-      kind_(scene) {
+      kind_(scene),
+      shadows_(shadows) {
     init();
 }
 
@@ -95,6 +99,7 @@ CubeCaptureGl::~CubeCaptureGl() = default;
 
 void CubeCaptureGl::init() {
     if (n_ < 1 || n_ > 2048) throw InputError("--size", "face size must be in [1, 2048]");
+    checkShadowSettings(shadows_, "shadow settings");
     drawer_ = std::make_unique<SceneDrawer>();
     colour_ = makeTexture2D(GL_RGBA32F, n_, 6 * n_);
     depth_ = makeTexture2D(GL_DEPTH_COMPONENT32F, n_, 6 * n_);
@@ -106,6 +111,55 @@ void CubeCaptureGl::init() {
     if (glCheckNamedFramebufferStatus(fbo, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
         throw std::runtime_error("capture: incomplete framebuffer");
     }
+}
+
+ShadowBinding CubeCaptureGl::prepareShadows(const glm::dvec3& probe_m) {
+    ShadowBinding binding;
+    const ShadowSettings& ss = shadows_;
+    using Clock = std::chrono::steady_clock;
+    if (kind_ == CaptureScene::Full) {
+        // The main view's cascades around the probe, rendered for this capture's faces.
+        if (!ss.enabled) return binding;
+        if (!shadowMap_) shadowMap_ = std::make_unique<ShadowMap>(ss.cascades, ss.mapSize);
+        const auto t0 = Clock::now();
+        shadowStats_.triangles = 0;
+        for (int k = 0; k < ss.cascades; ++k) {
+            shadowMap_->fit(k, probe_m, cascadeFar_m(ss, k, ss.cascades), sky_.lightDir);
+            scene_->buildCasters(probe_m, shadowMap_->casterViewProj(k, probe_m),
+                                 shadowMap_->texel_m(k), casters_);
+            shadowStats_.triangles += shadowMap_->render(k, *drawer_, casters_, probe_m);
+        }
+        ++shadowStats_.renders;
+        shadowStats_.render_ms +=
+            std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+        binding.texture = shadowMap_->texture();
+        binding.constants = shadowMap_->constants(probe_m, ss.cascades, ss.pcf,
+                                                  ss.normalOffset_texels, ss.depthBias_texels);
+        return binding;
+    }
+    if (!ss.captures) return binding;
+    if (!shadowMap_) shadowMap_ = std::make_unique<ShadowMap>(1, ss.captureMapSize);
+    // Re-render when the probe's trees (within captureTreeRange_m) are no longer all on the
+    // map, or when the light has turned by more than the threshold.
+    const double keep_m = std::max(0.0, ss.captureRegion_m - scene_->settings().captureTreeRange_m);
+    const glm::dvec3 c = shadowMap_->centre(0);
+    const bool outside = !shadowMap_->fitted(0) || std::hypot(probe_m.x - c.x, probe_m.z - c.z) > keep_m;
+    const double turned_rad = std::acos(std::clamp(
+        double(glm::dot(shadowMap_->towardLight(0), sky_.lightDir)), -1.0, 1.0));
+    if (outside || turned_rad > ss.captureRefresh_deg * kPi / 180.0) {
+        const auto t0 = Clock::now();
+        shadowMap_->fit(0, probe_m, ss.captureRegion_m, sky_.lightDir);
+        const glm::dvec3 centre = shadowMap_->centre(0);
+        scene_->buildCaptureCasters(centre, shadowMap_->casterViewProj(0, centre), casters_);
+        shadowStats_.triangles = shadowMap_->render(0, *drawer_, casters_, centre);
+        ++shadowStats_.renders;
+        shadowStats_.render_ms +=
+            std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    }
+    binding.texture = shadowMap_->texture();
+    binding.constants = shadowMap_->constants(probe_m, 1, ss.pcf, ss.normalOffset_texels,
+                                              ss.depthBias_texels, ss.captureBias_m);
+    return binding;
 }
 
 CubeCaptureStats CubeCaptureGl::capture(const glm::dvec3& position_m, double timeOfDay_h,
@@ -134,6 +188,7 @@ CubeCaptureStats CubeCaptureGl::captureFar(const glm::dvec3& position_m, double 
     if (kind_ == CaptureScene::Coarse) scene_->buildCapture(position_m, ambient, list_, nearRadius_m);
 
     glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+    const ShadowBinding shadows = prepareShadows(position_m);
     glBindFramebuffer(GL_FRAMEBUFFER, fbo_.id());
     FrameConstants fc;
     fillSkyConstants(sky_, fc);
@@ -156,7 +211,8 @@ CubeCaptureStats CubeCaptureGl::captureFar(const glm::dvec3& position_m, double 
         fc.invViewProj = glm::inverse(fc.viewProj);
         // The full scene is culled to each face's frustum, as the main view culls its own.
         if (kind_ == CaptureScene::Full) scene_->buildView(position_m, fc.viewProj, ambient, list_);
-        stats.triangles = std::max(stats.triangles, drawer_->draw(list_, fc, false, false));
+        stats.triangles =
+            std::max(stats.triangles, drawer_->draw(list_, fc, false, false, &shadows));
         ++stats.faces;
     }
     // One read-back covering the rendered faces.
@@ -203,7 +259,8 @@ std::unique_ptr<MethodAmbienceStages> makeMethodStages(Renderer& renderer,
                                                        const BaselineSettings& baselines,
                                                        int faceSize) {
     return std::make_unique<MethodAmbienceStages>(
-        std::make_unique<CubeCaptureGl>(renderer.scene(), faceSize), renderer.world(), method,
+        std::make_unique<CubeCaptureGl>(renderer.scene(), faceSize, renderer.settings().shadows),
+        renderer.world(), method,
         settings, baselines);
 }
 

@@ -1,0 +1,108 @@
+// ShadowMap.h — shadows of the main light (sun by day, moon by night) as depth maps seen from the
+// light: cascaded shadow maps for the main view, one map over the capture region for the coarse
+// captures, and probe-centred cascades for the reference oracle's full scene
+// (docs/ARCHITECTURE.md "Shadows").
+//
+// [SECTION] ShadowSettings   on/off, cascades, map size, PCF, biases, the capture region
+// [SECTION] ShadowMap        a depth texture array, one layer per cascade, fitted to spheres
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+
+#include "app/render/RendererCore.h"
+
+namespace amb {
+
+class RendererScene;
+
+// ---- [SECTION] ShadowSettings ----------------------------------------------------------------
+struct ShadowSettings {
+    // Main view and reference oracle: cascaded shadow maps.
+    bool enabled = true;
+    int cascades = 3;       // 1 to kMaxShadowCascades
+    int mapSize = 1024;     // texels per side of each cascade
+    int pcf = 2;            // PCF taps per side (1, 2 or 3), each a bilinear 2 x 2 comparison
+    double distance_m = 200.0;  // far end of the last cascade; cascade k ends at distance / 4^(N-1-k)
+    double normalOffset_texels = 1.5;  // receivers look up this far along their normal
+    double depthBias_texels = 1.0;     // and this much nearer the light
+    // Cascades past the first hold only static casters, so they are re-rendered only when their
+    // slice of the view leaves them: fitted to their slice's sphere grown by this fraction, at
+    // most one of them a frame. The first holds the car and is re-rendered every frame.
+    double staticMargin = 0.2;
+    // Coarse captures: one map over a region of the capture scene, reused across captures.
+    bool captures = true;
+    int captureMapSize = 1024;
+    double captureRegion_m = 300.0;      // radius of the region the map covers
+    double captureRefresh_deg = 2.0;     // re-rendered when the light turns by more than this
+    double captureBias_m = 1.0;          // depth bias (the caster and receiver proxies differ)
+};
+
+// Checks ranges; throws InputError naming `where` and the field.
+void checkShadowSettings(const ShadowSettings& s, const std::string& where);
+// "on" or "off" for --shadows; anything else is an InputError naming `option`.
+bool parseShadowSwitch(const std::string& text, const std::string& option);
+// What the run report says under "shadows": the technique and its settings, or "none".
+std::string describeShadows(const ShadowSettings& s);
+
+// Far end of cascade k of n [m].
+double cascadeFar_m(const ShadowSettings& s, int k, int n);
+
+// ---- [SECTION] ShadowMap ---------------------------------------------------------------------
+// Each cascade is an orthographic view along the light fitted to a sphere (world centre,
+// radius): texels of 2 r / N, the centre snapped to whole texels in the light's frame so that
+// shadows stay put as the camera moves. Depth runs from the sphere's light side (0) to its far
+// side (1); casters between the sphere and the light are clamped onto depth 0 (GL depth clamp),
+// so everything towards the light casts.
+class ShadowMap {
+  public:
+    ShadowMap(int layers, int mapSize);
+
+    int layers() const { return layers_; }
+    int mapSize() const { return size_; }
+    GLuint texture() const { return depth_.id(); }
+
+    // Fits layer k to the sphere and keeps it there until the next fit.
+    void fit(int k, const glm::dvec3& centre_m, double radius_m, const glm::vec3& towardLight);
+    bool fitted(int k) const { return cascades_[k].radius_m > 0.0; }
+    const glm::dvec3& centre(int k) const { return cascades_[k].centre_m; }
+    double radius(int k) const { return cascades_[k].radius_m; }
+    double texel_m(int k) const { return 2.0 * cascades_[k].radius_m / size_; }
+    const glm::vec3& towardLight(int k) const { return cascades_[k].light; }
+    // Layer k's camera-relative (world - eye_m) -> light clip matrix (x, y in [-1, 1], depth in
+    // [0, 1]), for drawing casters.
+    glm::mat4 casterViewProj(int k, const glm::dvec3& eye_m) const;
+    // Renders `casters` (positions relative to eye_m) into layer k: depth only, both faces.
+    // Returns the triangles drawn.
+    std::size_t render(int k, SceneDrawer& drawer, const DrawList& casters,
+                       const glm::dvec3& eye_m);
+    // What the receivers' shaders read (shaders/shadow.glsl) for a view from eye_m, layers
+    // [0, count): normal offset and depth bias in texels of each layer plus `extraBias_m`.
+    ShadowConstants constants(const glm::dvec3& eye_m, int count, int pcf,
+                              double normalOffset_texels, double depthBias_texels,
+                              double extraBias_m = 0.0) const;
+
+  private:
+    struct Cascade {
+        glm::dvec3 centre_m{0.0};
+        double radius_m = 0.0;
+        glm::vec3 light{0, 1, 0};
+        glm::dvec3 ex{1, 0, 0}, ey{0, 0, 1}, ez{0, 1, 0};  // light frame; ez towards the light
+    };
+    int layers_, size_;
+    GlTexture depth_;
+    std::vector<GlFramebuffer> fbos_;
+    std::array<Cascade, kMaxShadowCascades> cascades_{};
+};
+
+// The bounding sphere of the view frustum between distances near_m and far_m along the view
+// direction (tanX, tanY: tangents of the half angles): (distance of its centre along the view
+// direction, radius). Its radius does not depend on the view's orientation.
+std::pair<double, double> frustumSliceSphere(double near_m, double far_m, double tanX, double tanY);
+
+}  // namespace amb
