@@ -38,6 +38,30 @@ FaceBasis faceBasis(int face) {
 
 constexpr float kCaptureNear_m = 0.1f;
 
+// The objects of `list` whose bounding spheres reach into face f's 90-degree frustum (its four
+// side planes through the probe), into `out` (terrain and ambient sets shared by reference:
+// copied once, the instances filtered). Exact for what the face shows: a face draws only what
+// it can see, about a quarter of the trees around a probe.
+void cullObjectsToFace(const DrawList& list, int face, DrawList& out) {
+    const FaceBasis b = faceBasis(face);
+    const glm::vec3 n[4] = {b.forward - b.u, b.forward + b.u, b.forward - b.v, b.forward + b.v};
+    out.objects.resize(list.objects.size());
+    for (std::size_t k = 0; k < list.objects.size(); ++k) {
+        const ObjectBatch& src = list.objects[k];
+        ObjectBatch& dst = out.objects[k];
+        dst.mesh = src.mesh;
+        dst.simplified = src.simplified;
+        dst.instances.clear();
+        for (const ObjectInstance& inst : src.instances) {
+            const glm::vec3 c(inst.positionScale);
+            const float r = src.mesh->boundRadius_m * inst.positionScale.w * 1.4143f;  // |n| = sqrt 2
+            if (glm::dot(n[0], c) >= -r && glm::dot(n[1], c) >= -r && glm::dot(n[2], c) >= -r &&
+                glm::dot(n[3], c) >= -r)
+                dst.instances.push_back(inst);
+        }
+    }
+}
+
 }  // namespace
 
 glm::mat4 CubeCaptureGl::faceViewProj(int face, float near_m) {
@@ -211,8 +235,18 @@ CubeCaptureStats CubeCaptureGl::captureFar(const glm::dvec3& position_m, double 
         fc.invViewProj = glm::inverse(fc.viewProj);
         // The full scene is culled to each face's frustum, as the main view culls its own.
         if (kind_ == CaptureScene::Full) scene_->buildView(position_m, fc.viewProj, ambient, list_);
+        const DrawList* drawn = &list_;
+        if (kind_ == CaptureScene::Coarse) {
+            if (faceList_.terrain.size() != list_.terrain.size() || f == lo) {
+                faceList_.terrain = list_.terrain;
+                faceList_.ambientSets = list_.ambientSets;
+                faceList_.vertexIrradiance = list_.vertexIrradiance;
+            }
+            cullObjectsToFace(list_, f, faceList_);
+            drawn = &faceList_;
+        }
         stats.triangles =
-            std::max(stats.triangles, drawer_->draw(list_, fc, false, false, &shadows));
+            std::max(stats.triangles, drawer_->draw(*drawn, fc, false, false, &shadows));
         ++stats.faces;
     }
     // One read-back covering the rendered faces.

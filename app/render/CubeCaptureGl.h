@@ -105,7 +105,7 @@ class CubeCaptureGl final : public CubeCapture {
     SkyLighting sky_;
     GlTexture colour_, depth_;
     GlFramebuffer fbo_;
-    DrawList list_;
+    DrawList list_, faceList_;  // the capture's scene, and its objects culled to one face
     std::vector<float> rgba_;
     CubeCaptureStats lastStats_;
     ShadowSettings shadows_;

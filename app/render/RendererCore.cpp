@@ -29,6 +29,10 @@ GlMesh uploadMesh(const WorldMesh& mesh) {
     m.albedo = makeBuffer(mesh.albedo.data(), mesh.albedo.size() * sizeof(float));
     m.indices = makeBuffer(mesh.indices.data(), mesh.indices.size() * sizeof(std::uint32_t));
     m.indexCount = GLsizei(mesh.indices.size());
+    for (std::size_t i = 0; i + 2 < mesh.positions.size(); i += 3)
+        m.boundRadius_m = std::max(
+            m.boundRadius_m, glm::length(glm::vec3(mesh.positions[i], mesh.positions[i + 1],
+                                                   mesh.positions[i + 2])));
     m.vao = makeVertexArray();
     const GLuint vao = m.vao.id();
     const GLuint buffers[3] = {m.positions.id(), m.normals.id(), m.albedo.id()};

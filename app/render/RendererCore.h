@@ -67,6 +67,7 @@ struct GlMesh {
     GlVertexArray vao;
     GlBuffer positions, normals, albedo, indices;
     GLsizei indexCount = 0;
+    float boundRadius_m = 0.0f;  // farthest vertex from the mesh origin (culling)
     std::size_t triangles() const { return std::size_t(indexCount) / 3; }
 };
 // Attributes 0..2 per vertex; attributes 3 and 4 read ObjectInstance from binding 1 (instanced);

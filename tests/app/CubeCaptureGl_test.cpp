@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
@@ -284,6 +285,10 @@ TEST_F(CubeCaptureTest, CapturesUnderACanopyAreDarkerWithShadows) {
     capture(shadowed, probe_, noon_h + 1.0);
     EXPECT_EQ(shadowed.shadowStats().renders, renders + 1);
     ::testing::Test::RecordProperty("treesNear", int(most));
+    ::testing::Test::RecordProperty(
+        "ratios", "below face " + std::to_string(faceMean(a, below) / faceMean(b, below)) +
+                      ", downward irradiance " + std::to_string(down(a) / down(b)) +
+                      ", open ground " + std::to_string(faceMean(c, below) / faceMean(d, below)));
 }
 
 }  // namespace
