@@ -12,7 +12,7 @@ const int MAX_SHADOW_CASCADES = 4;
 
 layout(std140, binding = 2) uniform ShadowConstants {
     mat4 uShadowMatrix[MAX_SHADOW_CASCADES];  // camera-relative -> (u, v, depth, 1) in [0, 1]
-    vec4 uShadowOffset[MAX_SHADOW_CASCADES];  // x: normal offset [m]; y: depth bias
+    vec4 uShadowOffset[MAX_SHADOW_CASCADES];  // x: normal offset [m]; y: depth bias; z: layer
     vec4 uShadowParams;  // x: cascades (0: none); y: 1 / map size; z: PCF taps per side
 };
 
@@ -34,7 +34,7 @@ float shadowFactor(vec3 relPos, vec3 n) {
         for (int j = 0; j < taps; ++j)
             for (int i = 0; i < taps; ++i) {
                 vec2 uv = p.xy + vec2(start + float(i), start + float(j)) * uShadowParams.y;
-                lit += texture(uShadowMap, vec4(uv, float(k), ref));
+                lit += texture(uShadowMap, vec4(uv, uShadowOffset[k].z, ref));
             }
         lit /= float(taps * taps);
         if (k == count - 1) {  // fade to lit over the outer tenth of the last cascade

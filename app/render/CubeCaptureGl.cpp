@@ -162,27 +162,45 @@ ShadowBinding CubeCaptureGl::prepareShadows(const glm::dvec3& probe_m) {
         return binding;
     }
     if (!ss.captures) return binding;
-    if (!shadowMap_) shadowMap_ = std::make_unique<ShadowMap>(1, ss.captureMapSize);
-    // Re-render when the probe's trees (within captureTreeRange_m) are no longer all on the
-    // map, or when the light has turned by more than the threshold.
-    const double keep_m = std::max(0.0, ss.captureRegion_m - scene_->settings().captureTreeRange_m);
-    const glm::dvec3 c = shadowMap_->centre(0);
-    const bool outside = !shadowMap_->fitted(0) || std::hypot(probe_m.x - c.x, probe_m.z - c.z) > keep_m;
-    const double turned_rad = std::acos(std::clamp(
-        double(glm::dot(shadowMap_->towardLight(0), sky_.lightDir)), -1.0, 1.0));
-    if (outside || turned_rad > ss.captureRefresh_deg * kPi / 180.0) {
+    if (!shadowMap_) {
+        shadowMap_ = std::make_unique<ShadowMap>(ss.captureMaps, ss.captureMapSize);
+        cells_.assign(std::size_t(ss.captureMaps), RegionCell{});
+    }
+    // The probe's cell: a square of side sqrt 2 (region - tree range), so the region around its
+    // centre holds every tree within the capture's tree range of any probe in it.
+    const double treeRange_m = scene_->settings().captureTreeRange_m;
+    const double cell_m = std::max(10.0, std::sqrt(2.0) * (ss.captureRegion_m - treeRange_m));
+    const std::int64_t ci = std::int64_t(std::floor(probe_m.x / cell_m));
+    const std::int64_t ck = std::int64_t(std::floor(probe_m.z / cell_m));
+    int layer = -1, oldest = 0;
+    for (int l = 0; l < ss.captureMaps; ++l) {
+        const RegionCell& c = cells_[std::size_t(l)];
+        if (c.lastUse >= 0 && c.i == ci && c.k == ck) layer = l;
+        if (c.lastUse < cells_[std::size_t(oldest)].lastUse) oldest = l;
+    }
+    const double turned_rad =
+        layer < 0 ? 0.0
+                  : std::acos(std::clamp(double(glm::dot(shadowMap_->towardLight(layer), sky_.lightDir)),
+                                         -1.0, 1.0));
+    if (layer < 0 || turned_rad > ss.captureRefresh_deg * kPi / 180.0) {
+        if (layer < 0) layer = oldest;
         const auto t0 = Clock::now();
-        shadowMap_->fit(0, probe_m, ss.captureRegion_m, sky_.lightDir);
-        const glm::dvec3 centre = shadowMap_->centre(0);
-        scene_->buildCaptureCasters(centre, shadowMap_->casterViewProj(0, centre), casters_);
-        shadowStats_.triangles = shadowMap_->render(0, *drawer_, casters_, centre);
+        const double x = (double(ci) + 0.5) * cell_m, z = (double(ck) + 0.5) * cell_m;
+        const glm::dvec3 centre(x, scene_->world().height(x, z), z);
+        shadowMap_->fit(layer, centre, ss.captureRegion_m, sky_.lightDir);
+        const glm::dvec3 snapped = shadowMap_->centre(layer);
+        scene_->buildCaptureCasters(snapped, shadowMap_->casterViewProj(layer, snapped), casters_);
+        shadowStats_.triangles = shadowMap_->render(layer, *drawer_, casters_, snapped);
         ++shadowStats_.renders;
         shadowStats_.render_ms +=
             std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+        cells_[std::size_t(layer)].i = ci;
+        cells_[std::size_t(layer)].k = ck;
     }
+    cells_[std::size_t(layer)].lastUse = useClock_++;
     binding.texture = shadowMap_->texture();
     binding.constants = shadowMap_->constants(probe_m, 1, ss.pcf, ss.normalOffset_texels,
-                                              ss.depthBias_texels, ss.captureBias_m);
+                                              ss.depthBias_texels, ss.captureBias_m, layer);
     return binding;
 }
 

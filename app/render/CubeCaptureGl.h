@@ -15,10 +15,10 @@
 //            shaders as the main view. Far more triangles, so it is for measuring, not for frames.
 //
 // Shadows of the main light (ShadowSettings::captures; app/render/ShadowMap.h):
-//   coarse — one map over a region of captureRegion_m around a probe, of the capture scene's
-//            casters (terrain proxy, every tree proxy), reused by every capture whose trees it
-//            covers and re-rendered when a probe leaves that part of it or the light turns by
-//            more than captureRefresh_deg;
+//   coarse — maps over regions of captureRegion_m, of the capture scene's casters (terrain
+//            proxy, every tree proxy), one per square cell of the ground, centred on it, so that
+//            every tree a probe in the cell captures is on it; the last captureMaps cells kept,
+//            each re-rendered when the light has turned by more than captureRefresh_deg;
 //   full   — the main view's cascades (same count, size, PCF, biases and casters), fitted to
 //            spheres around the probe whose radii are the cascades' far ends, so the reference
 //            is shadowed as the main view is.
@@ -112,6 +112,12 @@ class CubeCaptureGl final : public CubeCapture {
     std::unique_ptr<ShadowMap> shadowMap_;
     DrawList casters_;
     ShadowStats shadowStats_;
+    struct RegionCell {
+        std::int64_t i = 0, k = 0;  // the cell's integer key (x, z over the cell size)
+        std::int64_t lastUse = -1;  // -1: the layer holds no map
+    };
+    std::vector<RegionCell> cells_;  // per layer of the coarse scene's region maps
+    std::int64_t useClock_ = 0;
 };
 
 // An ambience method's frame stages (app/frame/MethodStages.h) capturing from `renderer`'s own

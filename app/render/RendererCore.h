@@ -46,7 +46,8 @@ constexpr int kMaxShadowCascades = 4;
 struct ShadowConstants {
     // Camera-relative world -> (u, v, depth, 1) of each cascade, u, v, depth in [0, 1].
     glm::mat4 matrix[kMaxShadowCascades]{};
-    glm::vec4 offset[kMaxShadowCascades]{};  // x: normal offset [m]; y: depth bias [depth units]
+    // x: normal offset [m]; y: depth bias [depth units]; z: layer of the texture array
+    glm::vec4 offset[kMaxShadowCascades]{};
     glm::vec4 params{0.0f};  // x: cascades (0: no shadows); y: 1 / map size; z: PCF taps per side
 };
 static_assert(sizeof(ShadowConstants) == kMaxShadowCascades * 80 + 16, "std140 layout");

@@ -28,6 +28,7 @@ void checkShadowSettings(const ShadowSettings& s, const std::string& where) {
          "static cascade margin", "must be 0 to 2");
     need(s.captureMapSize >= 64 && s.captureMapSize <= 8192, "capture map size",
          "must be 64 to 8192 texels");
+    need(s.captureMaps >= 1 && s.captureMaps <= kMaxShadowCascades, "capture maps", "must be 1 to 4");
     need(std::isfinite(s.captureRegion_m) && s.captureRegion_m >= 10.0 &&
              s.captureRegion_m <= 5000.0,
          "capture region", "must be 10 to 5000 m");
@@ -60,8 +61,8 @@ std::string describeShadows(const ShadowSettings& s) {
         o << "main view: none";
     }
     if (s.captures) {
-        o << "; captures: one " << s.captureMapSize << "^2 map over " << s.captureRegion_m
-          << " m, refreshed after " << s.captureRefresh_deg << " deg";
+        o << "; captures: " << s.captureMaps << " maps of " << s.captureMapSize << "^2 over "
+          << s.captureRegion_m << " m, refreshed after " << s.captureRefresh_deg << " deg";
     } else {
         o << "; captures: none";
     }
@@ -164,20 +165,21 @@ std::size_t ShadowMap::render(int k, SceneDrawer& drawer, const DrawList& caster
 
 ShadowConstants ShadowMap::constants(const glm::dvec3& eye_m, int count, int pcf,
                                      double normalOffset_texels, double depthBias_texels,
-                                     double extraBias_m) const {
+                                     double extraBias_m, int first) const {
     ShadowConstants sc;
-    count = std::min(count, layers_);
-    for (int k = 0; k < count; ++k) {
+    count = std::min(count, layers_ - first);
+    for (int slot = 0; slot < count; ++slot) {
+        const int k = first + slot;
         // Clip (x, y in [-1, 1]) to texture coordinates.
         glm::mat4 toUv(1.0f);
         toUv[0][0] = toUv[1][1] = 0.5f;
         toUv[3][0] = toUv[3][1] = 0.5f;
-        sc.matrix[k] = toUv * casterViewProj(k, eye_m);
+        sc.matrix[slot] = toUv * casterViewProj(k, eye_m);
         const double texel = texel_m(k);
         const double depthRange_m = 2.0 * cascades_[std::size_t(k)].radius_m;
-        sc.offset[k] = glm::vec4(float(normalOffset_texels * texel),
-                                 float((depthBias_texels * texel + extraBias_m) / depthRange_m),
-                                 0.0f, 0.0f);
+        sc.offset[slot] = glm::vec4(float(normalOffset_texels * texel),
+                                    float((depthBias_texels * texel + extraBias_m) / depthRange_m),
+                                    float(k), 0.0f);
     }
     sc.params = glm::vec4(float(count), 1.0f / float(size_), float(pcf), 0.0f);
     return sc;

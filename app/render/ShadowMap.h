@@ -35,10 +35,14 @@ struct ShadowSettings {
     // slice of the view leaves them: fitted to their slice's sphere grown by this fraction, at
     // most one of them a frame. The first holds the car and is re-rendered every frame.
     double staticMargin = 0.2;
-    // Coarse captures: one map over a region of the capture scene, reused across captures.
+    // Coarse captures: maps over regions of the capture scene, reused across captures. A probe
+    // uses the map of the square cell (of side sqrt 2 (region - captureTreeRange_m)) it lies in,
+    // centred on the cell, so every tree of its capture is on the map; captureMaps cells are
+    // kept, the least recently used replaced.
     bool captures = true;
     int captureMapSize = 1024;
-    double captureRegion_m = 300.0;      // radius of the region the map covers
+    int captureMaps = 4;
+    double captureRegion_m = 240.0;      // radius of the region a map covers
     double captureRefresh_deg = 2.0;     // re-rendered when the light turns by more than this
     double captureBias_m = 1.0;          // depth bias (the caster and receiver proxies differ)
 };
@@ -83,9 +87,10 @@ class ShadowMap {
                        const glm::dvec3& eye_m);
     // What the receivers' shaders read (shaders/shadow.glsl) for a view from eye_m, layers
     // [0, count): normal offset and depth bias in texels of each layer plus `extraBias_m`.
+    // Layers [first, first + count) go to the shader's cascades [0, count).
     ShadowConstants constants(const glm::dvec3& eye_m, int count, int pcf,
                               double normalOffset_texels, double depthBias_texels,
-                              double extraBias_m = 0.0) const;
+                              double extraBias_m = 0.0, int first = 0) const;
 
   private:
     struct Cascade {
