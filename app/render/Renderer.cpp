@@ -53,7 +53,8 @@ Renderer::Renderer(const World& world, const RenderSettings& settings)
     noon_ = evaluateSky(world.sky(), 12.0);
     checkShadowSettings(settings.shadows, "shadow settings");
     if (settings.shadows.enabled)
-        shadowMap_ = std::make_unique<ShadowMap>(settings.shadows.cascades, settings.shadows.mapSize);
+        shadowMap_ = std::make_unique<ShadowMap>(settings.shadows.cascades + 1,  // + the car's
+                                                 settings.shadows.mapSize);
 }
 
 Renderer::~Renderer() = default;
@@ -83,30 +84,40 @@ ShadowBinding Renderer::renderShadows(const CameraSample& camera, RenderStats& s
     const glm::dvec3 f = glm::normalize(camera.forward);
     const double tanY = std::tan(0.5 * settings_.fovY_rad);
     const double tanX = tanY * double(settings_.width) / double(settings_.height);
-    bool staticRendered = false;
+    bool rendered = false;
     for (int k = 0; k < n; ++k) {
         const double near = k == 0 ? double(settings_.near_m) : cascadeFar_m(ss, k - 1, n);
         const auto [along, radius] = frustumSliceSphere(near, cascadeFar_m(ss, k, n), tanX, tanY);
         const glm::dvec3 centre = camera.position_m + along * f;
-        if (k > 0 && shadowMap_->fitted(k)) {
-            // A static cascade is fixed in the world: it stays right wherever it lies, so it is
-            // re-rendered only when the slice's sphere leaves it or the light turns by 1 degree,
-            // and at most one a frame (the others keep serving what they cover meanwhile).
+        if (shadowMap_->fitted(k)) {
+            // A cascade of static casters is fixed in the world: it stays right wherever it
+            // lies, so it is re-rendered only when the slice's sphere leaves it or the light
+            // turns by 1 degree, and at most one a frame, the nearest first (the others keep
+            // serving what they cover meanwhile).
             const bool inside = glm::length(centre - shadowMap_->centre(k)) + radius <=
                                 shadowMap_->radius(k);
             const bool turned = glm::dot(shadowMap_->towardLight(k), sky_.lightDir) < 0.99985f;
-            if (staticRendered || (inside && !turned)) continue;
+            if (rendered || (inside && !turned)) continue;
         }
-        const double fitRadius = k == 0 ? radius : radius * (1.0 + ss.staticMargin);
-        shadowMap_->fit(k, centre, fitRadius, sky_.lightDir);
+        const double margin = k == 0 ? ss.nearMargin : ss.staticMargin;
+        shadowMap_->fit(k, centre, radius * (1.0 + margin), sky_.lightDir);
         scene_->buildCasters(camera.position_m, shadowMap_->casterViewProj(k, camera.position_m),
-                             shadowMap_->texel_m(k), casters_, k == 0);
+                             shadowMap_->texel_m(k), casters_, false);
         stats.shadowTriangles += shadowMap_->render(k, *drawer_, casters_, camera.position_m);
-        staticRendered = staticRendered || k > 0;
+        rendered = true;
     }
     binding.texture = shadowMap_->texture();
     binding.constants = shadowMap_->constants(camera.position_m, n, ss.pcf,
                                               ss.normalOffset_texels, ss.depthBias_texels);
+    // The car, the one caster that moves: its own small map around it, every frame.
+    if (const auto& car = scene_->vehicle()) {
+        shadowMap_->fit(n, car->position_m, ss.carShadowRadius_m, sky_.lightDir, ss.carMapSize);
+        scene_->buildVehicleCaster(camera.position_m, casters_);
+        stats.shadowTriangles += shadowMap_->render(n, *drawer_, casters_, camera.position_m);
+        shadowMap_->setSlot(binding.constants, kMaxShadowCascades, n, camera.position_m,
+                            ss.normalOffset_texels, ss.depthBias_texels, 0.0);
+        binding.constants.params.w = 1.0f;
+    }
     return binding;
 }
 

@@ -44,13 +44,16 @@ static_assert(sizeof(FrameConstants) == 2 * 64 + 7 * 16, "std140 layout of Frame
 // ---- ShadowConstants -------------------------------------------------------------------------
 constexpr int kMaxShadowCascades = 4;
 struct ShadowConstants {
-    // Camera-relative world -> (u, v, depth, 1) of each cascade, u, v, depth in [0, 1].
-    glm::mat4 matrix[kMaxShadowCascades]{};
-    // x: normal offset [m]; y: depth bias [depth units]; z: layer of the texture array
-    glm::vec4 offset[kMaxShadowCascades]{};
-    glm::vec4 params{0.0f};  // x: cascades (0: no shadows); y: 1 / map size; z: PCF taps per side
+    // Camera-relative world -> (u, v, depth, 1) of each cascade, u, v, depth in [0, 1] over the
+    // part of the layer the cascade uses; slot kMaxShadowCascades: the car's own map.
+    glm::mat4 matrix[kMaxShadowCascades + 1]{};
+    // x: normal offset [m]; y: depth bias [depth units]; z: layer of the texture array;
+    // w: the share of the layer's side the cascade uses (its texels / the layer's)
+    glm::vec4 offset[kMaxShadowCascades + 1]{};
+    // x: cascades (0: no shadows); y: 1 / layer size; z: PCF taps per side; w: 1 with the car's map
+    glm::vec4 params{0.0f};
 };
-static_assert(sizeof(ShadowConstants) == kMaxShadowCascades * 80 + 16, "std140 layout");
+static_assert(sizeof(ShadowConstants) == (kMaxShadowCascades + 1) * 80 + 16, "std140 layout");
 
 // The shadows a draw reads: a depth texture array (GL_TEXTURE_2D_ARRAY, comparison on) and its
 // constants. texture 0 or params.x 0: no shadows.

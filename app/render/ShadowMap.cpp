@@ -24,11 +24,18 @@ void checkShadowSettings(const ShadowSettings& s, const std::string& where) {
     need(s.pcf >= 1 && s.pcf <= 3, "PCF", "must be 1, 2 or 3 taps per side");
     need(std::isfinite(s.distance_m) && s.distance_m >= 1.0 && s.distance_m <= 5000.0,
          "distance", "must be 1 to 5000 m");
-    need(std::isfinite(s.staticMargin) && s.staticMargin >= 0.0 && s.staticMargin <= 2.0,
-         "static cascade margin", "must be 0 to 2");
+    need(std::isfinite(s.staticMargin) && s.staticMargin >= 0.0 && s.staticMargin <= 2.0 &&
+             std::isfinite(s.nearMargin) && s.nearMargin >= 0.0 && s.nearMargin <= 2.0,
+         "cascade margins", "must be 0 to 2");
+    need(s.carMapSize >= 16 && s.carMapSize <= s.mapSize, "car map size",
+         "must be 16 to the map size");
+    need(std::isfinite(s.carShadowRadius_m) && s.carShadowRadius_m >= 1.0 &&
+             s.carShadowRadius_m <= 100.0,
+         "car shadow radius", "must be 1 to 100 m");
     need(s.captureMapSize >= 64 && s.captureMapSize <= 8192, "capture map size",
          "must be 64 to 8192 texels");
-    need(s.captureMaps >= 1 && s.captureMaps <= kMaxShadowCascades, "capture maps", "must be 1 to 4");
+    need(s.captureMaps >= 1 && s.captureMaps <= kMaxShadowLayers, "capture maps",
+         "must be 1 to 16");
     need(std::isfinite(s.captureRegion_m) && s.captureRegion_m >= 10.0 &&
              s.captureRegion_m <= 5000.0,
          "capture region", "must be 10 to 5000 m");
@@ -54,9 +61,9 @@ std::string describeShadows(const ShadowSettings& s) {
     if (s.enabled) {
         o << "cascaded shadow maps: " << s.cascades << " x " << s.mapSize << "^2 to "
           << s.distance_m << " m, PCF " << s.pcf << "x" << s.pcf << " bilinear taps";
-        if (s.cascades > 1)
-            o << ", cascades past the first re-rendered when the view leaves them (margin "
-              << s.staticMargin << ")";
+        o << ", static casters re-rendered when the view leaves a cascade (margins "
+          << s.nearMargin << ", " << s.staticMargin << "), the car in its own " << s.carMapSize
+          << "^2 map over " << s.carShadowRadius_m << " m every frame";
     } else {
         o << "main view: none";
     }
@@ -86,8 +93,9 @@ std::pair<double, double> frustumSliceSphere(double near_m, double far_m, double
 
 // ---- [SECTION] ShadowMap ---------------------------------------------------------------------
 
-ShadowMap::ShadowMap(int layers, int mapSize) : layers_(layers), size_(mapSize) {
-    if (layers < 1 || layers > kMaxShadowCascades || mapSize < 1)
+ShadowMap::ShadowMap(int layers, int mapSize)
+    : layers_(layers), size_(mapSize), cascades_(std::size_t(std::max(layers, 0))) {
+    if (layers < 1 || layers > kMaxShadowLayers || mapSize < 1)
         throw std::invalid_argument("ShadowMap: bad layer count or size");
     GLuint tex = 0;
     glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &tex);
@@ -112,8 +120,9 @@ ShadowMap::ShadowMap(int layers, int mapSize) : layers_(layers), size_(mapSize) 
 }
 
 void ShadowMap::fit(int k, const glm::dvec3& centre_m, double radius_m,
-                    const glm::vec3& towardLight) {
+                    const glm::vec3& towardLight, int texels) {
     Cascade& c = cascades_[std::size_t(k)];
+    c.texels = texels > 0 && texels < size_ ? texels : size_;
     c.light = glm::normalize(towardLight);
     c.ez = glm::dvec3(c.light);
     // A light frame that depends on the light alone (not on the camera), so the texel grid is
@@ -123,7 +132,7 @@ void ShadowMap::fit(int k, const glm::dvec3& centre_m, double radius_m,
     c.ey = glm::cross(c.ez, c.ex);
     c.radius_m = radius_m;
     // Snap the centre to whole texels across the light (along it, depth needs no snapping).
-    const double texel = 2.0 * radius_m / size_;
+    const double texel = 2.0 * radius_m / c.texels;
     const double a = std::floor(glm::dot(centre_m, c.ex) / texel) * texel;
     const double b = std::floor(glm::dot(centre_m, c.ey) / texel) * texel;
     c.centre_m = a * c.ex + b * c.ey + glm::dot(centre_m, c.ez) * c.ez;
@@ -153,34 +162,43 @@ std::size_t ShadowMap::render(int k, SceneDrawer& drawer, const DrawList& caster
     const GLuint fbo = fbos_[std::size_t(k)].id();
     glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);  // depth in [0, 1], as every pass here
     glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-    glViewport(0, 0, size_, size_);
+    const int texels = cascades_[std::size_t(k)].texels;
+    glViewport(0, 0, texels, texels);
+    glEnable(GL_SCISSOR_TEST);  // a layer's corner is cleared and drawn alone
+    glScissor(0, 0, texels, texels);
     const float one = 1.0f;
     glClearNamedFramebufferfv(fbo, GL_DEPTH, 0, &one);
     glEnable(GL_DEPTH_CLAMP);  // casters towards the light, beyond the sphere, at depth 0
     const std::size_t triangles = drawer.drawDepth(casters, casterViewProj(k, eye_m));
     glDisable(GL_DEPTH_CLAMP);
+    glDisable(GL_SCISSOR_TEST);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     return triangles;
+}
+
+void ShadowMap::setSlot(ShadowConstants& sc, int slot, int k, const glm::dvec3& eye_m,
+                        double normalOffset_texels, double depthBias_texels,
+                        double extraBias_m) const {
+    // Clip (x, y in [-1, 1]) to the cascade's texture coordinates [0, 1].
+    glm::mat4 toUv(1.0f);
+    toUv[0][0] = toUv[1][1] = 0.5f;
+    toUv[3][0] = toUv[3][1] = 0.5f;
+    sc.matrix[slot] = toUv * casterViewProj(k, eye_m);
+    const Cascade& c = cascades_[std::size_t(k)];
+    const double texel = texel_m(k);
+    const double depthRange_m = 2.0 * c.radius_m;
+    sc.offset[slot] = glm::vec4(float(normalOffset_texels * texel),
+                                float((depthBias_texels * texel + extraBias_m) / depthRange_m),
+                                float(k), float(c.texels) / float(size_));
 }
 
 ShadowConstants ShadowMap::constants(const glm::dvec3& eye_m, int count, int pcf,
                                      double normalOffset_texels, double depthBias_texels,
                                      double extraBias_m, int first) const {
     ShadowConstants sc;
-    count = std::min(count, layers_ - first);
-    for (int slot = 0; slot < count; ++slot) {
-        const int k = first + slot;
-        // Clip (x, y in [-1, 1]) to texture coordinates.
-        glm::mat4 toUv(1.0f);
-        toUv[0][0] = toUv[1][1] = 0.5f;
-        toUv[3][0] = toUv[3][1] = 0.5f;
-        sc.matrix[slot] = toUv * casterViewProj(k, eye_m);
-        const double texel = texel_m(k);
-        const double depthRange_m = 2.0 * cascades_[std::size_t(k)].radius_m;
-        sc.offset[slot] = glm::vec4(float(normalOffset_texels * texel),
-                                    float((depthBias_texels * texel + extraBias_m) / depthRange_m),
-                                    float(k), 0.0f);
-    }
+    count = std::min({count, layers_ - first, kMaxShadowCascades});
+    for (int slot = 0; slot < count; ++slot)
+        setSlot(sc, slot, first + slot, eye_m, normalOffset_texels, depthBias_texels, extraBias_m);
     sc.params = glm::vec4(float(count), 1.0f / float(size_), float(pcf), 0.0f);
     return sc;
 }

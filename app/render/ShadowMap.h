@@ -31,17 +31,20 @@ struct ShadowSettings {
     double distance_m = 200.0;  // far end of the last cascade; cascade k ends at distance / 4^(N-1-k)
     double normalOffset_texels = 1.5;  // receivers look up this far along their normal
     double depthBias_texels = 1.0;     // and this much nearer the light
-    // Cascades past the first hold only static casters, so they are re-rendered only when their
-    // slice of the view leaves them: fitted to their slice's sphere grown by this fraction, at
-    // most one of them a frame. The first holds the car and is re-rendered every frame.
-    double staticMargin = 0.2;
+    // The cascades hold only static casters, so each is re-rendered only when its slice of the
+    // view leaves it: fitted to the slice's sphere grown by these fractions, at most one cascade
+    // a frame. The car has its own small map over carShadowRadius_m, rendered every frame.
+    double nearMargin = 1.0;    // the first cascade
+    double staticMargin = 0.2;  // the others
+    int carMapSize = 256;
+    double carShadowRadius_m = 8.0;
     // Coarse captures: maps over regions of the capture scene, reused across captures. A probe
     // uses the map of the square cell (of side sqrt 2 (region - captureTreeRange_m)) it lies in,
     // centred on the cell, so every tree of its capture is on the map; captureMaps cells are
     // kept, the least recently used replaced.
     bool captures = true;
-    int captureMapSize = 1024;
-    int captureMaps = 4;
+    int captureMapSize = 512;
+    int captureMaps = 12;  // 1 to kMaxShadowLayers
     double captureRegion_m = 240.0;      // radius of the region a map covers
     double captureRefresh_deg = 2.0;     // re-rendered when the light turns by more than this
     double captureBias_m = 1.0;          // depth bias (the caster and receiver proxies differ)
@@ -63,20 +66,24 @@ double cascadeFar_m(const ShadowSettings& s, int k, int n);
 // shadows stay put as the camera moves. Depth runs from the sphere's light side (0) to its far
 // side (1); casters between the sphere and the light are clamped onto depth 0 (GL depth clamp),
 // so everything towards the light casts.
+constexpr int kMaxShadowLayers = 16;
+
 class ShadowMap {
   public:
-    ShadowMap(int layers, int mapSize);
+    ShadowMap(int layers, int mapSize);  // 1 to kMaxShadowLayers layers
 
     int layers() const { return layers_; }
     int mapSize() const { return size_; }
     GLuint texture() const { return depth_.id(); }
 
-    // Fits layer k to the sphere and keeps it there until the next fit.
-    void fit(int k, const glm::dvec3& centre_m, double radius_m, const glm::vec3& towardLight);
+    // Fits layer k to the sphere and keeps it there until the next fit, over `texels` per side
+    // of the layer (0: all of it; fewer render and clear only that corner).
+    void fit(int k, const glm::dvec3& centre_m, double radius_m, const glm::vec3& towardLight,
+             int texels = 0);
     bool fitted(int k) const { return cascades_[k].radius_m > 0.0; }
     const glm::dvec3& centre(int k) const { return cascades_[k].centre_m; }
     double radius(int k) const { return cascades_[k].radius_m; }
-    double texel_m(int k) const { return 2.0 * cascades_[k].radius_m / size_; }
+    double texel_m(int k) const { return 2.0 * cascades_[k].radius_m / cascades_[k].texels; }
     const glm::vec3& towardLight(int k) const { return cascades_[k].light; }
     // Layer k's camera-relative (world - eye_m) -> light clip matrix (x, y in [-1, 1], depth in
     // [0, 1]), for drawing casters.
@@ -91,18 +98,22 @@ class ShadowMap {
     ShadowConstants constants(const glm::dvec3& eye_m, int count, int pcf,
                               double normalOffset_texels, double depthBias_texels,
                               double extraBias_m = 0.0, int first = 0) const;
+    // Puts layer k into slot `slot` of `sc` (biases in texels of that layer).
+    void setSlot(ShadowConstants& sc, int slot, int k, const glm::dvec3& eye_m,
+                 double normalOffset_texels, double depthBias_texels, double extraBias_m) const;
 
   private:
     struct Cascade {
         glm::dvec3 centre_m{0.0};
         double radius_m = 0.0;
+        int texels = 1;
         glm::vec3 light{0, 1, 0};
         glm::dvec3 ex{1, 0, 0}, ey{0, 0, 1}, ez{0, 1, 0};  // light frame; ez towards the light
     };
     int layers_, size_;
     GlTexture depth_;
     std::vector<GlFramebuffer> fbos_;
-    std::array<Cascade, kMaxShadowCascades> cascades_{};
+    std::vector<Cascade> cascades_;
 };
 
 // The bounding sphere of the view frustum between distances near_m and far_m along the view
