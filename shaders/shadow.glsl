@@ -45,17 +45,17 @@ float shadowLookup(int k, vec3 relPos, vec3 n, bool fade) {
 }
 
 // Fraction of the main light reaching camera-relative position `relPos` with unit normal `n`
-// (1 lit, 0 in shadow): the first cascade that covers it, times the car's own map.
+// (1 lit, 0 in shadow): the first cascade that covers it, times the car's own map. Surfaces
+// facing away from the light get no direct light anyway and skip the lookups. The cascades
+// are tried with constant indices (a software rasteriser gathers dynamically indexed blocks).
 float shadowFactor(vec3 relPos, vec3 n) {
     int count = int(uShadowParams.x + 0.5);
-    float lit = 1.0;
-    for (int k = 0; k < count; ++k) {
-        float s = shadowLookup(k, relPos, n, k == count - 1);
-        if (s >= 0.0) {
-            lit = s;
-            break;
-        }
-    }
+    if (count == 0 || dot(n, uLightDir.xyz) <= 0.0) return 1.0;
+    float lit = shadowLookup(0, relPos, n, count == 1);
+    if (lit < 0.0 && count > 1) lit = shadowLookup(1, relPos, n, count == 2);
+    if (lit < 0.0 && count > 2) lit = shadowLookup(2, relPos, n, count == 3);
+    if (lit < 0.0 && count > 3) lit = shadowLookup(3, relPos, n, true);
+    if (lit < 0.0) lit = 1.0;
     if (uShadowParams.w > 0.5) {
         float car = shadowLookup(CAR_SHADOW_SLOT, relPos, n, false);
         if (car >= 0.0) lit *= car;
