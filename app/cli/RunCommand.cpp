@@ -653,9 +653,9 @@ void addRunCommand(CLI::App& app) {
     cmd->add_option("--shadow-cascades", o->shadowCascades,
                     "cascades of the main view's shadow maps, 1 to 4 (default 3)");
     cmd->add_option("--shadow-size", o->shadowSize,
-                    "texels per side of each cascade, 64 to 8192 (default 1024)");
+                    "texels per side of each cascade, 64 to 8192 (default 512)");
     cmd->add_option("--shadow-pcf", o->shadowPcf,
-                    "PCF taps per side, 1 to 3, each a bilinear 2 x 2 comparison (default 2)");
+                    "PCF taps per side, 1 to 3, each a bilinear 2 x 2 comparison (default 1)");
     cmd->add_option("--contact-sheet", o->contactSheet,
                     "PNG of frames across the run in a grid, or 'none' "
                     "(default <out>/contact-sheet.png)");

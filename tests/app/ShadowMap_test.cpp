@@ -236,7 +236,7 @@ TEST(ShadowMap, SettingsAndSwitchRefuseBadInput) {
     s.distance_m = std::nan("");
     EXPECT_THROW(checkShadowSettings(s, "test"), InputError);
     s = {};
-    EXPECT_NE(describeShadows(s).find("cascaded shadow maps: 3 x 1024"), std::string::npos);
+    EXPECT_NE(describeShadows(s).find("cascaded shadow maps: 3 x 512"), std::string::npos);
     s.enabled = s.captures = false;
     EXPECT_EQ(describeShadows(s), "none");
 }
