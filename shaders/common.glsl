@@ -48,9 +48,11 @@ vec4 fogAt(vec3 relPos) {
 
 vec3 applyFog(vec3 radiance, vec4 fog) { return mix(fog.rgb, radiance, fog.a); }
 
-// Lambertian surface: radiance = albedo / pi * (ambient irradiance + direct irradiance).
-vec3 shadeLambert(vec3 albedo, vec3 n, vec3 ambientIrradiance) {
-    vec3 direct = uLightIrradiance.rgb * max(dot(n, uLightDir.xyz), 0.0);
+// Lambertian surface: radiance = albedo / pi * (ambient irradiance + direct irradiance), the
+// direct term times `shadow`, the fraction of the main light that reaches the surface
+// (shadow.glsl); the ambient lights what the main light does not.
+vec3 shadeLambert(vec3 albedo, vec3 n, vec3 ambientIrradiance, float shadow) {
+    vec3 direct = uLightIrradiance.rgb * (max(dot(n, uLightDir.xyz), 0.0) * shadow);
     return albedo / PI * (max(ambientIrradiance, vec3(0.0)) + direct);
 }
 

@@ -13,6 +13,7 @@ layout(location = 4) in vec2 iRotationSet;    // x: rotation about +Y [rad]; y: 
 out vec3 vNormal;
 out vec3 vAlbedo;
 out vec4 vFog;
+out vec3 vRelPos;  // camera-relative position [m], for the shadow lookup
 flat out uint vAmbientSet;
 
 void main() {
@@ -23,5 +24,6 @@ void main() {
     vAlbedo = aAlbedo;
     vAmbientSet = uint(iRotationSet.y + 0.5);
     vFog = fogAt(relPos);
+    vRelPos = relPos;
     gl_Position = uViewProj * vec4(relPos, 1.0);
 }

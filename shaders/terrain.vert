@@ -17,6 +17,7 @@ out vec3 vAlbedo;
 out vec2 vPatchUv;  // bilinear weights of the four patch corners
 out vec3 vIrradiance;
 out vec4 vFog;
+out vec3 vRelPos;  // camera-relative position [m], for the shadow lookup
 
 void main() {
     vec3 relPos = uOrigin + aPosition;
@@ -25,5 +26,6 @@ void main() {
     vIrradiance = aIrradiance;
     vPatchUv = clamp((aPosition.xz - uPatchRect.xy) * uPatchRect.zw, 0.0, 1.0);
     vFog = fogAt(relPos);
+    vRelPos = relPos;
     gl_Position = uViewProj * vec4(relPos, 1.0);
 }

@@ -51,6 +51,7 @@ struct CompareOptions {
     std::string replay, ambient = "volume", config, out, size = "640x360", backend = "auto";
     std::string shaders;
     std::string camera = "chase", exposure = "auto";  // --camera, --exposure (as in run)
+    std::string shadows = "on";
     int frame = -1;  // default: the middle of the replay
     int grid = 16;
     int referenceSize = CubeCaptureGl::kReferenceFaceSize;
@@ -88,6 +89,7 @@ struct CompareInputs {
 // (1) inputs: reads the replay and the settings, checks every option, creates the output folder
 // and checks that the inputs can be read and the outputs written before anything is played.
 CompareInputs checkInputs(const CompareOptions& o) {
+    parseShadowSwitch(o.shadows, "--shadows");
     const std::string replayPath =
         o.replay.empty() ? (shippedReplayDir().empty() ? std::string("replays")
                                                        : shippedReplayDir()) +
@@ -392,6 +394,7 @@ void runCompare(const CompareOptions& o) {
     rs.width = in.size.width;
     rs.height = in.size.height;
     rs.exposure.enabled = parseExposure(o.exposure, "--exposure");
+    rs.shadows.enabled = rs.shadows.captures = parseShadowSwitch(o.shadows, "--shadows");
     Renderer renderer(world, rs);
     const auto stagesOwner =
         makeMethodStages(renderer, o.ambient, in.volumeSettings, in.baselines);
@@ -407,7 +410,7 @@ void runCompare(const CompareOptions& o) {
     const TargetFrame frame = playToTarget(loop, in.target);
 
     const FrameImages images = renderFrame(renderer, frame.camera, stages.ambient());
-    CubeCaptureGl reference(world, o.referenceSize, CaptureScene::Full);
+    CubeCaptureGl reference(world, o.referenceSize, CaptureScene::Full, rs.shadows);
     const ReferenceGrid grid = sampleReference(o, in.size, world, reference, frame, images);
     const ComposedImages composed = composeImages(o, in.size, renderer, images, grid);
     writeOutputs(o, in, frame, images, grid, composed);
@@ -438,6 +441,9 @@ void addCompareCommand(CLI::App& app) {
     cmd->add_option("--exposure", o->exposure, "auto (default: eye adaptation) or fixed");
     cmd->add_option("--out", o->out, "output folder (default out/compare-<replay name>)");
     cmd->add_option("--backend", o->backend, "auto, egl or osmesa (default auto)");
+    cmd->add_option("--shadows", o->shadows,
+                    "on (default) or off: shadows of the sun and moon in the view, the captures "
+                    "and the reference");
     cmd->add_option("--shaders", o->shaders,
                     "GLSL folder (default <exe>/../shaders or $AMBIENCE_SHADER_DIR)");
     cmd->callback([o] {

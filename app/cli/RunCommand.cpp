@@ -63,6 +63,9 @@ struct RunOptions {
     std::string camera = "chase";     // drive replays: chase or hood (--camera)
     std::string exposure = "auto";    // auto (eye adaptation) or fixed (--exposure)
     std::string view = "shaded";
+    std::string shadows = "on";
+    int shadowCascades = ShadowSettings{}.cascades, shadowSize = ShadowSettings{}.mapSize,
+        shadowPcf = ShadowSettings{}.pcf;
     std::string contactSheet;  // empty: <out>/contact-sheet.png; "none": none
     int sheetCells = 12;
     int faceSize = 16;
@@ -196,6 +199,7 @@ struct RunPlan {
     RenderOutput view = RenderOutput::Shaded;
     CarView carView = CarView::None;  // the car on drive replays (--camera, --no-vehicle)
     bool autoExposure = true;
+    ShadowSettings shadows;  // --shadows: the main view's, the captures' and the reference's
 };
 
 // Stage (1) of a run: reads the replay and the settings files, checks every option, completes
@@ -215,6 +219,11 @@ RunPlan planRun(RunOptions& o) {
     plan.carView = parseCarView(o.camera, "--camera");
     if (replay.mode != ReplayMode::Drive || o.noVehicle) plan.carView = CarView::None;
     plan.autoExposure = parseExposure(o.exposure, "--exposure");
+    plan.shadows.enabled = plan.shadows.captures = parseShadowSwitch(o.shadows, "--shadows");
+    plan.shadows.cascades = o.shadowCascades;
+    plan.shadows.mapSize = o.shadowSize;
+    plan.shadows.pcf = o.shadowPcf;
+    checkShadowSettings(plan.shadows, "--shadow-cascades/--shadow-size/--shadow-pcf");
     const bool useVolume = o.ambient == "volume";
     AmbienceVolumeSettings& volumeSettings = plan.volumeSettings;
     if (!o.ambienceConfig.empty()) {
@@ -326,7 +335,7 @@ RunMeasurement startMeasurement(const RunOptions& o, const RunPlan& plan, const 
         fs::path(o.replay).filename().string() + " stride=" + std::to_string(o.stride) +
         " every=" + std::to_string(o.measureEvery) + " face=" + std::to_string(o.faceSize) +
         " sunThreshold=" + std::to_string(measureSettings.sunThreshold) +
-        " frames=" + std::to_string(o.maxFrames) +
+        " frames=" + std::to_string(o.maxFrames) + " shadows=" + describeShadows(plan.shadows) +
         (o.loops > 1 ? " loops=" + std::to_string(o.loops) : std::string());
     if (o.measureEvery > 0) {
         m.meter = std::make_unique<ErrorMeter>(stages.cubeCapture(), stages.environment(),
@@ -342,7 +351,7 @@ RunMeasurement startMeasurement(const RunOptions& o, const RunPlan& plan, const 
         " every=" + std::to_string(ref.every) + " trees=" + std::to_string(ref.objectTrees);
     if (m.meter && o.referenceOn) {
         m.referenceCapture =
-            std::make_unique<CubeCaptureGl>(world, ref.faceSize, CaptureScene::Full);
+            std::make_unique<CubeCaptureGl>(world, ref.faceSize, CaptureScene::Full, plan.shadows);
         m.meter->attachReference(*m.referenceCapture, ref,
                                  plan.oracleKind == OracleKind::Reference);
         if (!o.reference.empty() && fs::exists(o.reference))
@@ -363,6 +372,11 @@ void addAmbienceTotals(const RunOptions& o, MethodAmbienceStages& stages, RunRep
         t.rejectedProbes = st.rejectedProbes;
         t.teleports = st.teleports;
         t.captureTriangles = stages.cubeCapture().lastTriangles();
+        if (const auto* gl = dynamic_cast<const CubeCaptureGl*>(&stages.cubeCapture())) {
+            t.captureShadowRenders = gl->shadowStats().renders;
+            t.captureShadowRender_ms = gl->shadowStats().render_ms;
+            t.captureShadowTriangles = gl->shadowStats().triangles;
+        }
     }
     if (volume) {
         const AmbienceStatistics& st = volume->statistics();
@@ -461,6 +475,7 @@ void runReplay(RunOptions o) {
     rs.height = size.height;
     rs.viewOutput = plan.view;
     rs.exposure.enabled = plan.autoExposure;
+    rs.shadows = plan.shadows;
     Renderer renderer(world, rs);
     auto stages =
         makeMethodStages(renderer, o.ambient, plan.volumeSettings, plan.baselines, o.faceSize);
@@ -491,6 +506,7 @@ void runReplay(RunOptions o) {
     if (plan.autoExposure)
         report.toneMapping = "auto exposure (eye adaptation to the mean log luminance in "
                              "simulation time), ACES filmic fit (Narkowicz 2015), sRGB";
+    report.shadows = describeShadows(plan.shadows);
     report.frameStep_s = loop.frameStep_s();
     report.loops = o.loops;
     // Rows in one block from the start: no copy of them all when a long run outgrows it.
@@ -643,6 +659,15 @@ void addRunCommand(CLI::App& app) {
                     "auto (default: eye adaptation in simulation time) or fixed (the sky's)");
     cmd->add_option("--view", o->view,
                     "shaded (default) or ambient: the ambient term alone, every surface white");
+    cmd->add_option("--shadows", o->shadows,
+                    "on (default) or off: shadows of the sun and moon in the main view, the "
+                    "captures and the reference");
+    cmd->add_option("--shadow-cascades", o->shadowCascades,
+                    "cascades of the main view's shadow maps, 1 to 4 (default 3)");
+    cmd->add_option("--shadow-size", o->shadowSize,
+                    "texels per side of each cascade, 64 to 8192 (default 512)");
+    cmd->add_option("--shadow-pcf", o->shadowPcf,
+                    "PCF taps per side, 1 to 3, each a bilinear 2 x 2 comparison (default 1)");
     cmd->add_option("--contact-sheet", o->contactSheet,
                     "PNG of frames across the run in a grid, or 'none' "
                     "(default <out>/contact-sheet.png)");

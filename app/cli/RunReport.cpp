@@ -335,7 +335,7 @@ void addRunSettingsJson(json& j, const RunReport& report) {
     j["frameCount"] = report.frames.size();
     j["loops"] = report.loops;
     j["wall_s"] = report.wall_s;
-    j["shadows"] = "none";
+    j["shadows"] = report.shadows;
     j["toneMapping"] = report.toneMapping;
 }
 
@@ -347,18 +347,25 @@ void addTimingsJson(json& j, const std::vector<FrameRecord>& frames) {
         for (const FrameRecord& f : frames) v.push_back(f.stage_ms[s]);
         stages[toString(FrameStage(s))] = statsJson(v);
     }
-    std::vector<double> frame_ms, scene_ms, tris;
+    std::vector<double> frame_ms, scene_ms, tris, shadow_ms, shadowTris;
     for (const FrameRecord& f : frames) {
         frame_ms.push_back(f.frame_ms);
         scene_ms.push_back(f.render.scene_ms);
         tris.push_back(double(f.render.triangles));
+        shadow_ms.push_back(f.render.shadow_ms);
+        shadowTris.push_back(double(f.render.shadowTriangles));
     }
     j["stages_ms"] = stages;
     j["frame_ms"] = statsJson(frame_ms);
     j["drawListBuild_ms"] = statsJson(scene_ms);
     j["triangles"] = statsJson(tris);
+    // The main view's shadow pass: casters built and submitted (CPU; the rasteriser may finish
+    // the maps later, inside the draw), and the triangles drawn into the maps.
+    j["shadowPass_ms"] = statsJson(shadow_ms);
+    j["shadowTriangles"] = statsJson(shadowTris);
     const double median = timingStats(frame_ms).median;
     j["fps_median"] = median > 0 ? 1000.0 / median : 0.0;
+    j["fps"] = j["fps_median"];
 }
 
 void addMemoryJson(json& j, const std::vector<FrameRecord>& frames, std::size_t rssPeak_kB) {
@@ -432,6 +439,12 @@ json ambienceJson(const RunReport& report) {
         {"anchorsRefreshed", t.refreshed},
         {"anchorsExpired", t.expired},
         {"captureTrianglesPerFace", t.captureTriangles},
+        // The captures' shadow map (app/render/ShadowMap.h), part of the capture stage.
+        {"captureShadowRenders", t.captureShadowRenders},
+        {"captureShadowRender_ms", t.captureShadowRender_ms},
+        {"captureShadowRenderMean_ms",
+         t.captureShadowRenders ? t.captureShadowRender_ms / double(t.captureShadowRenders) : 0.0},
+        {"captureShadowTriangles", t.captureShadowTriangles},
         {"storeScans", t.storeScans},
         {"nonFiniteAnchorsMax", t.nonFiniteAnchorsMax},
         {"lookup_ms", statsJson(lookup_ms)},

@@ -112,6 +112,7 @@ struct RunReport {
     // How the frames were tone mapped (the exposure and the curve), as the report states it.
     std::string toneMapping =
         "exposure (white Lambertian at 0.6), ACES filmic fit (Narkowicz 2015), sRGB";
+    std::string shadows = "none";  // what shadows the main light (describeShadows)
     int width = 0, height = 0;
     double frameStep_s = 0.0;
     double wall_s = 0.0;
@@ -125,6 +126,10 @@ struct RunReport {
         // one): how many were made, and the most non-finite anchors one of them found.
         std::int64_t storeScans = 0;
         std::size_t nonFiniteAnchorsMax = 0;
+        // The captures' shadow map: renders, their total wall time [ms], triangles of the last.
+        std::int64_t captureShadowRenders = 0;
+        double captureShadowRender_ms = 0.0;
+        std::size_t captureShadowTriangles = 0;
     } ambienceTotals;
     int loops = 1;               // passes over the replay (run --loop)
     std::size_t rssPeak_kB = 0;  // the process's peak resident memory at the end

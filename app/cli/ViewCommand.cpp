@@ -52,6 +52,7 @@ struct ViewOptions {
     bool debugOverlay = false;
     std::string view = "shaded";
     std::string camera = "chase";  // following a drive replay: chase or hood
+    std::string shadows = "on";
     std::string shaders;
     double time_h = -1.0;
     std::string config;      // the volume's settings (as `run --config`)
@@ -114,6 +115,7 @@ Size checkViewOptions(const ViewOptions& o) {
     checkAmbienceMethod(o.ambient, "--ambient");
     parseViewOutput(o.view, "--view");
     parseCarView(o.camera, "--camera");
+    parseShadowSwitch(o.shadows, "--shadows");
     if (o.debugOverlay && o.ambient != "volume")
         throw InputError("--debug-overlay", "needs --ambient volume");
     if (o.frames < 0) throw InputError("--frames", "must be >= 0");
@@ -256,6 +258,7 @@ void runView(const ViewOptions& o) {
     rs.width = size.width;
     rs.height = size.height;
     rs.viewOutput = parseViewOutput(o.view, "--view");
+    rs.shadows.enabled = rs.shadows.captures = parseShadowSwitch(o.shadows, "--shadows");
     Renderer renderer(world, rs);
     // The frame of `run`, with the camera and the clocks from the keyboard, the mouse and the
     // panel; the panel may rebuild the method (LiveMethod).
@@ -375,6 +378,8 @@ void addViewCommand(CLI::App& app) {
                     "shaded (default) or ambient: the ambient term alone, every surface white");
     cmd->add_option("--camera", o->camera,
                     "following a drive replay: chase (default; behind and above the car) or hood");
+    cmd->add_option("--shadows", o->shadows,
+                    "on (default) or off: shadows of the sun and moon in the view and the captures");
     cmd->add_option("--record", o->record, "file the R key records to (default recorded.json)");
     cmd->add_option("--frames", o->frames, "render N frames, then exit (non-interactive)");
     cmd->add_option("--screenshot", o->screenshot, "with --frames: save the last frame here");

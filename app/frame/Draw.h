@@ -50,7 +50,9 @@ struct RenderStats {
     std::size_t terrainPatches = 0, terrainPatchesDrawn = 0, objectsDrawn = 0;
     bool terrainRebuilt = false;
     double scene_ms = 0.0;  // building the draw list (CPU)
-    double draw_ms = 0.0;   // submitting GL commands (CPU)
+    double draw_ms = 0.0;   // submitting GL commands (CPU), the shadow pass included
+    std::size_t shadowTriangles = 0;  // drawn into the shadow maps
+    double shadow_ms = 0.0;           // building and submitting the shadow pass (CPU)
 };
 
 // What the main view needs to know about the frame besides its eye: the run's clock (the eye

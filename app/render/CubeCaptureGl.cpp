@@ -9,6 +9,7 @@
 #include "app/render/CubeCaptureGl.h"
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -37,6 +38,30 @@ FaceBasis faceBasis(int face) {
 
 constexpr float kCaptureNear_m = 0.1f;
 
+// The objects of `list` whose bounding spheres reach into face f's 90-degree frustum (its four
+// side planes through the probe), into `out` (terrain and ambient sets shared by reference:
+// copied once, the instances filtered). Exact for what the face shows: a face draws only what
+// it can see, about a quarter of the trees around a probe.
+void cullObjectsToFace(const DrawList& list, int face, DrawList& out) {
+    const FaceBasis b = faceBasis(face);
+    const glm::vec3 n[4] = {b.forward - b.u, b.forward + b.u, b.forward - b.v, b.forward + b.v};
+    out.objects.resize(list.objects.size());
+    for (std::size_t k = 0; k < list.objects.size(); ++k) {
+        const ObjectBatch& src = list.objects[k];
+        ObjectBatch& dst = out.objects[k];
+        dst.mesh = src.mesh;
+        dst.simplified = src.simplified;
+        dst.instances.clear();
+        for (const ObjectInstance& inst : src.instances) {
+            const glm::vec3 c(inst.positionScale);
+            const float r = src.mesh->boundRadius_m * inst.positionScale.w * 1.4143f;  // |n| = sqrt 2
+            if (glm::dot(n[0], c) >= -r && glm::dot(n[1], c) >= -r && glm::dot(n[2], c) >= -r &&
+                glm::dot(n[3], c) >= -r)
+                dst.instances.push_back(inst);
+        }
+    }
+}
+
 }  // namespace
 
 glm::mat4 CubeCaptureGl::faceViewProj(int face, float near_m) {
@@ -50,7 +75,8 @@ glm::mat4 CubeCaptureGl::faceViewProj(int face, float near_m) {
     return reversedInfinitePerspective(0.5f * float(kPi), 1.0f, near_m) * view;
 }
 
-CubeCaptureGl::CubeCaptureGl(RendererScene& scene, int faceSize) : scene_(&scene), n_(faceSize) {
+CubeCaptureGl::CubeCaptureGl(RendererScene& scene, int faceSize, const ShadowSettings& shadows)
+    : scene_(&scene), n_(faceSize), shadows_(shadows) {
     init();
 }
 
@@ -83,11 +109,13 @@ static std::unique_ptr<RendererScene> ownScene(const World& world, int faceSize,
     return std::make_unique<RendererScene>(world);
 }
 
-CubeCaptureGl::CubeCaptureGl(const World& world, int faceSize, CaptureScene scene)
+CubeCaptureGl::CubeCaptureGl(const World& world, int faceSize, CaptureScene scene,
+                             const ShadowSettings& shadows)
     : ownedScene_(ownScene(world, faceSize, scene)),
       scene_(ownedScene_.get()),
       n_(faceSize),
-      kind_(scene) {
+      kind_(scene),
+      shadows_(shadows) {
     init();
 }
 
@@ -95,6 +123,7 @@ CubeCaptureGl::~CubeCaptureGl() = default;
 
 void CubeCaptureGl::init() {
     if (n_ < 1 || n_ > 2048) throw InputError("--size", "face size must be in [1, 2048]");
+    checkShadowSettings(shadows_, "shadow settings");
     drawer_ = std::make_unique<SceneDrawer>();
     colour_ = makeTexture2D(GL_RGBA32F, n_, 6 * n_);
     depth_ = makeTexture2D(GL_DEPTH_COMPONENT32F, n_, 6 * n_);
@@ -106,6 +135,73 @@ void CubeCaptureGl::init() {
     if (glCheckNamedFramebufferStatus(fbo, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
         throw std::runtime_error("capture: incomplete framebuffer");
     }
+}
+
+ShadowBinding CubeCaptureGl::prepareShadows(const glm::dvec3& probe_m) {
+    ShadowBinding binding;
+    const ShadowSettings& ss = shadows_;
+    using Clock = std::chrono::steady_clock;
+    if (kind_ == CaptureScene::Full) {
+        // The main view's cascades around the probe, rendered for this capture's faces.
+        if (!ss.enabled) return binding;
+        if (!shadowMap_) shadowMap_ = std::make_unique<ShadowMap>(ss.cascades, ss.mapSize);
+        const auto t0 = Clock::now();
+        shadowStats_.triangles = 0;
+        for (int k = 0; k < ss.cascades; ++k) {
+            shadowMap_->fit(k, probe_m, cascadeFar_m(ss, k, ss.cascades), sky_.lightDir);
+            scene_->buildCasters(probe_m, shadowMap_->casterViewProj(k, probe_m),
+                                 shadowMap_->texel_m(k), casters_);
+            shadowStats_.triangles += shadowMap_->render(k, *drawer_, casters_, probe_m);
+        }
+        ++shadowStats_.renders;
+        shadowStats_.render_ms +=
+            std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+        binding.texture = shadowMap_->texture();
+        binding.constants = shadowMap_->constants(probe_m, ss.cascades, ss.pcf,
+                                                  ss.normalOffset_texels, ss.depthBias_texels);
+        return binding;
+    }
+    if (!ss.captures) return binding;
+    if (!shadowMap_) {
+        shadowMap_ = std::make_unique<ShadowMap>(ss.captureMaps, ss.captureMapSize);
+        cells_.assign(std::size_t(ss.captureMaps), RegionCell{});
+    }
+    // The probe's cell: a square of side sqrt 2 (region - tree range), so the region around its
+    // centre holds every tree within the capture's tree range of any probe in it.
+    const double treeRange_m = scene_->settings().captureTreeRange_m;
+    const double cell_m = std::max(10.0, std::sqrt(2.0) * (ss.captureRegion_m - treeRange_m));
+    const std::int64_t ci = std::int64_t(std::floor(probe_m.x / cell_m));
+    const std::int64_t ck = std::int64_t(std::floor(probe_m.z / cell_m));
+    int layer = -1, oldest = 0;
+    for (int l = 0; l < ss.captureMaps; ++l) {
+        const RegionCell& c = cells_[std::size_t(l)];
+        if (c.lastUse >= 0 && c.i == ci && c.k == ck) layer = l;
+        if (c.lastUse < cells_[std::size_t(oldest)].lastUse) oldest = l;
+    }
+    const double turned_rad =
+        layer < 0 ? 0.0
+                  : std::acos(std::clamp(double(glm::dot(shadowMap_->towardLight(layer), sky_.lightDir)),
+                                         -1.0, 1.0));
+    if (layer < 0 || turned_rad > ss.captureRefresh_deg * kPi / 180.0) {
+        if (layer < 0) layer = oldest;
+        const auto t0 = Clock::now();
+        const double x = (double(ci) + 0.5) * cell_m, z = (double(ck) + 0.5) * cell_m;
+        const glm::dvec3 centre(x, scene_->world().height(x, z), z);
+        shadowMap_->fit(layer, centre, ss.captureRegion_m, sky_.lightDir);
+        const glm::dvec3 snapped = shadowMap_->centre(layer);
+        scene_->buildCaptureCasters(snapped, shadowMap_->casterViewProj(layer, snapped), casters_);
+        shadowStats_.triangles = shadowMap_->render(layer, *drawer_, casters_, snapped);
+        ++shadowStats_.renders;
+        shadowStats_.render_ms +=
+            std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+        cells_[std::size_t(layer)].i = ci;
+        cells_[std::size_t(layer)].k = ck;
+    }
+    cells_[std::size_t(layer)].lastUse = useClock_++;
+    binding.texture = shadowMap_->texture();
+    binding.constants = shadowMap_->constants(probe_m, 1, ss.pcf, ss.normalOffset_texels,
+                                              ss.depthBias_texels, ss.captureBias_m, layer);
+    return binding;
 }
 
 CubeCaptureStats CubeCaptureGl::capture(const glm::dvec3& position_m, double timeOfDay_h,
@@ -134,6 +230,7 @@ CubeCaptureStats CubeCaptureGl::captureFar(const glm::dvec3& position_m, double 
     if (kind_ == CaptureScene::Coarse) scene_->buildCapture(position_m, ambient, list_, nearRadius_m);
 
     glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+    const ShadowBinding shadows = prepareShadows(position_m);
     glBindFramebuffer(GL_FRAMEBUFFER, fbo_.id());
     FrameConstants fc;
     fillSkyConstants(sky_, fc);
@@ -156,7 +253,18 @@ CubeCaptureStats CubeCaptureGl::captureFar(const glm::dvec3& position_m, double 
         fc.invViewProj = glm::inverse(fc.viewProj);
         // The full scene is culled to each face's frustum, as the main view culls its own.
         if (kind_ == CaptureScene::Full) scene_->buildView(position_m, fc.viewProj, ambient, list_);
-        stats.triangles = std::max(stats.triangles, drawer_->draw(list_, fc, false, false));
+        const DrawList* drawn = &list_;
+        if (kind_ == CaptureScene::Coarse) {
+            if (faceList_.terrain.size() != list_.terrain.size() || f == lo) {
+                faceList_.terrain = list_.terrain;
+                faceList_.ambientSets = list_.ambientSets;
+                faceList_.vertexIrradiance = list_.vertexIrradiance;
+            }
+            cullObjectsToFace(list_, f, faceList_);
+            drawn = &faceList_;
+        }
+        stats.triangles =
+            std::max(stats.triangles, drawer_->draw(*drawn, fc, false, false, &shadows));
         ++stats.faces;
     }
     // One read-back covering the rendered faces.
@@ -203,7 +311,8 @@ std::unique_ptr<MethodAmbienceStages> makeMethodStages(Renderer& renderer,
                                                        const BaselineSettings& baselines,
                                                        int faceSize) {
     return std::make_unique<MethodAmbienceStages>(
-        std::make_unique<CubeCaptureGl>(renderer.scene(), faceSize), renderer.world(), method,
+        std::make_unique<CubeCaptureGl>(renderer.scene(), faceSize, renderer.settings().shadows),
+        renderer.world(), method,
         settings, baselines);
 }
 

@@ -13,6 +13,15 @@
 //            with its full mesh wherever it covers at least fullMinTexels of the face, the road;
 //            built per face with the face's frustum (RendererScene::buildView), lit by the same
 //            shaders as the main view. Far more triangles, so it is for measuring, not for frames.
+//
+// Shadows of the main light (ShadowSettings::captures; app/render/ShadowMap.h):
+//   coarse — maps over regions of captureRegion_m, of the capture scene's casters (terrain
+//            proxy, every tree proxy), one per square cell of the ground, centred on it, so that
+//            every tree a probe in the cell captures is on it; the last captureMaps cells kept,
+//            each re-rendered when the light has turned by more than captureRefresh_deg;
+//   full   — the main view's cascades (same count, size, PCF, biases and casters), fitted to
+//            spheres around the probe whose radii are the cascades' far ends, so the reference
+//            is shadowed as the main view is.
 #pragma once
 
 #include <memory>
@@ -21,6 +30,7 @@
 
 #include "app/render/RendererCore.h"
 #include "app/render/RendererScene.h"
+#include "app/render/ShadowMap.h"
 #include "lighting/CubeCapture.h"
 
 namespace amb {
@@ -45,11 +55,12 @@ class CubeCaptureGl final : public CubeCapture {
     static constexpr int kReferenceFaceSize = 64;
 
     // Shares the scene (meshes, terrain cache) of a renderer; needs a current GL context.
-    CubeCaptureGl(RendererScene& scene, int faceSize = kDefaultFaceSize);
+    CubeCaptureGl(RendererScene& scene, int faceSize = kDefaultFaceSize,
+                  const ShadowSettings& shadows = {});
     // Standalone: builds its own scene of `world` (for CaptureScene::Full, with
     // fullCaptureSceneSettings).
     CubeCaptureGl(const World& world, int faceSize = kDefaultFaceSize,
-                  CaptureScene scene = CaptureScene::Coarse);
+                  CaptureScene scene = CaptureScene::Coarse, const ShadowSettings& shadows = {});
     ~CubeCaptureGl() override;
 
     int faceSize() const override { return n_; }
@@ -69,8 +80,22 @@ class CubeCaptureGl final : public CubeCapture {
     // The camera-relative view-projection of face f (exposed for tests).
     static glm::mat4 faceViewProj(int face, float near_m);
 
+    // The shadow maps' cost so far: renders of the coarse scene's region map (or of the full
+    // scene's cascades, one per capture) and their wall time [ms].
+    struct ShadowStats {
+        std::int64_t renders = 0;
+        double render_ms = 0.0;
+        std::size_t triangles = 0;  // of the last render
+    };
+    const ShadowStats& shadowStats() const { return shadowStats_; }
+    const ShadowSettings& shadowSettings() const { return shadows_; }
+    // The region map (coarse scene), for tests: null until the first shadowed capture.
+    const ShadowMap* regionShadowMap() const { return shadowMap_.get(); }
+
   private:
     void init();
+    // The shadows of a capture at `probe_m` (rendering the maps when due).
+    ShadowBinding prepareShadows(const glm::dvec3& probe_m);
 
     std::unique_ptr<RendererScene> ownedScene_;
     RendererScene* scene_;
@@ -80,13 +105,24 @@ class CubeCaptureGl final : public CubeCapture {
     SkyLighting sky_;
     GlTexture colour_, depth_;
     GlFramebuffer fbo_;
-    DrawList list_;
+    DrawList list_, faceList_;  // the capture's scene, and its objects culled to one face
     std::vector<float> rgba_;
     CubeCaptureStats lastStats_;
+    ShadowSettings shadows_;
+    std::unique_ptr<ShadowMap> shadowMap_;
+    DrawList casters_;
+    ShadowStats shadowStats_;
+    struct RegionCell {
+        std::int64_t i = 0, k = 0;  // the cell's integer key (x, z over the cell size)
+        std::int64_t lastUse = -1;  // -1: the layer holds no map
+    };
+    std::vector<RegionCell> cells_;  // per layer of the coarse scene's region maps
+    std::int64_t useClock_ = 0;
 };
 
 // An ambience method's frame stages (app/frame/MethodStages.h) capturing from `renderer`'s own
-// scene (coarse proxies) with faces of `faceSize`. Needs a current GL context.
+// scene (coarse proxies) with faces of `faceSize`, shadowed as the renderer's settings say
+// (ShadowSettings::captures). Needs a current GL context.
 std::unique_ptr<MethodAmbienceStages> makeMethodStages(Renderer& renderer,
                                                        const std::string& method,
                                                        const AmbienceVolumeSettings& settings,

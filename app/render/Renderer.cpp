@@ -54,6 +54,10 @@ Renderer::Renderer(const World& world, const RenderSettings& settings)
     hdrFbo_ = makeFramebuffer(hdr_.id(), depth_.id());
     ldrFbo_ = makeFramebuffer(ldr_.id(), 0);
     glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+    checkShadowSettings(settings.shadows, "shadow settings");
+    if (settings.shadows.enabled)
+        shadowMap_ = std::make_unique<ShadowMap>(settings.shadows.cascades + 1,  // + the car's
+                                                 settings.shadows.mapSize);
 }
 
 Renderer::~Renderer() = default;
@@ -75,6 +79,51 @@ glm::mat4 Renderer::viewProjection(const CameraSample& camera) const {
     return reversedInfinitePerspective(settings_.fovY_rad, aspect, settings_.near_m) * view;
 }
 
+ShadowBinding Renderer::renderShadows(const CameraSample& camera, RenderStats& stats) {
+    ShadowBinding binding;
+    if (!shadowMap_) return binding;
+    const ShadowSettings& ss = settings_.shadows;
+    const int n = ss.cascades;
+    const glm::dvec3 f = glm::normalize(camera.forward);
+    const double tanY = std::tan(0.5 * settings_.fovY_rad);
+    const double tanX = tanY * double(settings_.width) / double(settings_.height);
+    bool rendered = false;
+    for (int k = 0; k < n; ++k) {
+        const double near = k == 0 ? double(settings_.near_m) : cascadeFar_m(ss, k - 1, n);
+        const auto [along, radius] = frustumSliceSphere(near, cascadeFar_m(ss, k, n), tanX, tanY);
+        const glm::dvec3 centre = camera.position_m + along * f;
+        if (shadowMap_->fitted(k)) {
+            // A cascade of static casters is fixed in the world: it stays right wherever it
+            // lies, so it is re-rendered only when the slice's sphere leaves it or the light
+            // turns by 1 degree, and at most one a frame, the nearest first (the others keep
+            // serving what they cover meanwhile).
+            const bool inside = glm::length(centre - shadowMap_->centre(k)) + radius <=
+                                shadowMap_->radius(k);
+            const bool turned = glm::dot(shadowMap_->towardLight(k), sky_.lightDir) < 0.99985f;
+            if (rendered || (inside && !turned)) continue;
+        }
+        const double margin = k == 0 ? ss.nearMargin : ss.staticMargin;
+        shadowMap_->fit(k, centre, radius * (1.0 + margin), sky_.lightDir);
+        scene_->buildCasters(camera.position_m, shadowMap_->casterViewProj(k, camera.position_m),
+                             shadowMap_->texel_m(k), casters_, false);
+        stats.shadowTriangles += shadowMap_->render(k, *drawer_, casters_, camera.position_m);
+        rendered = true;
+    }
+    binding.texture = shadowMap_->texture();
+    binding.constants = shadowMap_->constants(camera.position_m, n, ss.pcf,
+                                              ss.normalOffset_texels, ss.depthBias_texels);
+    // The car, the one caster that moves: its own small map around it, every frame.
+    if (const auto& car = scene_->vehicle()) {
+        shadowMap_->fit(n, car->position_m, ss.carShadowRadius_m, sky_.lightDir, ss.carMapSize);
+        scene_->buildVehicleCaster(camera.position_m, casters_);
+        stats.shadowTriangles += shadowMap_->render(n, *drawer_, casters_, camera.position_m);
+        shadowMap_->setSlot(binding.constants, kMaxShadowCascades, n, camera.position_m,
+                            ss.normalOffset_texels, ss.depthBias_texels, 0.0);
+        binding.constants.params.w = 1.0f;
+    }
+    return binding;
+}
+
 RenderStats Renderer::render(const CameraSample& camera, const AmbientSource& ambient,
                              RenderOutput output) {
     using Clock = std::chrono::steady_clock;
@@ -89,6 +138,8 @@ RenderStats Renderer::render(const CameraSample& camera, const AmbientSource& am
     SceneStats ss;
     scene_->buildView(camera.position_m, fc.viewProj, ambient, list_, &ss);
     const auto t1 = Clock::now();
+    const ShadowBinding shadows = renderShadows(camera, stats);
+    const auto t1s = Clock::now();
 
     glBindFramebuffer(GL_FRAMEBUFFER, hdrFbo_.id());
     glViewport(0, 0, settings_.width, settings_.height);
@@ -96,7 +147,7 @@ RenderStats Renderer::render(const CameraSample& camera, const AmbientSource& am
     const float far = 0.0f;
     glClearNamedFramebufferfv(hdrFbo_.id(), GL_COLOR, 0, black);
     glClearNamedFramebufferfv(hdrFbo_.id(), GL_DEPTH, 0, &far);
-    stats.triangles = drawer_->draw(list_, fc, true, false);
+    stats.triangles = drawer_->draw(list_, fc, true, false, &shadows);
 
     if (output == RenderOutput::Shaded || output == RenderOutput::Ambient) {
         glBindFramebuffer(GL_FRAMEBUFFER, ldrFbo_.id());
@@ -111,6 +162,7 @@ RenderStats Renderer::render(const CameraSample& camera, const AmbientSource& am
     stats.terrainRebuilt = ss.terrainRebuilt;
     stats.scene_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
     stats.draw_ms = std::chrono::duration<double, std::milli>(t2 - t1).count();
+    stats.shadow_ms = std::chrono::duration<double, std::milli>(t1s - t1).count();
     return stats;
 }
 

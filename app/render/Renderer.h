@@ -1,7 +1,7 @@
 // Renderer.h — the main view: linear HDR into a float target, then exposure and tone mapping
 // (shaders/tonemap.frag: ACES filmic fit, sRGB) into an 8-bit target that is read back (offscreen)
-// or blitted to the window. Shadows: none (the direct light is unshadowed; docs/ARCHITECTURE.md
-// "Known limits").
+// or blitted to the window. The main light's direct term is shadowed by cascaded shadow maps
+// (app/render/ShadowMap.h; docs/ARCHITECTURE.md "Shadows").
 //
 // [SECTION] Renderer   one frame of the main view
 #pragma once
@@ -14,6 +14,7 @@
 #include "app/render/AutoExposure.h"
 #include "app/render/RendererCore.h"
 #include "app/render/RendererScene.h"
+#include "app/render/ShadowMap.h"
 #include "lighting/SH.h"
 #include "world/Replay.h"
 
@@ -43,6 +44,8 @@ struct RenderSettings {
     AutoExposureSettings exposure{};
     // What the main view (drawView) shows: Shaded, or Ambient (--view ambient).
     RenderOutput viewOutput = RenderOutput::Shaded;
+    // Shadows of the main light (main view; `captures` is read by the cube captures).
+    ShadowSettings shadows{};
 };
 
 // One output read back: RGBA per pixel and the camera-relative position of its surface (from
@@ -97,8 +100,14 @@ class Renderer final : public MainView {
     SceneDrawer& drawer() { return *drawer_; }
     RendererScene& scene() { return *scene_; }
     const World& world() const { return world_; }
+    const RenderSettings& settings() const { return settings_; }
+    // The main view's cascades (null with shadows off), e.g. for tests.
+    const ShadowMap* shadowMap() const { return shadowMap_.get(); }
 
   private:
+    // Fits and renders the cascades due this frame; returns the shadows the draw reads.
+    ShadowBinding renderShadows(const CameraSample& camera, RenderStats& stats);
+
     const World& world_;
     RenderSettings settings_;
     std::unique_ptr<SceneDrawer> drawer_;
@@ -111,6 +120,8 @@ class Renderer final : public MainView {
     AutoExposure exposure_;
     LuminanceMeter meter_;
     float adaptExposure();  // this frame's exposure (metered once per frame)
+    std::unique_ptr<ShadowMap> shadowMap_;
+    DrawList casters_;
 };
 
 }  // namespace amb

@@ -29,6 +29,10 @@ GlMesh uploadMesh(const WorldMesh& mesh) {
     m.albedo = makeBuffer(mesh.albedo.data(), mesh.albedo.size() * sizeof(float));
     m.indices = makeBuffer(mesh.indices.data(), mesh.indices.size() * sizeof(std::uint32_t));
     m.indexCount = GLsizei(mesh.indices.size());
+    for (std::size_t i = 0; i + 2 < mesh.positions.size(); i += 3)
+        m.boundRadius_m = std::max(
+            m.boundRadius_m, glm::length(glm::vec3(mesh.positions[i], mesh.positions[i + 1],
+                                                   mesh.positions[i + 2])));
     m.vao = makeVertexArray();
     const GLuint vao = m.vao.id();
     const GLuint buffers[3] = {m.positions.id(), m.normals.id(), m.albedo.id()};
@@ -68,8 +72,19 @@ SceneDrawer::SceneDrawer()
     : terrain_("terrain.vert", "terrain.frag"),
       object_("object.vert", "object.frag"),
       sky_("fullscreen.vert", "sky.frag"),
-      tonemap_("fullscreen.vert", "tonemap.frag") {
+      tonemap_("fullscreen.vert", "tonemap.frag"),
+      caster_("shadow_caster.vert", "shadow_caster.frag") {
     constants_ = makeBuffer(nullptr, sizeof(FrameConstants), GL_DYNAMIC_STORAGE_BIT);
+    shadowConstants_ = makeBuffer(nullptr, sizeof(ShadowConstants), GL_DYNAMIC_STORAGE_BIT);
+    // A depth array of one texel at depth 1 (never nearer the light than a receiver).
+    GLuint none = 0;
+    glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &none);
+    noShadow_ = GlTexture(none);
+    glTextureStorage3D(none, 1, GL_DEPTH_COMPONENT32F, 1, 1, 1);
+    const float one = 1.0f;
+    glTextureSubImage3D(none, 0, 0, 0, 0, 1, 1, 1, GL_DEPTH_COMPONENT, GL_FLOAT, &one);
+    glTextureParameteri(none, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+    glTextureParameteri(none, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
     skyTexture_ = makeTexture2D(GL_RGB32F, SkyLighting::kWidth, SkyLighting::kHeight);
     glTextureParameteri(skyTexture_.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
     glTextureParameteri(skyTexture_.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
@@ -81,6 +96,8 @@ SceneDrawer::SceneDrawer()
     terrainCorners_ = terrain_.uniform("uCornerIrradiance");
     terrainPerVertex_ = terrain_.uniform("uVertexIrradiance");
     objectSimplified_ = object_.uniform("uSimplified");
+    casterOrigin_ = caster_.uniform("uOrigin");
+    casterInstanced_ = caster_.uniform("uInstanced");
 }
 
 void SceneDrawer::setSky(const SkyLighting& sky) {
@@ -88,12 +105,39 @@ void SceneDrawer::setSky(const SkyLighting& sky) {
                         GL_RGB, GL_FLOAT, sky.texture.data());
 }
 
+std::size_t SceneDrawer::uploadInstances(const DrawList& list) {
+    std::size_t instanceCount = 0;
+    for (const ObjectBatch& b : list.objects) instanceCount += b.instances.size();
+    if (instanceCount == 0) return 0;
+    if (instanceCount > instanceCapacity_) {
+        instanceCapacity_ = std::max<std::size_t>(instanceCount * 2, 1024);
+        instances_ = makeBuffer(nullptr, instanceCapacity_ * sizeof(ObjectInstance),
+                                GL_DYNAMIC_STORAGE_BIT);
+    }
+    std::size_t offset = 0;
+    for (const ObjectBatch& b : list.objects) {
+        if (b.instances.empty()) continue;
+        glNamedBufferSubData(instances_.id(), GLintptr(offset * sizeof(ObjectInstance)),
+                             GLsizeiptr(b.instances.size() * sizeof(ObjectInstance)),
+                             b.instances.data());
+        offset += b.instances.size();
+    }
+    return instanceCount;
+}
+
 std::size_t SceneDrawer::draw(const DrawList& list, const FrameConstants& constants,
-                              bool cullBackFaces, bool frontFaceClockwise) {
+                              bool cullBackFaces, bool frontFaceClockwise,
+                              const ShadowBinding* shadows) {
     std::size_t triangles = 0;
     glNamedBufferSubData(constants_.id(), 0, sizeof(FrameConstants), &constants);
     glBindBufferBase(GL_UNIFORM_BUFFER, 0, constants_.id());
     glBindTextureUnit(0, skyTexture_.id());
+    // The shadows of the direct term (shaders/shadow.glsl): binding 2, texture unit 2.
+    const bool shadowed = shadows && shadows->texture && shadows->constants.params.x > 0.5f;
+    ShadowConstants sc = shadowed ? shadows->constants : ShadowConstants{};
+    glNamedBufferSubData(shadowConstants_.id(), 0, sizeof(ShadowConstants), &sc);
+    glBindBufferBase(GL_UNIFORM_BUFFER, 2, shadowConstants_.id());
+    glBindTextureUnit(2, shadowed ? shadows->texture : noShadow_.id());
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_GREATER);
     glDepthMask(GL_TRUE);
@@ -107,14 +151,7 @@ std::size_t SceneDrawer::draw(const DrawList& list, const FrameConstants& consta
 
     // Objects first (near trees hide much terrain): one instanced draw per batch; all
     // instances of the frame in one buffer.
-    std::size_t instanceCount = 0;
-    for (const ObjectBatch& b : list.objects) instanceCount += b.instances.size();
-    if (instanceCount > 0 && !list.ambientSets.empty()) {
-        if (instanceCount > instanceCapacity_) {
-            instanceCapacity_ = std::max<std::size_t>(instanceCount * 2, 1024);
-            instances_ = makeBuffer(nullptr, instanceCapacity_ * sizeof(ObjectInstance),
-                                    GL_DYNAMIC_STORAGE_BIT);
-        }
+    if (!list.ambientSets.empty() && uploadInstances(list) > 0) {
         if (list.ambientSets.size() > ambientCapacity_) {
             ambientCapacity_ = std::max<std::size_t>(list.ambientSets.size() * 2, 64);
             ambientSets_ =
@@ -123,16 +160,8 @@ std::size_t SceneDrawer::draw(const DrawList& list, const FrameConstants& consta
         glNamedBufferSubData(ambientSets_.id(), 0, list.ambientSets.size() * sizeof(AmbientSet),
                              list.ambientSets.data());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, ambientSets_.id());
-        std::size_t offset = 0;
-        for (const ObjectBatch& b : list.objects) {
-            if (b.instances.empty()) continue;
-            glNamedBufferSubData(instances_.id(), GLintptr(offset * sizeof(ObjectInstance)),
-                                 GLsizeiptr(b.instances.size() * sizeof(ObjectInstance)),
-                                 b.instances.data());
-            offset += b.instances.size();
-        }
         object_.use();
-        offset = 0;
+        std::size_t offset = 0;
         for (const ObjectBatch& b : list.objects) {
             if (b.instances.empty()) continue;
             const GLuint vao = b.mesh->vao.id();
@@ -196,6 +225,49 @@ std::size_t SceneDrawer::draw(const DrawList& list, const FrameConstants& consta
     glDrawArrays(GL_TRIANGLES, 0, 3);
     glDepthMask(GL_TRUE);
     glBindVertexArray(0);
+    return triangles;
+}
+
+std::size_t SceneDrawer::drawDepth(const DrawList& list, const glm::mat4& viewProj) {
+    std::size_t triangles = 0;
+    FrameConstants fc;
+    fc.viewProj = viewProj;
+    glNamedBufferSubData(constants_.id(), 0, sizeof(FrameConstants), &fc);
+    glBindBufferBase(GL_UNIFORM_BUFFER, 0, constants_.id());
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    glDisable(GL_CULL_FACE);  // crowns and leaves are thin: both faces cast
+    caster_.use();
+    if (uploadInstances(list) > 0) {
+        glUniform1i(casterInstanced_, 1);
+        std::size_t offset = 0;
+        for (const ObjectBatch& b : list.objects) {
+            if (b.instances.empty()) continue;
+            const GLuint vao = b.mesh->vao.id();
+            glVertexArrayVertexBuffer(vao, 1, instances_.id(),
+                                      GLintptr(offset * sizeof(ObjectInstance)),
+                                      sizeof(ObjectInstance));
+            glEnableVertexArrayAttrib(vao, 3);
+            glEnableVertexArrayAttrib(vao, 4);
+            glBindVertexArray(vao);
+            glDrawElementsInstanced(GL_TRIANGLES, b.mesh->indexCount, GL_UNSIGNED_INT, nullptr,
+                                    GLsizei(b.instances.size()));
+            triangles += b.mesh->triangles() * b.instances.size();
+            offset += b.instances.size();
+        }
+    }
+    glUniform1i(casterInstanced_, 0);
+    for (const TerrainDraw& d : list.terrain) {
+        glUniform3fv(casterOrigin_, 1, &d.origin.x);
+        glBindVertexArray(d.mesh->vao.id());
+        const GLsizei count = d.indexCount > 0 ? GLsizei(d.indexCount) : d.mesh->indexCount;
+        glDrawElements(GL_TRIANGLES, count, GL_UNSIGNED_INT,
+                       reinterpret_cast<const void*>(std::uintptr_t(d.firstIndex) * 4));
+        triangles += std::size_t(count) / 3;
+    }
+    glBindVertexArray(0);
+    glDepthFunc(GL_GREATER);
     return triangles;
 }
 

@@ -2,6 +2,7 @@
 // texture, meshes on the GPU, and drawing one DrawList (plain data) into the bound framebuffer.
 //
 // [SECTION] FrameConstants   the std140 block of shaders/common.glsl
+// [SECTION] ShadowConstants  the std140 block of shaders/shadow.glsl
 // [SECTION] GlMesh           a WorldMesh on the GPU (positions, normals, albedo, indices)
 // [SECTION] DrawList         terrain patches with corner irradiance, road pieces with irradiance
 //                            per vertex, instanced objects with ambient sets (three R&H 4x4
@@ -40,6 +41,27 @@ struct FrameConstants {
 };
 static_assert(sizeof(FrameConstants) == 2 * 64 + 7 * 16, "std140 layout of FrameConstants");
 
+// ---- ShadowConstants -------------------------------------------------------------------------
+constexpr int kMaxShadowCascades = 4;
+struct ShadowConstants {
+    // Camera-relative world -> (u, v, depth, 1) of each cascade, u, v, depth in [0, 1] over the
+    // part of the layer the cascade uses; slot kMaxShadowCascades: the car's own map.
+    glm::mat4 matrix[kMaxShadowCascades + 1]{};
+    // x: normal offset [m]; y: depth bias [depth units]; z: layer of the texture array;
+    // w: the share of the layer's side the cascade uses (its texels / the layer's)
+    glm::vec4 offset[kMaxShadowCascades + 1]{};
+    // x: cascades (0: no shadows); y: 1 / layer size; z: PCF taps per side; w: 1 with the car's map
+    glm::vec4 params{0.0f};
+};
+static_assert(sizeof(ShadowConstants) == (kMaxShadowCascades + 1) * 80 + 16, "std140 layout");
+
+// The shadows a draw reads: a depth texture array (GL_TEXTURE_2D_ARRAY, comparison on) and its
+// constants. texture 0 or params.x 0: no shadows.
+struct ShadowBinding {
+    GLuint texture = 0;
+    ShadowConstants constants{};
+};
+
 // Reversed-Z perspective with an infinite far plane (depth 1 at `near_m`, 0 at infinity), for
 // glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE).
 glm::mat4 reversedInfinitePerspective(float fovY_rad, float aspect, float near_m);
@@ -49,6 +71,7 @@ struct GlMesh {
     GlVertexArray vao;
     GlBuffer positions, normals, albedo, indices;
     GLsizei indexCount = 0;
+    float boundRadius_m = 0.0f;  // farthest vertex from the mesh origin (culling)
     std::size_t triangles() const { return std::size_t(indexCount) / 3; }
 };
 // Attributes 0..2 per vertex; attributes 3 and 4 read ObjectInstance from binding 1 (instanced);
@@ -104,15 +127,22 @@ class SceneDrawer {
 
     void setSky(const SkyLighting& sky);  // uploads the sky texture
     // Draws `list` into the bound framebuffer (depth cleared to 0 by the caller): terrain and
-    // objects, then the sky where nothing was drawn. Returns the triangles submitted.
+    // objects, then the sky where nothing was drawn; the main light's direct term shadowed by
+    // `shadows` (none: unshadowed). Returns the triangles submitted.
     std::size_t draw(const DrawList& list, const FrameConstants& constants, bool cullBackFaces,
-                     bool frontFaceClockwise);
+                     bool frontFaceClockwise, const ShadowBinding* shadows = nullptr);
+    // Shadow casters: the depth of `list`'s terrain and objects only, both faces, with
+    // `viewProj` (camera-relative -> light clip) into the bound framebuffer. Returns triangles.
+    std::size_t drawDepth(const DrawList& list, const glm::mat4& viewProj);
     // Tone maps `hdrTexture` into the bound framebuffer (full-screen pass, no depth).
     void drawTonemap(GLuint hdrTexture, float exposure);
 
   private:
-    GlProgram terrain_, object_, sky_, tonemap_;
-    GlBuffer constants_;
+    // Uploads every batch's instances into one buffer (grown as needed); returns their count.
+    std::size_t uploadInstances(const DrawList& list);
+    GlProgram terrain_, object_, sky_, tonemap_, caster_;
+    GlBuffer constants_, shadowConstants_;
+    GlTexture noShadow_;  // 1 x 1 x 1 depth array bound when a draw has no shadows
     GlBuffer instances_;
     std::size_t instanceCapacity_ = 0;
     GlBuffer ambientSets_;
@@ -123,6 +153,7 @@ class SceneDrawer {
     GlVertexArray emptyVao_;
     GLint terrainOrigin_ = -1, terrainRect_ = -1, terrainCorners_ = -1, terrainPerVertex_ = -1;
     GLint objectSimplified_ = -1;
+    GLint casterOrigin_ = -1, casterInstanced_ = -1;
 };
 
 }  // namespace amb

@@ -5,6 +5,7 @@
 // [SECTION] Roads        ribbons along the centrelines, in chunks for culling, lit per vertex
 // [SECTION] Plants       per-tile culling, per-plant distance LOD (full mesh, proxy, none)
 // [SECTION] Capture      terrain proxy + tree proxies + roads around the probe
+// [SECTION] Casters      what casts into a shadow map, culled to it (app/render/ShadowMap.h)
 #include "app/render/RendererScene.h"
 
 #include <algorithm>
@@ -12,6 +13,7 @@
 #include <utility>
 
 #include <glm/geometric.hpp>
+#include <glm/matrix.hpp>
 
 #include "world/Road.h"
 #include "world/Vegetation.h"
@@ -42,6 +44,14 @@ bool boxVisible(const Frustum& f, const glm::vec3& lo, const glm::vec3& hi) {
     for (const glm::vec4& p : f.planes) {
         const glm::vec3 v(p.x >= 0 ? hi.x : lo.x, p.y >= 0 ? hi.y : lo.y, p.z >= 0 ? hi.z : lo.z);
         if (p.x * v.x + p.y * v.y + p.z * v.z + p.w < 0.0f) return false;
+    }
+    return true;
+}
+
+// Camera-relative sphere against the frustum (planes not normalised).
+bool sphereVisible(const Frustum& f, const glm::vec3& c, float r) {
+    for (const glm::vec4& p : f.planes) {
+        if (glm::dot(glm::vec3(p), c) + p.w < -r * glm::length(glm::vec3(p))) return false;
     }
     return true;
 }
@@ -433,6 +443,133 @@ void RendererScene::buildCapture(const glm::dvec3& probe_m, const AmbientSource&
     out.terrain.push_back(d);
     addRoads(probe_m, nullptr, settings_.captureTerrainRadius_m, ambient, out);
     addPlants(probe_m, nullptr, true, ambient, out, nullptr, nearRadius_m);
+}
+
+}  // namespace amb
+
+namespace amb {
+
+// ---- [SECTION] Casters -----------------------------------------------------------------------
+
+void RendererScene::buildCasters(const glm::dvec3& eye_m, const glm::mat4& lightViewProj,
+                                 double texel_m, DrawList& out, bool withVehicle) {
+    out.clear();
+    updateTerrain(eye_m);
+    // frustumOf's fifth plane is depth <= 1: for the light's box, its far side. The light side
+    // stays open: everything towards the light casts.
+    const Frustum frustum = frustumOf(lightViewProj);
+    for (size_t i = 0; i < terrainMesh_.patches.size(); ++i) {
+        const PatchBounds& b = terrainBounds_[i];
+        if (!boxVisible(frustum, glm::vec3(b.min - eye_m), glm::vec3(b.max - eye_m))) continue;
+        const glm::vec3 none[4] = {};
+        out.terrain.push_back(
+            patchDraw(terrainGl_, terrainMesh_.patches[i], terrainMesh_.origin_m, eye_m, none));
+    }
+    for (const RoadChunk& c : roads_) {
+        if (!boxVisible(frustum, glm::vec3(c.min_m - eye_m), glm::vec3(c.max_m - eye_m)))
+            continue;
+        TerrainDraw d;
+        d.mesh = &c.mesh;
+        d.origin = glm::vec3(c.origin_m - eye_m);
+        out.terrain.push_back(d);
+    }
+    addPlantCasters(eye_m, lightViewProj, texel_m, false, out);
+    if (vehicle_ && withVehicle) {
+        ObjectInstance inst;
+        const glm::dvec3 rel = vehicle_->position_m - eye_m;
+        inst.positionScale = glm::vec4(float(rel.x), float(rel.y), float(rel.z), 1.0f);
+        inst.rotationSet = glm::vec2(float(vehicle_->heading_rad), 0.0f);
+        out.objects.push_back({&vehicleMesh_, {inst}});
+    }
+}
+
+void RendererScene::buildVehicleCaster(const glm::dvec3& eye_m, DrawList& out) {
+    out.clear();
+    if (!vehicle_) return;
+    ObjectInstance inst;
+    const glm::dvec3 rel = vehicle_->position_m - eye_m;
+    inst.positionScale = glm::vec4(float(rel.x), float(rel.y), float(rel.z), 1.0f);
+    inst.rotationSet = glm::vec2(float(vehicle_->heading_rad), 0.0f);
+    out.objects.push_back({&vehicleMesh_, {inst}});
+}
+
+void RendererScene::buildCaptureCasters(const glm::dvec3& centre_m,
+                                        const glm::mat4& lightViewProj, DrawList& out) {
+    out.clear();
+    if (horizontalDistance(centre_m, shadowTerrainCentre_) > 1e-3 ||
+        shadowTerrain_.indexCount == 0) {
+        shadowTerrainCentre_ = glm::dvec3(centre_m.x, 0.0, centre_m.z);
+        shadowTerrain_ = uploadMesh(
+            makeTerrainProxy(world_, shadowTerrainCentre_, settings_.captureTerrainRadius_m));
+    }
+    TerrainDraw d;
+    d.mesh = &shadowTerrain_;
+    d.origin = glm::vec3(shadowTerrainCentre_ - centre_m);
+    out.terrain.push_back(d);
+    addPlantCasters(centre_m, lightViewProj, 0.0, true, out);
+}
+
+void RendererScene::addPlantCasters(const glm::dvec3& eye_m, const glm::mat4& lightViewProj,
+                                    double texel_m, bool treesOnly, DrawList& out) {
+    const Vegetation& veg = world_.vegetation();
+    const Frustum frustum = frustumOf(lightViewProj);
+    const size_t base = out.objects.size();
+    for (int k = 0; k < kPlantKinds; ++k) out.objects.push_back({&plantMeshes_[k], {}});
+    for (int k = 0; k < kPlantKinds; ++k) out.objects.push_back({&plantProxies_[k], {}, true});
+    for (int k = 0; k < kPlantKinds; ++k) out.objects.push_back({&plantFar_[k], {}, true});
+    // The tiles under the light's box: its eight corners seen from above, widened by the
+    // shadow of the tallest plant (a plant outside the box may reach into it towards the light).
+    const glm::mat4 inv = glm::inverse(lightViewProj);
+    glm::dvec2 lo(1e300), hi(-1e300);
+    for (int c = 0; c < 8; ++c) {
+        const glm::vec4 p = inv * glm::vec4(c & 1 ? 1 : -1, c & 2 ? 1 : -1, c & 4 ? 1 : 0, 1);
+        const glm::dvec2 q(eye_m.x + p.x / p.w, eye_m.z + p.z / p.w);
+        lo = glm::min(lo, q), hi = glm::max(hi, q);
+    }
+    const glm::vec3 toLight = -glm::normalize(glm::vec3(lightViewProj[0][2], lightViewProj[1][2],
+                                                        lightViewProj[2][2]));
+    const float maxHeight = *std::max_element(plantHeight_m_.begin(), plantHeight_m_.end());
+    const double reach = std::min(
+        600.0, double(maxHeight) * std::hypot(toLight.x, toLight.z) / std::max(toLight.y, 0.05f));
+    const std::int64_t i0 = Vegetation::tileIndex(lo.x - reach), i1 = Vegetation::tileIndex(hi.x + reach);
+    const std::int64_t k0 = Vegetation::tileIndex(lo.y - reach), k1 = Vegetation::tileIndex(hi.y + reach);
+    for (std::int64_t k = k0; k <= k1; ++k) {
+        for (std::int64_t i = i0; i <= i1; ++i) {
+            const auto plants = veg.tile(i, k);
+            if (plants->empty()) continue;
+            const double x0 = double(i) * Vegetation::kTile_m, z0 = double(k) * Vegetation::kTile_m;
+            double ylo = 1e300, yhi = -1e300;
+            for (const Plant& p : *plants) {
+                ylo = std::min(ylo, p.position_m.y);
+                yhi = std::max(yhi, p.position_m.y + p.scale * maxHeight);
+            }
+            const glm::vec3 tlo(float(x0 - 4 - eye_m.x), float(ylo - eye_m.y), float(z0 - 4 - eye_m.z));
+            const glm::vec3 thi(float(x0 + Vegetation::kTile_m + 4 - eye_m.x), float(yhi - eye_m.y),
+                                float(z0 + Vegetation::kTile_m + 4 - eye_m.z));
+            if (!boxVisible(frustum, tlo, thi)) continue;
+            for (const Plant& p : *plants) {
+                const int kind = int(p.kind);
+                const bool small = p.kind == PlantKind::Bush || p.kind == PlantKind::Rock;
+                if (treesOnly && small) continue;
+                const float h = float(p.scale) * plantHeight_m_[kind];
+                const glm::vec3 rel(p.position_m - eye_m);
+                if (!sphereVisible(frustum, rel + glm::vec3(0.0f, 0.5f * h, 0.0f), 0.6f * h + 0.5f))
+                    continue;
+                // LOD by the plant's height in texels: the full mesh where its shape shows, the
+                // proxy, the 8-triangle hull, nothing below a texel.
+                int lod = 1;
+                if (texel_m > 0.0) {
+                    const double texels = h / texel_m;
+                    if (texels < 1.0) continue;
+                    lod = texels >= 64.0 ? 0 : texels >= 12.0 ? 1 : 2;
+                }
+                ObjectInstance inst;
+                inst.positionScale = glm::vec4(rel, float(p.scale));
+                inst.rotationSet = glm::vec2(p.rotation_rad, 0.0f);
+                out.objects[base + lod * kPlantKinds + kind].instances.push_back(inst);
+            }
+        }
+    }
 }
 
 }  // namespace amb

@@ -55,12 +55,28 @@ class RendererScene {
                    DrawList& out, SceneStats* stats = nullptr);
     // The car drawn by the next buildView calls (lit like any object: its own SH set), or none.
     void setVehicle(const std::optional<VehiclePose>& pose) { vehicle_ = pose; }
+    const std::optional<VehiclePose>& vehicle() const { return vehicle_; }
+    // The car alone as a shadow caster (its own map), relative to eye_m; empty without a car.
+    void buildVehicleCaster(const glm::dvec3& eye_m, DrawList& out);
     // Capture scene around a probe (no culling: all six faces share it). Positions relative to
     // `probe_m`. Plants whose base lies within nearRadius_m (horizontally) are left out.
     void buildCapture(const glm::dvec3& probe_m, const AmbientSource& ambient, DrawList& out,
                       double nearRadius_m = 0.0);
+    // Shadow casters of the main view's scene for one cascade (app/render/ShadowMap.h):
+    // `lightViewProj` maps positions relative to `eye_m` to the cascade's light clip space;
+    // terrain patches of the LOD mesh around `eye_m` (buildView's), road pieces, every plant
+    // kind and (withVehicle) the car, each culled to the cascade and plants at a LOD by their
+    // size in texels of `texel_m` (full mesh, proxy, far mesh). No ambient is looked up.
+    void buildCasters(const glm::dvec3& eye_m, const glm::mat4& lightViewProj, double texel_m,
+                      DrawList& out, bool withVehicle = true);
+    // Shadow casters of the capture scene over a region: a terrain proxy centred on `centre_m`
+    // and the tree proxies (all of them: a tree in the near field still shades the ground the
+    // probe sees), culled to the map; positions relative to `centre_m`.
+    void buildCaptureCasters(const glm::dvec3& centre_m, const glm::mat4& lightViewProj,
+                             DrawList& out);
 
     const World& world() const { return world_; }
+    const RendererSceneSettings& settings() const { return settings_; }
 
   private:
     struct RoadChunk;
@@ -70,6 +86,10 @@ class RendererScene {
     void addPlants(const glm::dvec3& centre_m, const glm::mat4* viewProj, bool capture,
                    const AmbientSource& ambient, DrawList& out, std::size_t* drawn,
                    double nearRadius_m = 0.0);
+    // Plants casting into a light frustum: trees only (`treesOnly`, the capture scene) or every
+    // kind, at a LOD by size in texels (texel_m 0: proxies).
+    void addPlantCasters(const glm::dvec3& eye_m, const glm::mat4& lightViewProj,
+                         double texel_m, bool treesOnly, DrawList& out);
 
     const World& world_;
     RendererSceneSettings settings_;
@@ -84,6 +104,9 @@ class RendererScene {
     // Proxy terrain of the last capture and where it was centred.
     GlMesh captureTerrain_;
     glm::dvec3 captureCentre_{1e300};
+    // Proxy terrain of the capture shadow map's region and its centre.
+    GlMesh shadowTerrain_;
+    glm::dvec3 shadowTerrainCentre_{1e300};
     std::vector<RoadChunk> roads_;
     std::array<GlMesh, 4> plantMeshes_, plantProxies_, plantFar_;
     std::array<float, 4> plantHeight_m_{};

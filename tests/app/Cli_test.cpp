@@ -157,5 +157,20 @@ TEST(Cli, CompareWritesTheFrameTheReferenceAndTheHeatMap) {
     expectInputError("compare --ambient magic --out " + out, {"--ambient"});
 }
 
+// The shadow options: anything but on or off, and absurd cascades, sizes or taps, are one clear
+// error naming the option, before any work.
+TEST(Cli, ShadowBadOptions) {
+    const std::string replay = sourcePath("replays/highway-drive.json");
+    const std::string out = testing::TempDir() + "cli_shadows";
+    expectInputError("run --replay " + replay + " --shadows maybe --out " + out, {"--shadows", "maybe"});
+    expectInputError("run --replay " + replay + " --shadow-cascades 9 --out " + out,
+                     {"--shadow-cascades", "cascades"});
+    expectInputError("run --replay " + replay + " --shadow-size 100000 --out " + out,
+                     {"--shadow-size", "map size"});
+    expectInputError("run --replay " + replay + " --shadow-pcf 0 --out " + out, {"PCF"});
+    expectInputError("compare --shadows 1 --out " + out, {"--shadows"});
+    expectInputError("view --shadows yes", {"--shadows"});
+}
+
 }  // namespace
 }  // namespace amb

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
@@ -215,6 +216,82 @@ TEST_F(CubeCaptureTest, FullSceneAgreesWithTheCoarseSceneWhereTheyShareIt) {
     const double eb = amb::luminance(shIrradiance(sb, glm::vec3(0, 1, 0)));
     EXPECT_NEAR(eb, ea, 0.25 * ea);
     EXPECT_THROW(parseCaptureScene("fine", "--scene"), InputError);
+}
+
+// Capture shadows (ShadowSettings::captures): a probe 2 m above the ground where a broadleaf's
+// crown casts its shadow at noon, captured as the methods capture (captureFar, the trees within
+// 12 m left to the near field). Those trees still shade the ground the probe sees, so the -Y
+// face (the ground below) is darker with capture shadows than without, by more than 20 %, and so
+// is the irradiance of a downward surface; over open ground (no plant within 25 m) the -Y face
+// is the same within 2 % (no acne on the terrain proxy). The region maps are rendered once for
+// each region and kept (both regions' maps), and rendered again only after the light turns by
+// more than the threshold.
+TEST_F(CubeCaptureTest, CapturesUnderACanopyAreDarkerWithShadows) {
+    AMB_REQUIRE_PLATFORM(platform, Backend::Auto, 16, 16);
+    const double noon_h = 12.0;
+    const glm::dvec3 L(world_->sky().sunDirection(noon_h));
+    ASSERT_GT(L.y, 0.3);
+    // The broadleaf with the most trees within 15 m of it.
+    Plant tree;
+    std::size_t most = 0;
+    for (int step = 0; step < 60 && most < 6; ++step) {
+        const double x = probe_.x + 300.0 * (step % 8), z = probe_.z + 300.0 * (step / 8);
+        for (const Plant& p : world_->vegetation().inDisc(x, z, 150.0)) {
+            if (p.kind != PlantKind::Broadleaf) continue;
+            const std::size_t n =
+                world_->vegetation().inDisc(p.position_m.x, p.position_m.z, 15.0).size();
+            if (n > most) most = n, tree = p;
+        }
+    }
+    ASSERT_GT(most, 0u);
+    // The crown's centre (6 m up, scaled) projected along the sun onto the ground.
+    const double crown_m = 6.0 * tree.scale;
+    glm::dvec3 under = tree.position_m - glm::dvec3(L.x, 0.0, L.z) * (crown_m / L.y);
+    under.y = world_->height(under.x, under.z) + 2.0;
+
+    ShadowSettings off;
+    off.captures = false;
+    CubeCaptureGl shadowed(*world_, kN), lit(*world_, kN, CaptureScene::Coarse, off);
+    const auto capture = [&](CubeCaptureGl& c, const glm::dvec3& at, double time_h) {
+        std::vector<float> cube;
+        c.captureFar(at, time_h, kAllCubeFaces, cube, 12.0);
+        return cube;
+    };
+    const auto faceMean = [&](const std::vector<float>& cube, int face) {
+        double sum = 0.0;
+        for (int j = 0; j < kN; ++j)
+            for (int i = 0; i < kN; ++i) sum += luminance(texel(cube, face, i, j));
+        return sum / double(kN * kN);
+    };
+    const auto down = [&](const std::vector<float>& cube) {
+        CubeMapProjector::Options options;
+        options.sunThreshold = kSunThreshold_Wpsrm2;
+        const ShRgb sh = toFloat(projectCubeMap(kN, cube, options).sh);
+        return amb::luminance(shIrradiance(sh, glm::vec3(0, -1, 0)));
+    };
+    const int below = int(CubeFace::NegY);
+    const std::vector<float> a = capture(shadowed, under, noon_h), b = capture(lit, under, noon_h);
+    EXPECT_LT(faceMean(a, below), 0.8 * faceMean(b, below));
+    EXPECT_LT(down(a), 0.8 * down(b));
+    EXPECT_EQ(shadowed.shadowStats().renders, 1);
+    EXPECT_EQ(lit.shadowStats().renders, 0);
+    // Open ground, 25 m from any plant, with the map of another region: rendered anew.
+    const std::vector<float> c = capture(shadowed, probe_, noon_h), d = capture(lit, probe_, noon_h);
+    EXPECT_NEAR(faceMean(c, below), faceMean(d, below), 0.02 * faceMean(d, below));
+    const std::int64_t renders = shadowed.shadowStats().renders;
+    // 2 minutes later (the sun turns by about half a degree), and back under the canopy: the
+    // maps kept.
+    capture(shadowed, probe_, noon_h + 2.0 / 60.0);
+    capture(shadowed, under, noon_h + 2.0 / 60.0);
+    EXPECT_EQ(shadowed.shadowStats().renders, renders);
+    // An hour later (about 15 degrees): rendered again.
+    capture(shadowed, probe_, noon_h + 1.0);
+    EXPECT_EQ(shadowed.shadowStats().renders, renders + 1);
+    ::testing::Test::RecordProperty("treesNear", int(most));
+    ::testing::Test::RecordProperty(
+        "ratios", "below face " + std::to_string(faceMean(a, below) / faceMean(b, below)) +
+                      ", downward irradiance " + std::to_string(down(a) / down(b)) +
+                      ", open ground " + std::to_string(faceMean(c, below) / faceMean(d, below)));
 }
 
 }  // namespace

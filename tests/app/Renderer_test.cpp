@@ -311,18 +311,9 @@ TEST(Renderer, ScreenWitnessOutputsAreWhatTheDrawApplies) {
     EXPECT_GT(onTerrain, terrain * 9 / 10);
 }
 
-// The ambient view (--view ambient): every surface pixel is a white Lambertian surface lit by
-// the ambient alone, radiance = E / pi. With the hemisphere ambient (E varies with the normal)
-// an object pixel equals the SH irradiance at its normal (read from the normal output) over pi,
-// within 2e-3 relative; every surface pixel equals the screen witnesses' ambient output over pi
-// (the same corner and vertex colours) within 1.5e-3 (the HDR target is half float: 2^-11 a
-// rounding, two roundings); the sky stays the shaded view's.
-TEST(Renderer, TheAmbientViewIsTheShIrradianceOverPi) {
-    AMB_REQUIRE_PLATFORM(platform, Backend::Auto, kW, kH);
-    const World world(WorldSettings{});
-    Renderer renderer(world, testSettings());
-    const FixedAmbient ambient(AmbientMode::Hemisphere, renderer.setTimeOfDay(10.0));
-    // Looking at a tree from 14 m, so objects fill part of the view.
+// A camera 14 m south of the tree nearest an open spot (eastwards until one is near), 2 m above
+// the ground, looking at the tree 1 m above its base.
+CameraSample treeView(const World& world) {
     glm::dvec3 ground = test::openGround(world);
     std::vector<Plant> near;
     for (int step = 0; step < 40 && near.empty(); ++step) {
@@ -335,7 +326,8 @@ TEST(Renderer, TheAmbientViewIsTheShIrradianceOverPi) {
                                   }),
                    near.end());
     }
-    ASSERT_FALSE(near.empty());
+    EXPECT_FALSE(near.empty());
+    if (near.empty()) return viewAt(world, 0.0);
     const Plant& plant = *std::min_element(near.begin(), near.end(), [&](const Plant& a, const Plant& b) {
         return std::hypot(a.position_m.x - ground.x, a.position_m.z - ground.z) <
                std::hypot(b.position_m.x - ground.x, b.position_m.z - ground.z);
@@ -345,6 +337,22 @@ TEST(Renderer, TheAmbientViewIsTheShIrradianceOverPi) {
     cam.position_m.y = world.height(cam.position_m.x, cam.position_m.z) + 2.0;
     cam.forward = glm::normalize(plant.position_m + glm::dvec3(0.0, 1.0, 0.0) - cam.position_m);
     cam.up = glm::normalize(glm::cross(glm::cross(cam.forward, glm::dvec3(0, 1, 0)), cam.forward));
+    return cam;
+}
+
+// The ambient view (--view ambient): every surface pixel is a white Lambertian surface lit by
+// the ambient alone, radiance = E / pi. With the hemisphere ambient (E varies with the normal)
+// an object pixel equals the SH irradiance at its normal (read from the normal output) over pi,
+// within 2e-3 relative; every surface pixel equals the screen witnesses' ambient output over pi
+// (the same corner and vertex colours) within 1.5e-3 (the HDR target is half float: 2^-11 a
+// rounding, two roundings); the sky stays the shaded view's.
+TEST(Renderer, TheAmbientViewIsTheShIrradianceOverPi) {
+    AMB_REQUIRE_PLATFORM(platform, Backend::Auto, kW, kH);
+    const World world(WorldSettings{});
+    Renderer renderer(world, testSettings());
+    const FixedAmbient ambient(AmbientMode::Hemisphere, renderer.setTimeOfDay(10.0));
+    // Looking at a tree from 14 m, so objects fill part of the view.
+    const CameraSample cam = treeView(world);
     renderer.render(cam, ambient, RenderOutput::Ambient);
     const std::vector<float> view = renderer.readHdr();
     renderer.render(cam, ambient, RenderOutput::Shaded);
@@ -380,6 +388,65 @@ TEST(Renderer, TheAmbientViewIsTheShIrradianceOverPi) {
     ::testing::Test::RecordProperty("skyPixels", sky0);
     // The hemisphere ambient varies with the normal: the test sees more than one value.
     EXPECT_GT(spread, 1.2f * least);
+}
+
+// The ambient view is not shadowed: it shows the ambient alone, and the ambient is what lights
+// a surface in shadow. Looking at a tree at 10 h with the hemisphere ambient, pixels in shadow
+// (shaded luminance with shadows below 0.7 x without) exist on terrain and on the tree; there
+// the ambient view with shadows is the same image as without (to 1e-6 relative), an object
+// pixel equals the SH irradiance at its normal over pi (lighting/SH.h, 2e-3 relative, as above)
+// and a terrain pixel the applied corner colours over pi (1.5e-3: two half-float roundings).
+TEST(Renderer, TheAmbientViewIsNotShadowed) {
+    AMB_REQUIRE_PLATFORM(platform, Backend::Auto, kW, kH);
+    const World world(WorldSettings{});
+    RenderSettings off = testSettings();
+    off.shadows.enabled = false;
+    Renderer lit(world, off), shadowed(world, testSettings());
+    ASSERT_NE(shadowed.shadowMap(), nullptr);
+    EXPECT_EQ(lit.shadowMap(), nullptr);
+    const FixedAmbient ambient(AmbientMode::Hemisphere, shadowed.setTimeOfDay(10.0));
+    lit.setTimeOfDay(10.0);
+    const CameraSample cam = treeView(world);
+    const auto image = [&](Renderer& r, RenderOutput out) {
+        r.render(cam, ambient, out);
+        return r.readHdr();
+    };
+    const std::vector<float> shadedOn = image(shadowed, RenderOutput::Shaded);
+    const std::vector<float> shadedOff = image(lit, RenderOutput::Shaded);
+    const std::vector<float> viewOn = image(shadowed, RenderOutput::Ambient);
+    const std::vector<float> viewOff = image(lit, RenderOutput::Ambient);
+    shadowed.render(cam, ambient, RenderOutput::AmbientIrradiance);
+    const SurfaceImage applied = shadowed.readSurface(cam);
+    shadowed.render(cam, ambient, RenderOutput::Normal);
+    const SurfaceImage normals = shadowed.readSurface(cam);
+    int inShadow = 0, objectsInShadow = 0, terrainInShadow = 0;
+    for (std::size_t p = 0; p < std::size_t(kW) * kH; ++p) {
+        for (int c = 0; c < 3; ++c)
+            ASSERT_NEAR(viewOn[3 * p + c], viewOff[3 * p + c], 1e-6f * viewOff[3 * p + c] + 1e-9f);
+        const float kind = applied.rgba[4 * p + 3];
+        if (kind == 0.0f) continue;
+        const auto lum = [&](const std::vector<float>& v) {
+            return luminance(glm::vec3(v[3 * p], v[3 * p + 1], v[3 * p + 2]));
+        };
+        if (!(lum(shadedOn) < 0.7f * lum(shadedOff))) continue;
+        ++inShadow;
+        const glm::vec3 got(viewOn[3 * p], viewOn[3 * p + 1], viewOn[3 * p + 2]);
+        if (kind == 3.0f || kind == 4.0f) {
+            ++objectsInShadow;
+            const glm::vec3 n(normals.rgba[4 * p], normals.rgba[4 * p + 1], normals.rgba[4 * p + 2]);
+            const glm::vec3 want =
+                glm::max(shIrradiance(ambient.sh(), glm::normalize(n)), glm::vec3(0.0f));
+            for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[c] * kPi, want[c], 2e-3 * want[c] + 1e-5);
+        } else {
+            terrainInShadow += kind == 1.0f;
+            for (int c = 0; c < 3; ++c)
+                EXPECT_NEAR(got[c] * kPi, applied.rgba[4 * p + c],
+                            1.5e-3 * applied.rgba[4 * p + c] + 1e-6);
+        }
+    }
+    ::testing::Test::RecordProperty("pixelsInShadow", inShadow);
+    EXPECT_GT(objectsInShadow, 20);
+    EXPECT_GT(terrainInShadow, 20);
 }
 
 }  // namespace
