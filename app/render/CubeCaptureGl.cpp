@@ -178,16 +178,24 @@ ShadowBinding CubeCaptureGl::prepareShadows(const glm::dvec3& probe_m) {
         if (c.lastUse >= 0 && c.i == ci && c.k == ck) layer = l;
         if (c.lastUse < cells_[std::size_t(oldest)].lastUse) oldest = l;
     }
-    const double turned_rad =
-        layer < 0 ? 0.0
-                  : std::acos(std::clamp(double(glm::dot(shadowMap_->towardLight(layer), sky_.lightDir)),
-                                         -1.0, 1.0));
-    if (layer < 0 || turned_rad > ss.captureRefresh_deg * kPi / 180.0) {
+    // The map's light is that of the current light epoch: the time of day cut into steps in
+    // which the sun turns by at most captureRefresh_deg (15 degrees an hour at most), lit at the
+    // step's middle. A cell's map is then a function of the cell and the epoch alone, whatever
+    // was captured before it (an oracle's captures between the method's change nothing).
+    const double step_h = ss.captureRefresh_deg / 15.0;
+    const std::int64_t epoch = std::int64_t(std::floor(sky_.timeOfDay_h / step_h));
+    if (epoch != lightEpoch_) {
+        lightEpoch_ = epoch;
+        epochLight_ =
+            evaluateSky(scene_->world().sky(), std::fmod((double(epoch) + 0.5) * step_h, 24.0))
+                .lightDir;
+    }
+    if (layer < 0 || cells_[std::size_t(layer)].epoch != epoch) {
         if (layer < 0) layer = oldest;
         const auto t0 = Clock::now();
         const double x = (double(ci) + 0.5) * cell_m, z = (double(ck) + 0.5) * cell_m;
         const glm::dvec3 centre(x, scene_->world().height(x, z), z);
-        shadowMap_->fit(layer, centre, ss.captureRegion_m, sky_.lightDir);
+        shadowMap_->fit(layer, centre, ss.captureRegion_m, epochLight_);
         const glm::dvec3 snapped = shadowMap_->centre(layer);
         scene_->buildCaptureCasters(snapped, shadowMap_->casterViewProj(layer, snapped), casters_);
         shadowStats_.triangles = shadowMap_->render(layer, *drawer_, casters_, snapped);
@@ -196,6 +204,7 @@ ShadowBinding CubeCaptureGl::prepareShadows(const glm::dvec3& probe_m) {
             std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
         cells_[std::size_t(layer)].i = ci;
         cells_[std::size_t(layer)].k = ck;
+        cells_[std::size_t(layer)].epoch = epoch;
     }
     cells_[std::size_t(layer)].lastUse = useClock_++;
     binding.texture = shadowMap_->texture();

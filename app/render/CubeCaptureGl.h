@@ -18,12 +18,15 @@
 //   coarse — maps over regions of captureRegion_m, of the capture scene's casters (terrain
 //            proxy, every tree proxy), one per square cell of the ground, centred on it, so that
 //            every tree a probe in the cell captures is on it; the last captureMaps cells kept,
-//            each re-rendered when the light has turned by more than captureRefresh_deg;
+//            each rendered for a light epoch (the time of day in steps in which the sun turns
+//            by at most captureRefresh_deg) and re-rendered when the epoch changes, so a map
+//            depends on its cell and epoch alone, never on what was captured before;
 //   full   — the main view's cascades (same count, size, PCF, biases and casters), fitted to
 //            spheres around the probe whose radii are the cascades' far ends, so the reference
 //            is shadowed as the main view is.
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -115,9 +118,12 @@ class CubeCaptureGl final : public CubeCapture {
     struct RegionCell {
         std::int64_t i = 0, k = 0;  // the cell's integer key (x, z over the cell size)
         std::int64_t lastUse = -1;  // -1: the layer holds no map
+        std::int64_t epoch = 0;     // the light epoch it was rendered for
     };
     std::vector<RegionCell> cells_;  // per layer of the coarse scene's region maps
     std::int64_t useClock_ = 0;
+    std::int64_t lightEpoch_ = std::numeric_limits<std::int64_t>::min();  // none yet
+    glm::vec3 epochLight_{0, 1, 0};  // towards the main light of lightEpoch_
 };
 
 // An ambience method's frame stages (app/frame/MethodStages.h) capturing from `renderer`'s own

@@ -49,7 +49,7 @@ struct ShadowSettings {
     int captureMapSize = 512;
     int captureMaps = 12;  // 1 to kMaxShadowLayers
     double captureRegion_m = 240.0;      // radius of the region a map covers
-    double captureRefresh_deg = 2.0;     // re-rendered when the light turns by more than this
+    double captureRefresh_deg = 2.0;     // light epochs: the sun turns by at most this in one
     double captureBias_m = 1.0;          // depth bias (the caster and receiver proxies differ)
 };
 
