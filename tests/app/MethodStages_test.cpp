@@ -129,20 +129,31 @@ std::vector<unsigned char> driveFrame(const std::string& name, const std::string
     return px;
 }
 
-// On a drive the camera's own red car shows at the bottom centre, lit by the volume (not black,
-// not saturated); without it the road is there.
+// On a drive the camera's own blue car shows, lit by the volume (not black, not saturated): seen
+// from behind at the middle of the image with the chase camera (the default), as the bonnet at
+// the bottom centre with --camera hood; without it the grey road is there.
 TEST(VolumeRun, DriveShowsTheLitVehicle) {
-    auto bottomCentre = [](const std::vector<unsigned char>& px) {
-        const std::size_t i = (std::size_t(172) * 320 + 160) * 3;
+    auto at = [](const std::vector<unsigned char>& px, int x, int y) {
+        const std::size_t i = (std::size_t(y) * 320 + x) * 3;
         return glm::ivec3(px[i], px[i + 1], px[i + 2]);
     };
-    const glm::ivec3 car = bottomCentre(driveFrame("vehicle_on", ""));
-    const glm::ivec3 road = bottomCentre(driveFrame("vehicle_off", "--no-vehicle"));
-    EXPECT_GT(car.r, 2 * car.g) << car.r << "," << car.g << "," << car.b;
-    EXPECT_GT(car.r, 2 * car.b);
-    EXPECT_GT(car.r, 30);
-    EXPECT_LT(car.r, 255);
-    EXPECT_LT(std::abs(road.r - road.g), 30) << road.r << "," << road.g << "," << road.b;  // grey
+    auto expectBlue = [](const glm::ivec3& c) {
+        EXPECT_GT(c.b, 2 * c.r) << c.r << "," << c.g << "," << c.b;
+        EXPECT_GT(c.b, c.g) << c.r << "," << c.g << "," << c.b;
+        EXPECT_GT(c.b, 30);
+        EXPECT_LT(c.b, 255);
+    };
+    auto expectGrey = [](const glm::ivec3& c) {
+        EXPECT_LT(std::abs(c.r - c.g), 30) << c.r << "," << c.g << "," << c.b;
+        EXPECT_LT(std::abs(c.b - c.g), 30) << c.r << "," << c.g << "," << c.b;
+    };
+    const std::vector<unsigned char> chase = driveFrame("vehicle_chase", "");
+    expectBlue(at(chase, 160, 118));  // the car's back, under its rear window
+    expectGrey(at(chase, 160, 172));  // the road behind it
+    expectBlue(at(driveFrame("vehicle_hood", "--camera hood"), 160, 172));  // the bonnet
+    const std::vector<unsigned char> none = driveFrame("vehicle_off", "--no-vehicle");
+    expectGrey(at(none, 160, 118));
+    expectGrey(at(none, 160, 172));
 }
 
 // The overlay marks anchors on the frame and changes nothing else: the same run with and
