@@ -105,6 +105,29 @@ void SceneDrawer::setSky(const SkyLighting& sky) {
                         GL_RGB, GL_FLOAT, sky.texture.data());
 }
 
+// One instanced draw per batch of `list`, reading the instances uploadInstances put in one
+// buffer, in the same order; `simplifiedLocation` (or -1) is told which batches are simplified.
+// Returns the triangles drawn.
+std::size_t SceneDrawer::drawObjectBatches(const DrawList& list, GLint simplifiedLocation) {
+    std::size_t triangles = 0, offset = 0;
+    for (const ObjectBatch& b : list.objects) {
+        if (b.instances.empty()) continue;
+        const GLuint vao = b.mesh->vao.id();
+        glVertexArrayVertexBuffer(vao, 1, instances_.id(),
+                                  GLintptr(offset * sizeof(ObjectInstance)),
+                                  sizeof(ObjectInstance));
+        glEnableVertexArrayAttrib(vao, 3);
+        glEnableVertexArrayAttrib(vao, 4);
+        if (simplifiedLocation >= 0) glUniform1i(simplifiedLocation, b.simplified ? 1 : 0);
+        glBindVertexArray(vao);
+        glDrawElementsInstanced(GL_TRIANGLES, b.mesh->indexCount, GL_UNSIGNED_INT, nullptr,
+                                GLsizei(b.instances.size()));
+        triangles += b.mesh->triangles() * b.instances.size();
+        offset += b.instances.size();
+    }
+    return triangles;
+}
+
 std::size_t SceneDrawer::uploadInstances(const DrawList& list) {
     std::size_t instanceCount = 0;
     for (const ObjectBatch& b : list.objects) instanceCount += b.instances.size();
@@ -161,22 +184,7 @@ std::size_t SceneDrawer::draw(const DrawList& list, const FrameConstants& consta
                              list.ambientSets.data());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, ambientSets_.id());
         object_.use();
-        std::size_t offset = 0;
-        for (const ObjectBatch& b : list.objects) {
-            if (b.instances.empty()) continue;
-            const GLuint vao = b.mesh->vao.id();
-            glVertexArrayVertexBuffer(vao, 1, instances_.id(),
-                                      GLintptr(offset * sizeof(ObjectInstance)),
-                                      sizeof(ObjectInstance));
-            glEnableVertexArrayAttrib(vao, 3);
-            glEnableVertexArrayAttrib(vao, 4);
-            glUniform1i(objectSimplified_, b.simplified ? 1 : 0);
-            glBindVertexArray(vao);
-            glDrawElementsInstanced(GL_TRIANGLES, b.mesh->indexCount, GL_UNSIGNED_INT, nullptr,
-                                    GLsizei(b.instances.size()));
-            triangles += b.mesh->triangles() * b.instances.size();
-            offset += b.instances.size();
-        }
+        triangles += drawObjectBatches(list, objectSimplified_);
     }
 
     // Terrain patches (and road pieces): one draw each, corner irradiance per patch (or, for
@@ -241,21 +249,7 @@ std::size_t SceneDrawer::drawDepth(const DrawList& list, const glm::mat4& viewPr
     caster_.use();
     if (uploadInstances(list) > 0) {
         glUniform1i(casterInstanced_, 1);
-        std::size_t offset = 0;
-        for (const ObjectBatch& b : list.objects) {
-            if (b.instances.empty()) continue;
-            const GLuint vao = b.mesh->vao.id();
-            glVertexArrayVertexBuffer(vao, 1, instances_.id(),
-                                      GLintptr(offset * sizeof(ObjectInstance)),
-                                      sizeof(ObjectInstance));
-            glEnableVertexArrayAttrib(vao, 3);
-            glEnableVertexArrayAttrib(vao, 4);
-            glBindVertexArray(vao);
-            glDrawElementsInstanced(GL_TRIANGLES, b.mesh->indexCount, GL_UNSIGNED_INT, nullptr,
-                                    GLsizei(b.instances.size()));
-            triangles += b.mesh->triangles() * b.instances.size();
-            offset += b.instances.size();
-        }
+        triangles += drawObjectBatches(list, -1);
     }
     glUniform1i(casterInstanced_, 0);
     for (const TerrainDraw& d : list.terrain) {

@@ -140,6 +140,7 @@ class SceneDrawer {
   private:
     // Uploads every batch's instances into one buffer (grown as needed); returns their count.
     std::size_t uploadInstances(const DrawList& list);
+    std::size_t drawObjectBatches(const DrawList& list, GLint simplifiedLocation);
     GlProgram terrain_, object_, sky_, tonemap_, caster_;
     GlBuffer constants_, shadowConstants_;
     GlTexture noShadow_;  // 1 x 1 x 1 depth array bound when a draw has no shadows
