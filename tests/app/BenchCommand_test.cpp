@@ -232,13 +232,10 @@ TEST(BenchCommand, EmittedSweepRunByParallelCollectsAsALocalBench) {
     EXPECT_EQ(lineCount(slurp((emitted / "commands.txt").string())), 3);
     EXPECT_TRUE(fs::exists(emitted / "slurm.sh") && fs::exists(emitted / "README.txt"));
     EXPECT_FALSE(fs::exists(emitted / "results.csv"));  // nothing ran
-    const std::string log = (dir / "parallel.log").string();
-    const int status =
-        std::system(("cd / && parallel --will-cite --jobs 2 < " +
-                     shellQuote((emitted / "jobs.txt").string()) + " >" + shellQuote(log) + " 2>&1")
-                        .c_str());
-    ASSERT_TRUE(WIFEXITED(status)) << slurp(log);
-    EXPECT_EQ(WEXITSTATUS(status), 1) << slurp(log);  // parallel: the number of failed runs
+    // The job file is shell lines by design: GNU parallel runs each through a shell, from /.
+    const auto parallel = runCommand({"parallel", "--will-cite", "--jobs", "2"},
+                                     (emitted / "jobs.txt").string(), "/");
+    EXPECT_EQ(parallel.exitCode, 1) << parallel.out << parallel.err;  // the number of failed runs
     const auto collect = runAmbience("bench --collect " + shellQuote(emitted.string()));
     ASSERT_EQ(collect.exitCode, 0) << collect.err;
     EXPECT_NE(collect.out.find("3 runs (1 failed)"), std::string::npos) << collect.out;
@@ -292,8 +289,9 @@ TEST(BenchCommand, CollectReportsRunsThatDidNotRun) {
     // The first line only (the oracle run), from commands.txt.
     const std::string first = slurp((dir / "e" / "commands.txt").string());
     ASSERT_EQ(lineCount(first), 2);
-    const int status = std::system(first.substr(0, first.find('\n')).c_str());
-    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+    // A line of commands.txt is a shell command by design: run as `/bin/sh -c LINE`.
+    const auto line = runCommand({"/bin/sh", "-c", first.substr(0, first.find('\n'))});
+    EXPECT_EQ(line.exitCode, 0) << line.err;
     const auto collect = runAmbience("bench --collect " + (dir / "e").string());
     ASSERT_EQ(collect.exitCode, 0) << collect.err;
     const auto rows = readCsv((dir / "e" / "results.csv").string());

@@ -4,7 +4,6 @@
 #include <sys/wait.h>
 
 #include <chrono>
-#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <string>
@@ -20,16 +19,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Runs `command` with /bin/sh (popen); its stdout, and its exit code in `code`.
+// Runs `command` as `/bin/sh -c command` (the shell is what these tests are about); its
+// stdout, and its exit code in `code`.
 std::string shell(const std::string& command, int* code = nullptr) {
-    std::FILE* p = popen(command.c_str(), "r");
-    if (!p) return "(popen failed)";
-    std::string out;
-    char buffer[4096];
-    for (std::size_t n; (n = std::fread(buffer, 1, sizeof(buffer), p)) > 0;) out.append(buffer, n);
-    const int status = pclose(p);
-    if (code) *code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return out;
+    const test::CommandResult r = test::runCommand({"/bin/sh", "-c", command});
+    if (code) *code = r.exitCode;
+    return r.out;
 }
 
 const std::vector<std::string> kHostileWords = {

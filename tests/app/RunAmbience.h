@@ -102,24 +102,22 @@ inline bool onPath(const std::string& name) {
     return false;
 }
 
-// Runs `prefix ambience args` (splitWords of each; `prefix` is a wrapper such as xvfb-run,
-// found on PATH) with stdin from /dev/null, stdout and stderr captured, in `workDir` if given.
-inline CommandResult runAmbience(const std::string& args, const std::string& prefix = "",
-                                 const std::filesystem::path& workDir = {}) {
+// Runs the program argv[0] (found on PATH) with the argument vector `argv`, stdin from
+// `stdinPath` (/dev/null if empty), stdout and stderr captured, in `workDir` if given. No shell.
+inline CommandResult runCommand(std::vector<std::string> words, const std::string& stdinPath = "",
+                                const std::filesystem::path& workDir = {}) {
     static int counter = 0;
     // ctest runs tests as parallel processes: the pid keeps their files apart.
     const std::string base = testing::TempDir() + "ambience_cli_" + std::to_string(getpid()) +
                              "_" + std::to_string(++counter);
-    std::vector<std::string> words = splitWords(prefix);
-    words.push_back(std::string(AMBIENCE_BINARY_DIR) + "/bin/ambience");
-    for (std::string& w : splitWords(args)) words.push_back(std::move(w));
     std::vector<char*> argv;
     for (std::string& w : words) argv.push_back(w.data());
     argv.push_back(nullptr);
+    const std::string inPath = stdinPath.empty() ? "/dev/null" : stdinPath;
     const std::string outPath = base + ".out", errPath = base + ".err";
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+    posix_spawn_file_actions_addopen(&actions, 0, inPath.c_str(), O_RDONLY, 0);
     posix_spawn_file_actions_addopen(&actions, 1, outPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     posix_spawn_file_actions_addopen(&actions, 2, errPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     if (!workDir.empty()) posix_spawn_file_actions_addchdir_np(&actions, workDir.c_str());
@@ -139,6 +137,16 @@ inline CommandResult runAmbience(const std::string& args, const std::string& pre
     r.out = slurp(outPath);
     r.err = slurp(errPath);
     return r;
+}
+
+// Runs `prefix ambience args` (splitWords of each; `prefix` is a wrapper such as xvfb-run,
+// found on PATH) with stdin from /dev/null, in `workDir` if given (runCommand).
+inline CommandResult runAmbience(const std::string& args, const std::string& prefix = "",
+                                 const std::filesystem::path& workDir = {}) {
+    std::vector<std::string> words = splitWords(prefix);
+    words.push_back(std::string(AMBIENCE_BINARY_DIR) + "/bin/ambience");
+    for (std::string& w : splitWords(args)) words.push_back(std::move(w));
+    return runCommand(std::move(words), "", workDir);
 }
 
 inline std::string sourcePath(const std::string& relative) {
