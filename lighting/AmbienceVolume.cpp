@@ -119,7 +119,8 @@ bool sameNearField(const NearFieldSettings& a, const NearFieldSettings& b) {
     return a.enabled == b.enabled && a.radius_m == b.radius_m &&
            a.captureRadius_m == b.captureRadius_m && a.plants == b.plants &&
            a.smallRadius_m == b.smallRadius_m && a.terrain == b.terrain &&
-           a.terrainRadius_m == b.terrainRadius_m && a.cacheEntries == b.cacheEntries &&
+           a.terrainRadius_m == b.terrainRadius_m && a.ground == b.ground &&
+           a.groundRadius_m == b.groundRadius_m && a.cacheEntries == b.cacheEntries &&
            a.objectRange_m == b.objectRange_m;
 }
 

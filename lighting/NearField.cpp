@@ -26,6 +26,8 @@ void readNearFieldSettings(JsonFields& f, NearFieldSettings& s) {
     f.boolean("plants", s.plants);
     f.boolean("terrain", s.terrain);
     f.number("terrainRadius_m", s.terrainRadius_m, 1.0, 500.0);
+    f.boolean("ground", s.ground);
+    f.number("groundRadius_m", s.groundRadius_m, 0.5, 500.0);
     f.integer("cacheEntries", s.cacheEntries, 1, 1 << 24);
     f.number("objectRange_m", s.objectRange_m, 0.0, 1e6);
 }
@@ -271,7 +273,15 @@ std::array<double, kShCoefficients> showFunctional(const OccluderCap& e) {
 
 }  // namespace
 
-NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps) {
+// A(n)_k = Ahat_l Y_k(n): irradiance at n is A(n) . L.
+std::array<double, kShCoefficients> irradianceFunctional(const glm::dvec3& normal) {
+    const auto y = shBasis(normal);
+    std::array<double, kShCoefficients> a{};
+    for (int k = 0; k < kShCoefficients; ++k) a[k] = kAhatBand[shBand(k)] * y[k];
+    return a;
+}
+
+NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps, const GroundTerm* ground) {
     NearFieldTransfer t;
     constexpr int K = kShCoefficients;
     std::array<std::array<float, K * K>, 3> show{};  // what the caps show, per channel
@@ -296,15 +306,61 @@ NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps) {
                 }
         }
     }
+    if (ground && ground->any) {
+        // The ground's sky is the far field with the caps applied, at the ground's normal:
+        // a'_c = (I + T_c)^T a(n) with the caps' T_c; and its direct light, which the explicit
+        // term replaces, what the caps leave of it: b = (I + hide)^T a(n).
+        const auto a = irradianceFunctional(ground->normal);
+        std::array<std::array<double, K>, 3> ac{};
+        for (int k = 0; k < K; ++k) {
+            double hk = a[k];
+            for (int j = 0; j < K; ++j) hk += a[j] * t.hide[j * K + k];
+            t.groundHideA[k] = float(hk);
+            for (int ch = 0; ch < 3; ++ch) {
+                double v = hk;
+                for (int j = 0; j < K; ++j) v += a[j] * show[ch][j * K + k];
+                ac[ch][k] = v;
+            }
+        }
+        for (int j = 0; j < K * K; ++j) t.hide[std::size_t(j)] += ground->hide[std::size_t(j)];
+        for (int ch = 0; ch < 3; ++ch)
+            for (int j = 0; j < K; ++j) {
+                const float g = ground->show[ch][j];
+                t.groundShow[ch][j] = g;
+                t.groundLit[ch][j] = ground->lit[ch][j];
+                for (int k = 0; k < K; ++k) show[ch][j * K + k] += g * float(ac[ch][k]);
+            }
+        t.groundNormal = glm::vec3(ground->normal);
+        t.ground = true;
+    }
     // T_c = hide + show_c, stored by column for the apply: columns[k][ch][j].
     for (int k = 0; k < K; ++k)
         for (int ch = 0; ch < 3; ++ch)
             for (int j = 0; j < K; ++j)
                 t.columns[std::size_t(k * 3 * K + ch * K + j)] =
                     show[ch][j * K + k] + t.hide[j * K + k];
-    t.any = !caps.empty();
+    t.any = !caps.empty() || t.ground;
     return t;
 }
+
+namespace {
+
+// The ground's light term per unit of the light (see Ground): lit_c max(0, n . l) - g_c (b .
+// Y(l)), the second taking out the direct light the delta trick gives the ground's sky part.
+struct GroundLight {
+    double cosine = 0.0, delta = 0.0;
+};
+GroundLight groundLight(const glm::vec3& groundNormal,
+                        const std::array<float, kShCoefficients>& hideA,
+                        const glm::dvec3& lightDirection) {
+    const auto y = shBasis(lightDirection);
+    GroundLight g;
+    g.cosine = std::max(0.0, glm::dot(glm::dvec3(groundNormal), lightDirection));
+    for (int k = 0; k < kShCoefficients; ++k) g.delta += hideA[k] * y[k];
+    return g;
+}
+
+}  // namespace
 
 void updateLightTerm(NearFieldTransfer& t, const glm::dvec3& lightDirection) {
     // The light is a delta in the far field: what the caps show of it is show_c Y(l), show_c =
@@ -319,6 +375,12 @@ void updateLightTerm(NearFieldTransfer& t, const glm::dvec3& lightDirection) {
                 v += (t.columns[std::size_t(m * 3 * K + ch * K + j)] - t.hide[j * K + m]) * y[m];
             t.s[ch][j] = float(v);
         }
+    if (t.ground) {
+        const GroundLight g = groundLight(t.groundNormal, t.groundHideA, lightDirection);
+        for (int ch = 0; ch < 3; ++ch)
+            for (int j = 0; j < K; ++j)
+                t.s[ch][j] += float(t.groundLit[ch][j] * g.cosine - t.groundShow[ch][j] * g.delta);
+    }
 }
 
 NormalTransfer normalTransfer(const NearFieldTransfer* t, const glm::dvec3& normal) {
@@ -340,6 +402,17 @@ NormalTransfer normalTransfer(const NearFieldTransfer* t, const glm::dvec3& norm
             n.show[std::size_t(ch * K + k)] = float(v);
         }
     }
+    if (t->ground) {
+        for (int ch = 0; ch < 3; ++ch) {
+            double show = 0.0, lit = 0.0;
+            for (int j = 0; j < K; ++j)
+                show += a[j] * t->groundShow[ch][j], lit += a[j] * t->groundLit[ch][j];
+            n.groundShow[ch] = float(show), n.groundLit[ch] = float(lit);
+        }
+        n.groundNormal = t->groundNormal;
+        n.groundHideA = t->groundHideA;
+        n.ground = true;
+    }
     n.any = true;
     return n;
 }
@@ -350,6 +423,10 @@ void updateLightTerm(NormalTransfer& t, const glm::dvec3& lightDirection, std::u
         double v = 0.0;
         for (int k = 0; k < kShCoefficients; ++k) v += t.show[std::size_t(ch * kShCoefficients + k)] * y[k];
         t.light[ch] = float(v);
+    }
+    if (t.ground) {
+        const GroundLight g = groundLight(t.groundNormal, t.groundHideA, lightDirection);
+        t.light += t.groundLit * float(g.cosine) - t.groundShow * float(g.delta);
     }
     t.lightEpoch = epoch;
 }
@@ -522,8 +599,8 @@ ShRgb applyTransfer(const NearFieldTransfer& t, const ShRgb& far, const Directio
 
 ShRgbD applyNearField(const ShRgbD& far, const glm::dvec3& point_m,
                       const std::vector<SphereOccluder>& occluders, const DirectionalLight& light,
-                      const std::vector<HorizonWedge>& horizon) {
-    NearFieldTransfer t = nearFieldTransfer(nearOccluders(point_m, occluders, horizon));
+                      const std::vector<HorizonWedge>& horizon, const GroundTerm* ground) {
+    NearFieldTransfer t = nearFieldTransfer(nearOccluders(point_m, occluders, horizon), ground);
     updateLightTerm(t, light.direction);
     return toDouble(applyTransfer(t, toFloat(far), light));
 }
@@ -588,6 +665,108 @@ double WorldNearFieldScene::groundHeight(double x_m, double z_m) const {
     return world_.height(x_m, z_m);
 }
 
+// ---- [SECTION] Ground --------------------------------------------------------------------------
+
+namespace {
+
+constexpr int kGroundRings = 4, kGroundAzimuths = 8;  // 32 directions (see Ground)
+
+// How much the spheres block the segment from `origin` along unit `dir` for `length`: 1 - the
+// product of (1 - weight) over the spheres it meets (a faded plant blocks in part).
+double sphereBlock(const glm::dvec3& origin, const glm::dvec3& dir, double length,
+                   const std::vector<SphereOccluder>& occluders) {
+    double open = 1.0;
+    for (const SphereOccluder& o : occluders) {
+        const glm::dvec3 d = o.centre_m - origin;
+        const double r2 = o.radius_m * o.radius_m;
+        const double tc = glm::dot(d, dir);
+        const double d2 = glm::dot(d, d);
+        if (d2 > r2 && (tc <= 0.0 || tc - o.radius_m > length)) continue;
+        if (d2 - tc * tc >= r2) continue;
+        if (d2 > r2 && tc - std::sqrt(r2 - (d2 - tc * tc)) > length) continue;
+        open *= 1.0 - std::clamp(o.weight, 0.0, 1.0);
+        if (open <= 0.0) break;
+    }
+    return 1.0 - open;
+}
+
+}  // namespace
+
+GroundTerm groundTerm(const glm::dvec3& p, const NearFieldScene& scene,
+                      const std::vector<SphereOccluder>& seen,
+                      const std::vector<SphereOccluder>& shading, double radius_m,
+                      const glm::dvec3& lightDirection) {
+    GroundTerm out;
+    GroundPoint foot;
+    if (!scene.groundAt(p.x, p.z, foot)) return out;
+    const glm::dvec3 n = foot.normal;
+    const double h = glm::dot(p - glm::dvec3(p.x, foot.height_m, p.z), n);
+    if (!(h > 1e-3) || !(radius_m > 0.0) || !std::isfinite(h + n.x + n.y + n.z)) return out;
+    const double cosMax = h / std::sqrt(h * h + radius_m * radius_m);
+    const glm::dvec3 t = glm::normalize(
+        glm::cross(n, std::abs(n.x) < 0.9 ? glm::dvec3(1.0, 0.0, 0.0) : glm::dvec3(0.0, 0.0, 1.0)));
+    const glm::dvec3 b = glm::cross(n, t);
+    const double w = 2.0 * kPi * (1.0 - cosMax) / double(kGroundRings * kGroundAzimuths);
+    // The terrain's shadow, once for the foot (the region is small beside a hill's shadow).
+    const bool lightAbove = glm::dot(lightDirection, n) > 0.0 && lightDirection.y > 0.0;
+    const double terrainLit =
+        lightAbove ? scene.terrainLightVisibility(p - n * (h - 0.5), lightDirection) : 0.0;
+    constexpr int K = kShCoefficients;
+    for (int ring = 0; ring < kGroundRings; ++ring) {
+        const double c = cosMax + (1.0 - cosMax) * (ring + 0.5) / kGroundRings;  // cos from -n
+        const double sn = std::sqrt(std::max(0.0, 1.0 - c * c));
+        for (int az = 0; az < kGroundAzimuths; ++az) {
+            const double phi = 2.0 * kPi * (az + 0.5 + 0.5 * (ring % 2)) / kGroundAzimuths;
+            const glm::dvec3 d = -n * c + (t * std::cos(phi) + b * std::sin(phi)) * sn;
+            const double reach = h / c;
+            // A plant in front: its cap shows there, not the ground.
+            if (sphereBlock(p, d, reach, seen) >= 0.5) continue;
+            const glm::dvec3 x = p + d * reach;
+            GroundPoint g;
+            if (!scene.groundAt(x.x, x.z, g)) continue;
+            const double lit =
+                terrainLit > 0.0 ? terrainLit * (1.0 - sphereBlock(glm::dvec3(x.x, g.height_m, x.z),
+                                                                   lightDirection, 1e30, shading))
+                                 : 0.0;
+            const auto y = shBasis(d);
+            for (int j = 0; j < K; ++j) {
+                for (int k = 0; k < K; ++k) out.hide[std::size_t(j * K + k)] -= float(w * y[j] * y[k]);
+                for (int ch = 0; ch < 3; ++ch) {
+                    const double shown = w * g.albedo[ch] / kPi * y[j];
+                    out.show[ch][j] += float(shown);
+                    out.lit[ch][j] += float(shown * lit);
+                }
+            }
+            ++out.samples;
+        }
+    }
+    out.normal = n;
+    out.any = out.samples > 0;
+    return out;
+}
+
+bool WorldNearFieldScene::groundAt(double x_m, double z_m, GroundPoint& out) const {
+    const GroundSample s = world_.sample(x_m, z_m);
+    out.height_m = s.height_m;
+    out.normal = s.normal;
+    out.albedo = glm::dvec3(
+        albedo_.at(x_m, z_m, s.height_m, s.roadWeight, s.normal, TerrainPatch::kFinestSpacing_m));
+    return std::isfinite(out.height_m);
+}
+
+double WorldNearFieldScene::terrainLightVisibility(const glm::dvec3& from,
+                                                   const glm::dvec3& l) const {
+    const double horizontal = std::hypot(l.x, l.z);
+    if (l.y <= 0.0) return 0.0;
+    if (horizontal < 1e-6) return 1.0;
+    // Steps growing by half each time: 2 m near the point, about 60 m at the far end.
+    for (double d = 2.0; d <= kShadowReach_m; d *= 1.5) {
+        const glm::dvec3 q = from + l * (d / horizontal);
+        if (world_.height(q.x, q.z) > q.y) return 0.0;
+    }
+    return 1.0;
+}
+
 // ---- [SECTION] Cache ---------------------------------------------------------------------------
 
 namespace {
@@ -621,19 +800,10 @@ void NearField::setTimeOfDay(double timeOfDay_h) {
     }
 }
 
-std::vector<SphereOccluder> NearField::occluders(const glm::dvec3& p, double selfRadius_m) const {
+std::vector<SphereOccluder> NearField::occluders(const glm::dvec3& p) const {
     std::vector<SphereOccluder> out;
     if (!settings_.plants) return out;
     scene_.occludersNear(p, settings_.radius_m, settings_.smallRadius_m, out);
-    if (selfRadius_m > 0.0) {
-        // An object's own spheres sit on its axis, above its base.
-        out.erase(std::remove_if(out.begin(), out.end(),
-                                 [&](const SphereOccluder& o) {
-                                     return std::hypot(o.centre_m.x - p.x, o.centre_m.z - p.z) <
-                                            selfRadius_m;
-                                 }),
-                  out.end());
-    }
     return out;
 }
 
@@ -642,9 +812,21 @@ std::unique_ptr<NearFieldTransfer> NearField::build(const glm::dvec3& p,
     std::vector<HorizonWedge> horizon;
     if (settings_.terrain && selfRadius_m <= 0.0)
         scene_.terrainNear(p, settings_.terrainRadius_m, horizon);
-    std::vector<OccluderCap> caps = nearOccluders(p, occluders(p, selfRadius_m), horizon);
-    if (caps.empty()) return nullptr;
-    auto t = std::make_unique<NearFieldTransfer>(nearFieldTransfer(caps));
+    // The ground is shaded by every plant near it, the object's own included.
+    std::vector<SphereOccluder> all = occluders(p);
+    std::vector<SphereOccluder> others;
+    if (selfRadius_m > 0.0) {
+        // An object's own spheres sit on its axis, above its base.
+        for (const SphereOccluder& o : all)
+            if (std::hypot(o.centre_m.x - p.x, o.centre_m.z - p.z) >= selfRadius_m) others.push_back(o);
+    }
+    const std::vector<SphereOccluder>& caps0 = selfRadius_m > 0.0 ? others : all;
+    GroundTerm ground;
+    if (settings_.ground)
+        ground = groundTerm(p, scene_, caps0, all, settings_.groundRadius_m, light_.direction);
+    std::vector<OccluderCap> caps = nearOccluders(p, caps0, horizon);
+    if (caps.empty() && !ground.any) return nullptr;
+    auto t = std::make_unique<NearFieldTransfer>(nearFieldTransfer(caps, &ground));
     updateLightTerm(*t, light_.direction);
     return t;
 }

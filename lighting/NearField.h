@@ -49,6 +49,28 @@
 //   cap (what it hides, what it shows, the light's cosine on a wall facing the point). Its SH is
 //   closed form: over azimuth phi0..phi1 and elevation e1..e2 every basis function is a sum of
 //   products of cos/sin powers, integrated exactly. A plant seen against a band hides the band.
+// [SECTION] Ground
+//   Below a point the far field holds the ground its probes stood over: grass where the point is
+//   on asphalt, sunlit turf where it is in a tree's shadow, another patch of the albedo's noise.
+//   That ground fills most of a low point's lower hemisphere (the ground within R of the foot of
+//   a point h up holds R^2 / (R^2 + h^2) of a downward normal's irradiance: 98 % at R = 16 m,
+//   h = 2 m), and measured against the reference it was the largest part of the error near the
+//   camera. So the ground within groundRadius_m of the foot (the plane through the foot with the
+//   ground's normal there) is put in the far field's place. Over 32 directions d_k of that
+//   region (4 rings of equal solid angle w about -n, 8 azimuths) each ray that no plant stops
+//   meets the ground at x_k, of albedo rho_k (the terrain's as the patches draw it) and lit
+//   with visibility V_k (the sun blocked by the point's plants or by terrain):
+//     L' = L - sum_k w Y(d_k) (Y(d_k) . L)                     what the probes saw there
+//            + g_c (a'_c . L) + lit_c E_light max(0, n . l) - g_c (b . Y(l)) E_light
+//     g_c = sum_k w rho_k,c / pi Y(d_k),  lit_c = sum_k w rho_k,c / pi V_k Y(d_k),
+//   the ground's radiance rho / pi (E_sky + E_light V cos). Its sky is the far field with the
+//   point's caps applied, at the ground's normal n: a'_c = (I + T_c)^T a(n), T_c the caps' (a
+//   canopy over the ground darkens its sky and shows it its lit leaves). Through the delta trick
+//   that part also gives the light as the caps leave it, b . Y(l) with b = (I + hide)^T a(n):
+//   the last term takes that out, as the explicit V replaces it. The first two terms are part of
+//   T (the hide is the same for every channel); the light term is remade from lit, g and b when
+//   the light moves, with the visibility of the light the point was built in. A white ground
+//   under a uniform far field changes nothing.
 // [SECTION] Overlap (occluders must not darken twice)
 //   Caps are taken largest first; cap i keeps the weight w_i = f_i prod_{j<i} (1 - f_j O_ij /
 //   Omega_i), f its fade (see Radii), O_ij the solid angle it shares with an earlier cap j (the
@@ -88,6 +110,7 @@
 #include "lighting/AmbienceMethod.h"
 #include "lighting/SH.h"
 #include "world/DirectionalLight.h"
+#include "world/TerrainPatch.h"
 
 namespace amb {
 
@@ -107,6 +130,8 @@ struct NearFieldSettings {
     double smallRadius_m = 48.0;
     bool terrain = true;     // the terrain's near horizon (see Terrain)
     double terrainRadius_m = 32.0;  // how far the near horizon is searched
+    bool ground = true;             // the ground below the point (see Ground)
+    double groundRadius_m = 16.0;   // how far from the point's foot the ground is its own
     // Points the draw asks for (terrain corners, objects) are cached with their transfer; the
     // cache is emptied when it holds more than this.
     int cacheEntries = 16384;  // about 1.7 kB each (objects), 0.2 kB (corners)
@@ -116,7 +141,7 @@ struct NearFieldSettings {
     double objectRange_m = 64.0;
 };
 // Reads {"enabled", "radius_m", "captureRadius_m", "smallRadius_m", "plants", "terrain",
-// "terrainRadius_m", "cacheEntries", "objectRange_m"}
+// "terrainRadius_m", "ground", "groundRadius_m", "cacheEntries", "objectRange_m"}
 // (JsonFields, lighting/JsonFields.h).
 void readNearFieldSettings(JsonFields& fields, NearFieldSettings& settings);
 
@@ -143,6 +168,23 @@ struct HorizonWedge {
     double azimuth0 = 0.0, azimuth1 = 0.0;
     double lower = 0.0, upper = 0.0;
     glm::dvec3 albedo{0.0};
+};
+
+// The ground at one place as the scene knows it.
+struct GroundPoint {
+    double height_m = 0.0;
+    glm::dvec3 normal{0.0, 1.0, 0.0};
+    glm::dvec3 albedo{0.0};
+};
+
+// What the ground near a point puts in place of the far field's (see Ground).
+struct GroundTerm {
+    std::array<float, kShCoefficients * kShCoefficients> hide{};  // -sum w Y Y^T, row-major
+    std::array<std::array<float, kShCoefficients>, 3> show{};      // g_c (sigma not applied)
+    std::array<std::array<float, kShCoefficients>, 3> lit{};       // lit_c
+    glm::dvec3 normal{0.0, 1.0, 0.0};                              // the ground's at the foot
+    int samples = 0;  // directions that met the ground (no plant in front)
+    bool any = false;
 };
 
 // One occluder as seen from a point: a plant's cap or a terrain band.
@@ -182,6 +224,11 @@ struct NearFieldTransfer {
     std::array<float, 3 * kShCoefficients * kShCoefficients> columns{};
     std::array<std::array<float, kShCoefficients>, 3> s{};  // S_c for lightDirection
     glm::dvec3 lightDirection{0.0};
+    // The ground's light term (see Ground): g_c, lit_c, b and the ground's normal.
+    std::array<std::array<float, kShCoefficients>, 3> groundShow{}, groundLit{};
+    std::array<float, kShCoefficients> groundHideA{};
+    glm::vec3 groundNormal{0.0f, 1.0f, 0.0f};
+    bool ground = false;
     bool any = false;  // some occluder is near
     // The guard's last scale per channel and the far field it was found for (see Guard).
     mutable bool guardValid = false;
@@ -189,13 +236,19 @@ struct NearFieldTransfer {
     mutable ShRgb guardFar;
     bool empty() const { return !any; }
 };
-NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps);
+NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps,
+                                    const GroundTerm* ground = nullptr);
 
 // The transfer seen through one normal (see Through one normal).
 struct NormalTransfer {
     std::array<float, kShCoefficients> hide{};      // h = hide^T a(n)
     std::array<float, 3 * kShCoefficients> show{};  // s_c = (T_c - hide)^T a(n), [c * 9 + k]
     glm::vec3 light{0.0f};                          // s_c . Y(l), for lightEpoch's light
+    // The ground's part through this normal: a(n) . g_c and a(n) . lit_c, and b (see Ground).
+    glm::vec3 groundShow{0.0f}, groundLit{0.0f};
+    std::array<float, kShCoefficients> groundHideA{};
+    glm::vec3 groundNormal{0.0f, 1.0f, 0.0f};
+    bool ground = false;
     std::uint32_t lightEpoch = 0;
     bool any = false;
 };
@@ -212,11 +265,12 @@ void updateLightTerm(NearFieldTransfer& transfer, const glm::dvec3& lightDirecti
 // The far field with the near field applied, guarded (see above).
 ShRgb applyTransfer(const NearFieldTransfer& transfer, const ShRgb& far,
                     const DirectionalLight& light);
-// Everything at once, uncached: the caps of `occluders` and the bands of `horizon` at `point`
-// applied to `far`.
+// Everything at once, uncached: the caps of `occluders`, the bands of `horizon` and the
+// ground (if given) at `point` applied to `far`.
 ShRgbD applyNearField(const ShRgbD& far, const glm::dvec3& point_m,
                       const std::vector<SphereOccluder>& occluders, const DirectionalLight& light,
-                      const std::vector<HorizonWedge>& horizon = {});
+                      const std::vector<HorizonWedge>& horizon = {},
+                      const GroundTerm* ground = nullptr);
 
 // ---- The scene's occluders ---------------------------------------------------------------------
 class NearFieldScene {
@@ -236,22 +290,48 @@ class NearFieldScene {
                              std::vector<HorizonWedge>& out) const {
         (void)point_m, (void)radius_m, (void)out;
     }
+    // The ground at (x, z); false if the scene has none to offer (then no ground term).
+    virtual bool groundAt(double x_m, double z_m, GroundPoint& out) const {
+        (void)x_m, (void)z_m, (void)out;
+        return false;
+    }
+    // Whether terrain leaves the light (unit direction towards it) visible from `from`, in [0, 1].
+    virtual double terrainLightVisibility(const glm::dvec3& from_m, const glm::dvec3& toLight) const {
+        (void)from_m, (void)toLight;
+        return 1.0;
+    }
 };
+
+// The ground term at `point_m` (see Ground): the ground within radius_m of its foot, lit by the
+// light towards `lightDirection`; `seen` stop the rays from the point (an object's own spheres
+// are not among them), `shading` the light on the ground. Nothing (any = false) where the scene
+// has no ground or the point is not above it.
+GroundTerm groundTerm(const glm::dvec3& point_m, const NearFieldScene& scene,
+                      const std::vector<SphereOccluder>& seen,
+                      const std::vector<SphereOccluder>& shading, double radius_m,
+                      const glm::dvec3& lightDirection);
 
 // The generated world's plants (Vegetation::spheres, scaled and placed).
 class WorldNearFieldScene final : public NearFieldScene {
   public:
-    explicit WorldNearFieldScene(const World& world) : world_(world) {}
+    explicit WorldNearFieldScene(const World& world) : world_(world), albedo_(world) {}
     void occludersNear(const glm::dvec3& point_m, double radius_m, double smallRadius_m,
                        std::vector<SphereOccluder>& out) const override;
     DirectionalLight mainLight(double timeOfDay_h) const override;
     double groundHeight(double x_m, double z_m) const override;
     void terrainNear(const glm::dvec3& point_m, double radius_m,
                      std::vector<HorizonWedge>& out) const override;
+    // The terrain's height, normal and albedo as the patches draw them near the camera.
+    bool groundAt(double x_m, double z_m, GroundPoint& out) const override;
+    // Marched along the light out to kShadowReach_m, as far as the main view's shadows reach.
+    double terrainLightVisibility(const glm::dvec3& from_m,
+                                  const glm::dvec3& toLight) const override;
     static constexpr int kWedges = 8;
+    static constexpr double kShadowReach_m = 200.0;
 
   private:
     const World& world_;
+    TerrainAlbedo albedo_;
 };
 
 // The near field at points, with the per-point cache: what a method's decorator asks.
@@ -295,7 +375,8 @@ class NearField {
     // The same with the lock held and without timing.
     ShRgb applyLocked(const ShRgb& far, const std::array<float, 4>& key,
                       const std::function<glm::dvec3()>& point, double selfRadius_m) const;
-    std::vector<SphereOccluder> occluders(const glm::dvec3& point_m, double selfRadius_m) const;
+    // The plants near a point (all of them: build leaves an object's own out of its caps).
+    std::vector<SphereOccluder> occluders(const glm::dvec3& point_m) const;
 
     const NearFieldScene& scene_;
     NearFieldSettings settings_;

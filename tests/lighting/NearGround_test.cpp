@@ -1,0 +1,176 @@
+// NearGround_test.cpp — the near field's ground term (lighting/NearField.h "Ground"): a white
+// ground under a uniform far field changes nothing, a sunlit disc of ground matches the closed
+// form of a cap, a sphere's shadow on the ground darkens what the ground shows, and a cached
+// point follows the light as a fresh one does.
+#include "lighting/NearField.h"
+
+#include <cmath>
+#include <functional>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include "world/Conventions.h"
+
+namespace amb {
+namespace {
+
+// Flat ground at height 0 with an albedo that may vary, spheres as plants, and a light whose
+// elevation follows the time of day (90 degrees at noon).
+struct FlatGround final : NearFieldScene {
+    std::function<glm::dvec3(double, double)> albedo = [](double, double) { return glm::dvec3(0.3); };
+    std::vector<SphereOccluder> plants;
+    glm::dvec3 lightIrradiance{0.0};
+    void occludersNear(const glm::dvec3& p, double radius_m, double,
+                       std::vector<SphereOccluder>& out) const override {
+        for (const SphereOccluder& o : plants)
+            if (std::hypot(o.centre_m.x - p.x, o.centre_m.z - p.z) < radius_m) out.push_back(o);
+    }
+    DirectionalLight mainLight(double timeOfDay_h) const override {
+        const double e = kPi / 2.0 - (timeOfDay_h - 12.0) * kPi / 12.0;
+        DirectionalLight l;
+        l.direction = glm::normalize(glm::dvec3(std::cos(e), std::sin(e), 0.1 * std::cos(e)));
+        l.irradiance = lightIrradiance;
+        return l;
+    }
+    double groundHeight(double, double) const override { return 0.0; }
+    bool groundAt(double x, double z, GroundPoint& out) const override {
+        out.height_m = 0.0;
+        out.normal = {0.0, 1.0, 0.0};
+        out.albedo = albedo(x, z);
+        return true;
+    }
+};
+
+ShRgbD constantSky(const glm::dvec3& radiance) {
+    ShRgbD sh;
+    sh.c[0] = radiance * (2.0 * std::sqrt(kPi));
+    return sh;
+}
+
+DirectionalLight zenithSun(double irradiance) {
+    DirectionalLight l;
+    l.direction = {0.0, 1.0, 0.0};
+    l.irradiance = glm::dvec3(irradiance);
+    return l;
+}
+
+// The irradiance of `sh` at `n`, green channel.
+double irradianceG(const ShRgbD& sh, const glm::dvec3& n) {
+    return double(shIrradiance(toFloat(sh), glm::vec3(n)).g);
+}
+
+// The far field is what a white ground would send back: removing it and putting the ground's
+// own in its place is the identity (to float rounding).
+TEST(NearGround, AWhiteGroundUnderAUniformFarFieldChangesNothing) {
+    FlatGround scene;
+    scene.albedo = [](double, double) { return glm::dvec3(1.0); };
+    const glm::dvec3 p(3.0, 2.0, -1.0);
+    const GroundTerm ground = groundTerm(p, scene, {}, {}, 16.0, {0.0, 1.0, 0.0});
+    ASSERT_TRUE(ground.any);
+    EXPECT_EQ(ground.samples, 32);
+    const ShRgbD far = constantSky(glm::dvec3(1.0, 0.8, 0.6));
+    const ShRgbD got = applyNearField(far, p, {}, zenithSun(0.0), {}, &ground);
+    for (int k = 0; k < kShCoefficients; ++k)
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(got.c[k][c], far.c[k][c], 1e-5) << k << " " << c;
+}
+
+// A dark far field and the sun at the zenith: the ground within R of the foot, of albedo rho,
+// sends rho E / pi up; its SH is that radiance times the closed-form SH of the cap about -Y of
+// half-angle atan(R / h). The 32 directions give it within 2 % of the constant coefficient, and
+// a downward surface's irradiance within 2 %. Each channel takes its own albedo.
+TEST(NearGround, ASunlitDiscOfGroundMatchesTheCapsClosedForm) {
+    FlatGround scene;
+    const glm::dvec3 rho(0.1, 0.3, 0.2);
+    scene.albedo = [&](double, double) { return rho; };
+    const double h = 2.0, R = 16.0, E = 500.0;
+    const glm::dvec3 p(0.0, h, 0.0);
+    const GroundTerm ground = groundTerm(p, scene, {}, {}, R, {0.0, 1.0, 0.0});
+    const ShRgbD got = applyNearField(ShRgbD{}, p, {}, zenithSun(E), {}, &ground);
+    const auto cap = capSh({0.0, -1.0, 0.0}, h / std::hypot(h, R));
+    for (int c = 0; c < 3; ++c) {
+        const double L = rho[c] * E / kPi;
+        for (int k = 0; k < kShCoefficients; ++k)
+            EXPECT_NEAR(got.c[k][c], L * cap[k], 0.02 * L * cap[0]) << "k " << k << " channel " << c;
+    }
+    ShRgbD want;
+    for (int k = 0; k < kShCoefficients; ++k) want.c[k] = glm::dvec3(rho.g * E / kPi * cap[k]);
+    const double down = irradianceG(got, {0.0, -1.0, 0.0});
+    EXPECT_NEAR(down, irradianceG(want, {0.0, -1.0, 0.0}), 0.02 * down);
+    EXPECT_GT(down, 0.9 * rho.g * E);  // nearly the whole lower hemisphere at rho E
+}
+
+// A crown of radius 3 m, 8 m above the foot, with the sun at the zenith: its shadow is the disc
+// of radius 3 m under it, which holds 9 / 13 of a downward normal's irradiance from the ground
+// (r^2 / (r^2 + h^2) at h = 2 m), so that irradiance drops to about 0.3 of the open ground's
+// (0.2-0.42 for 32 directions). The crown also hides the sky above; the ground's sky, from a
+// uniform far field, is dimmed with it.
+TEST(NearGround, AShadowOnTheGroundDarkensWhatTheGroundShows) {
+    FlatGround scene;
+    const glm::dvec3 p(0.0, 2.0, 0.0);
+    const SphereOccluder crown{{0.0, 8.0, 0.0}, 3.0, glm::dvec3(0.2), 1.0};
+    const GroundTerm open = groundTerm(p, scene, {}, {}, 16.0, {0.0, 1.0, 0.0});
+    const GroundTerm shaded = groundTerm(p, scene, {crown}, {crown}, 16.0, {0.0, 1.0, 0.0});
+    EXPECT_EQ(shaded.samples, open.samples);  // nothing stands between the point and the ground
+    const DirectionalLight sun = zenithSun(500.0);
+    const double a = irradianceG(applyNearField(ShRgbD{}, p, {}, sun, {}, &open), {0, -1, 0});
+    const double b = irradianceG(applyNearField(ShRgbD{}, p, {}, sun, {}, &shaded), {0, -1, 0});
+    EXPECT_GT(b, 0.2 * a);
+    EXPECT_LT(b, 0.42 * a);
+    // The sky part: a uniform far field, no light; the crown's cap dims the ground's sky.
+    const ShRgbD sky = constantSky(glm::dvec3(1.0));
+    const double skyOpen =
+        irradianceG(applyNearField(sky, p, {}, zenithSun(0.0), {}, &open), {0, -1, 0});
+    const double skyShaded =
+        irradianceG(applyNearField(sky, p, {crown}, zenithSun(0.0), {}, &shaded), {0, -1, 0});
+    EXPECT_LT(skyShaded, skyOpen);
+    EXPECT_GT(skyShaded, 0.5 * skyOpen);
+}
+
+// Points cached at 10 h and asked again at 13 h (the light has moved; no plant, so nothing
+// depends on the light the point was built in) answer what a NearField built at 13 h answers,
+// through the SH path and through normals facing up and down (the light on the ground reaches
+// the downward ones), and the ground changes the answer.
+TEST(NearGround, ACachedPointFollowsTheLightAsAFreshOne) {
+    FlatGround scene;
+    scene.lightIrradiance = glm::dvec3(400.0, 380.0, 350.0);
+    scene.albedo = [](double x, double z) {
+        return glm::dvec3(0.1 + 0.05 * std::sin(x), 0.2 + 0.1 * std::cos(0.3 * z), 0.15);
+    };
+    NearFieldSettings settings;
+    NearField cached(scene, settings);
+    cached.setTimeOfDay(10.0);
+    const ShRgb far = toFloat(constantSky(glm::dvec3(0.9, 1.0, 1.1)));
+    std::vector<glm::dvec3> points, normals;
+    for (int i = 0; i < 12; ++i) {
+        points.push_back({3.0 * i, 2.0, -2.0 * i});
+        normals.push_back(glm::normalize(glm::dvec3(0.2 * std::sin(i), i % 2 ? -1.0 : 1.0, 0.1 * i - 0.6)));
+    }
+    std::vector<ShRgb> fars(points.size(), far);
+    std::vector<glm::vec3> before(points.size()), after(points.size()), fresh(points.size());
+    cached.irradianceMany(points.size(), fars.data(), points.data(), normals.data(), before.data());
+    for (const glm::dvec3& p : points) cached.apply(far, p);
+    cached.setTimeOfDay(13.0);
+    cached.irradianceMany(points.size(), fars.data(), points.data(), normals.data(), after.data());
+    NearField rebuilt(scene, settings);
+    rebuilt.setTimeOfDay(13.0);
+    rebuilt.irradianceMany(points.size(), fars.data(), points.data(), normals.data(), fresh.data());
+    NearFieldSettings noGround = settings;
+    noGround.ground = false;
+    NearField without(scene, noGround);
+    without.setTimeOfDay(13.0);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(after[i][c], fresh[i][c], 1e-4 * fresh[i][c]);
+        if (i % 2) EXPECT_GT(std::abs(after[i].g - before[i].g), 1e-2f * after[i].g);  // the light moved
+        const ShRgb a = cached.apply(far, points[i]), b = rebuilt.apply(far, points[i]);
+        for (int k = 0; k < kShCoefficients; ++k)
+            for (int c = 0; c < 3; ++c)
+                EXPECT_NEAR(a.c[k][c], b.c[k][c], 1e-4f * std::abs(b.c[0][c])) << i << " " << k;
+        const ShRgb plain = without.apply(far, points[i]);
+        EXPECT_GT(std::abs(plain.c[0].g - a.c[0].g), 0.1f * std::abs(a.c[0].g));
+    }
+}
+
+}  // namespace
+}  // namespace amb
