@@ -279,9 +279,7 @@ CubeCaptureStats CubeCaptureGl::captureFar(const glm::dvec3& position_m, double 
     // One read-back covering the rendered faces.
     const int rows = (hi - lo + 1) * n_;
     rgba_.resize(size_t(n_) * rows * 4);
-    glPixelStorei(GL_PACK_ALIGNMENT, 4);
-    glReadBuffer(GL_COLOR_ATTACHMENT0);
-    glReadPixels(0, lo * n_, n_, rows, GL_RGBA, GL_FLOAT, rgba_.data());
+    readFramebuffer(fbo_.id(), 0, lo * n_, n_, rows, GL_RGBA, GL_FLOAT, 4, rgba_.data());
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
 
     const glm::vec3 sunDir = glm::vec3(scene_->world().sky().sunDirection(timeOfDay_h));

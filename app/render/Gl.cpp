@@ -178,12 +178,18 @@ void GlProgram::set(const char* name, const glm::mat4& m) const {
 
 // ---- Read-back -------------------------------------------------------------------------------
 
-std::vector<unsigned char> readPixelsRgb8(GLuint framebuffer, int width, int height) {
-    std::vector<unsigned char> rgba(size_t(width) * height * 4), rgb(size_t(width) * height * 3);
+void readFramebuffer(GLuint framebuffer, int x, int y, int width, int height, GLenum format,
+                     GLenum type, int packAlignment, void* out) {
+    glFinish();  // see Gl.h: glReadPixels alone can read a frame still being drawn
     glBindFramebuffer(GL_READ_FRAMEBUFFER, framebuffer);
     glReadBuffer(GL_COLOR_ATTACHMENT0);
-    glPixelStorei(GL_PACK_ALIGNMENT, 1);
-    glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+    glPixelStorei(GL_PACK_ALIGNMENT, packAlignment);
+    glReadPixels(x, y, width, height, format, type, out);
+}
+
+std::vector<unsigned char> readPixelsRgb8(GLuint framebuffer, int width, int height) {
+    std::vector<unsigned char> rgba(size_t(width) * height * 4), rgb(size_t(width) * height * 3);
+    readFramebuffer(framebuffer, 0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, 1, rgba.data());
     for (int y = 0; y < height; ++y) {
         const unsigned char* src = &rgba[size_t(height - 1 - y) * width * 4];
         unsigned char* dst = &rgb[size_t(y) * width * 3];
@@ -198,10 +204,7 @@ std::vector<unsigned char> readPixelsRgb8(GLuint framebuffer, int width, int hei
 
 std::vector<float> readPixelsRgb32f(GLuint framebuffer, int x, int y, int width, int height) {
     std::vector<float> rgb(size_t(width) * height * 3);
-    glBindFramebuffer(GL_READ_FRAMEBUFFER, framebuffer);
-    glReadBuffer(GL_COLOR_ATTACHMENT0);
-    glPixelStorei(GL_PACK_ALIGNMENT, 1);
-    glReadPixels(x, y, width, height, GL_RGB, GL_FLOAT, rgb.data());
+    readFramebuffer(framebuffer, x, y, width, height, GL_RGB, GL_FLOAT, 1, rgb.data());
     return rgb;
 }
 

@@ -85,6 +85,18 @@ class GlProgram {
     GlName<glDeleteProgramName> program_;
 };
 
+// Reads the rectangle (x, y, width, height) of `framebuffer`'s colour attachment 0, or of its
+// depth with format GL_DEPTH_COMPONENT, into `out` as `format` and `type`, rows bottom-up as GL
+// gives them, each row aligned to `packAlignment` bytes; leaves `framebuffer` bound for reading.
+// Every read-back of a rendered image goes through here: it waits for all GL commands issued so
+// far (glFinish) before it reads. glReadPixels alone should, but Mesa's llvmpipe (seen with 22.3)
+// rasterizes a frame on its own threads while the caller goes on, and its read-back does not
+// always wait for them once the image is no longer bound for drawing: after a shaded render
+// (whose tone mapping samples the HDR target), the next screen-witness render read back this way
+// came back in part, whole 64 x 64 tiles of it, as the target held before (the last render's
+// pixels or only the clear), more often when other load slowed the rasterizer threads.
+void readFramebuffer(GLuint framebuffer, int x, int y, int width, int height, GLenum format,
+                     GLenum type, int packAlignment, void* out);
 // Reads the RGBA8 colour attachment 0 of `framebuffer` (rows bottom-up in GL) into top-down RGB.
 std::vector<unsigned char> readPixelsRgb8(GLuint framebuffer, int width, int height);
 // Reads an RGBA32F attachment into float RGB, rows in GL order (row 0 = first row, bottom).

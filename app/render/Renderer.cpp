@@ -205,11 +205,8 @@ SurfaceImage Renderer::readSurface(const CameraSample& camera) {
     SurfaceImage out;
     out.width = w, out.height = h;
     std::vector<float> rgba(std::size_t(w) * h * 4), depth(std::size_t(w) * h);
-    glBindFramebuffer(GL_READ_FRAMEBUFFER, hdrFbo_.id());
-    glReadBuffer(GL_COLOR_ATTACHMENT0);
-    glPixelStorei(GL_PACK_ALIGNMENT, 4);
-    glReadPixels(0, 0, w, h, GL_RGBA, GL_FLOAT, rgba.data());
-    glReadPixels(0, 0, w, h, GL_DEPTH_COMPONENT, GL_FLOAT, depth.data());
+    readFramebuffer(hdrFbo_.id(), 0, 0, w, h, GL_RGBA, GL_FLOAT, 4, rgba.data());
+    readFramebuffer(hdrFbo_.id(), 0, 0, w, h, GL_DEPTH_COMPONENT, GL_FLOAT, 4, depth.data());
     glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
     const glm::mat4 inv = glm::inverse(viewProjection(camera));
     out.rgba.resize(rgba.size());

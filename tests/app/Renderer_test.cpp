@@ -345,13 +345,10 @@ CameraSample treeView(const World& world) {
 // an object pixel equals the SH irradiance at its normal (read from the normal output) over pi,
 // within 2e-3 relative; every surface pixel equals the screen witnesses' ambient output over pi
 // (the same corner and vertex colours) within 1.5e-3 (the HDR target is half float: 2^-11 a
-// rounding, two roundings); the sky stays the shaded view's.
-// Disabled: an open defect (docs/ARCHITECTURE.md "Known limits"). In some processes the first
-// screen-witness render after two shaded ones marks part of the distant terrain as sky that the
-// shaded and ambient views of the same camera draw, so the sky check below fails there. The
-// ambient view's own property is also checked by TheAmbientViewIsNotShadowed, which passes.
-// Run it with --gtest_also_run_disabled_tests.
-TEST(Renderer, DISABLED_TheAmbientViewIsTheShIrradianceOverPi) {
+// rounding, two roundings); the sky stays the shaded view's. The surface output is read back
+// right after the two tone-mapped views, where a read-back that did not wait for the rasterizer
+// (app/render/Gl.h, readFramebuffer) once returned tiles of the shaded render as sky.
+TEST(Renderer, TheAmbientViewIsTheShIrradianceOverPi) {
     AMB_REQUIRE_PLATFORM(platform, Backend::Auto, kW, kH);
     const World world(WorldSettings{});
     Renderer renderer(world, testSettings());
