@@ -186,7 +186,7 @@ TEST(ShadowMap, SphereOverPlaneCastsTheClosedFormEllipse) {
 
 // The bounding sphere of a frustum slice holds the slice's eight corners, and touches one.
 TEST(ShadowMap, FrustumSliceSphereEnclosesTheSlice) {
-    for (const auto [n, f] : {std::pair{0.3, 12.5}, {12.5, 50.0}, {50.0, 200.0}, {1.0, 1.5}}) {
+    for (const auto& [n, f] : {std::pair{0.3, 12.5}, {12.5, 50.0}, {50.0, 200.0}, {1.0, 1.5}}) {
         const double tx = 1.0264, ty = 0.5774;
         const auto [c, r] = frustumSliceSphere(n, f, tx, ty);
         double farthest = 0.0;
