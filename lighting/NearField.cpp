@@ -39,8 +39,6 @@ namespace {
 constexpr double kAhatBand[3] = {kShA0, kShA1, kShA2};
 // Projected-area mean over a visible disc of the normals' irradiance, per band (NearField.h).
 constexpr double kDiscMean[3] = {1.0, 2.0 / 3.0, 0.25};
-// An occluder that holds the point counts as a cap of this half-angle.
-const double kMaxCosHalfAngle = std::cos(80.0 * kPi / 180.0);
 // Caps narrower than this (a 0.3 m trunk 20 m away) are left out: 2e-4 of the sphere each.
 constexpr double kMinSinHalfAngle = 0.015;
 // Terrain bands thinner than this (about a degree) are left out.
@@ -97,7 +95,11 @@ std::vector<OccluderCap> occluderCaps(const glm::dvec3& point_m,
         if (sinT < kMinSinHalfAngle) continue;  // too small to matter (see NearField.h)
         OccluderCap c;
         c.direction = to / d;
-        c.cosHalfAngle = std::max(kMaxCosHalfAngle, std::sqrt(1.0 - sinT * sinT));
+        // Outside, sin t = r / d; inside, t grows on from 90 degrees to 180 at the centre, so a
+        // point that passes through a crown sees it close around it without a step (where it
+        // is nearly the whole sphere, its direction no longer matters).
+        c.cosHalfAngle = d >= o.radius_m ? std::sqrt(1.0 - sinT * sinT)
+                                         : -std::sin(0.5 * kPi * (1.0 - d / o.radius_m));
         c.albedo = o.albedo;
         c.weight = std::clamp(o.weight, 0.0, 1.0);
         caps.push_back(c);
@@ -322,7 +324,10 @@ NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps, const 
                 ac[ch][k] = v;
             }
         }
-        for (int j = 0; j < K * K; ++j) t.hide[std::size_t(j)] += ground->hide[std::size_t(j)];
+        for (int j = 0; j < K * K; ++j) {
+            t.hide[std::size_t(j)] += ground->hide[std::size_t(j)];
+            t.groundHide[std::size_t(j)] = ground->hide[std::size_t(j)];
+        }
         for (int ch = 0; ch < 3; ++ch)
             for (int j = 0; j < K; ++j) {
                 const float g = ground->show[ch][j];
@@ -391,15 +396,18 @@ NormalTransfer normalTransfer(const NearFieldTransfer* t, const glm::dvec3& norm
     std::array<double, K> a{};
     for (int j = 0; j < K; ++j) a[j] = kAhatBand[shBand(j)] * y[j];
     for (int k = 0; k < K; ++k) {
-        double h = 0.0;
-        for (int j = 0; j < K; ++j) h += a[j] * t->hide[j * K + k];
+        // The guard takes the caps' hide only: the ground's is a replacement (see Guard).
+        double h = 0.0, hg = 0.0;
+        for (int j = 0; j < K; ++j)
+            h += a[j] * (t->hide[j * K + k] - t->groundHide[j * K + k]), hg += a[j] * t->groundHide[j * K + k];
         n.hide[k] = float(h);
+        n.groundHide[k] = float(hg);
         for (int ch = 0; ch < 3; ++ch) {
             double v = 0.0;
             for (int j = 0; j < K; ++j)
                 v += a[j] * (double(t->columns[std::size_t(k * 3 * K + ch * K + j)]) -
                              double(t->hide[j * K + k]));
-            n.show[std::size_t(ch * K + k)] = float(v);
+            n.show[std::size_t(ch * K + k)] = float(v + hg);
         }
     }
     if (t->ground) {
@@ -421,7 +429,8 @@ void updateLightTerm(NormalTransfer& t, const glm::dvec3& lightDirection, std::u
     const auto y = shBasis(lightDirection);
     for (int ch = 0; ch < 3; ++ch) {
         double v = 0.0;
-        for (int k = 0; k < kShCoefficients; ++k) v += t.show[std::size_t(ch * kShCoefficients + k)] * y[k];
+        for (int k = 0; k < kShCoefficients; ++k)
+            v += (t.show[std::size_t(ch * kShCoefficients + k)] - t.groundHide[std::size_t(k)]) * y[k];
         t.light[ch] = float(v);
     }
     if (t.ground) {
@@ -566,7 +575,8 @@ ShRgb applyTransfer(const NearFieldTransfer& t, const ShRgb& far, const Directio
         const ShRgbD farD = toDouble(far);
         ShRgbD hidden = farD;
         for (int j = 0; j < K; ++j)
-            for (int k = 0; k < K; ++k) hidden.c[j] += double(t.hide[j * K + k]) * farD.c[k];
+            for (int k = 0; k < K; ++k)
+                hidden.c[j] += double(t.hide[j * K + k] - t.groundHide[j * K + k]) * farD.c[k];
         t.guardScale = guardScale(farD, hidden);
         t.guardFar = far;
         t.guardValid = true;
@@ -590,7 +600,8 @@ ShRgb applyTransfer(const NearFieldTransfer& t, const ShRgb& far, const Directio
         const float unhide = float(1.0 - t.guardScale[ch]);
         if (unhide <= 0.0f) continue;
         for (int j = 0; j < K; ++j)
-            for (int k = 0; k < K; ++k) out[ch][j] -= unhide * t.hide[j * K + k] * far.c[k][ch];
+            for (int k = 0; k < K; ++k)
+                out[ch][j] -= unhide * (t.hide[j * K + k] - t.groundHide[j * K + k]) * far.c[k][ch];
     }
     ShRgb r;
     for (int j = 0; j < K; ++j) r.c[j] = glm::vec3(out[0][j], out[1][j], out[2][j]);
@@ -671,20 +682,26 @@ namespace {
 
 constexpr int kGroundRings = 4, kGroundAzimuths = 8;  // 32 directions (see Ground)
 
+// The rim of a sphere in the ground's ray tests: a ray that passes within (1 - kRim) r of the
+// centre is blocked, one that passes beyond (1 + kRim) r is not, and between the two the block
+// falls off smoothly, so a moving point's rays cross a plant's edge without a step.
+constexpr double kRim = 0.2;
+
 // How much the spheres block the segment from `origin` along unit `dir` for `length`: 1 - the
-// product of (1 - weight) over the spheres it meets (a faded plant blocks in part).
+// product of (1 - weight x coverage) over the spheres it passes (a faded plant blocks in part).
 double sphereBlock(const glm::dvec3& origin, const glm::dvec3& dir, double length,
                    const std::vector<SphereOccluder>& occluders) {
     double open = 1.0;
     for (const SphereOccluder& o : occluders) {
         const glm::dvec3 d = o.centre_m - origin;
-        const double r2 = o.radius_m * o.radius_m;
-        const double tc = glm::dot(d, dir);
-        const double d2 = glm::dot(d, d);
-        if (d2 > r2 && (tc <= 0.0 || tc - o.radius_m > length)) continue;
-        if (d2 - tc * tc >= r2) continue;
-        if (d2 > r2 && tc - std::sqrt(r2 - (d2 - tc * tc)) > length) continue;
-        open *= 1.0 - std::clamp(o.weight, 0.0, 1.0);
+        const double outer = (1.0 + kRim) * o.radius_m;
+        // The ray's nearest approach to the centre, within the segment.
+        const double tc = std::clamp(glm::dot(d, dir), 0.0, length);
+        const glm::dvec3 miss = d - dir * tc;
+        const double q2 = glm::dot(miss, miss);
+        if (q2 >= outer * outer) continue;
+        const double x = std::clamp((outer - std::sqrt(q2)) / (2.0 * kRim * o.radius_m), 0.0, 1.0);
+        open *= 1.0 - std::clamp(o.weight, 0.0, 1.0) * x * x * (3.0 - 2.0 * x);
         if (open <= 0.0) break;
     }
     return 1.0 - open;
@@ -719,8 +736,9 @@ GroundTerm groundTerm(const glm::dvec3& p, const NearFieldScene& scene,
             const double phi = 2.0 * kPi * (az + 0.5 + 0.5 * (ring % 2)) / kGroundAzimuths;
             const glm::dvec3 d = -n * c + (t * std::cos(phi) + b * std::sin(phi)) * sn;
             const double reach = h / c;
-            // A plant in front: its cap shows there, not the ground.
-            if (sphereBlock(p, d, reach, seen) >= 0.5) continue;
+            // A plant in front: its cap shows there, not the ground (in part at its rim).
+            const double ws = w * (1.0 - sphereBlock(p, d, reach, seen));
+            if (ws <= 0.0) continue;
             const glm::dvec3 x = p + d * reach;
             GroundPoint g;
             if (!scene.groundAt(x.x, x.z, g)) continue;
@@ -730,9 +748,9 @@ GroundTerm groundTerm(const glm::dvec3& p, const NearFieldScene& scene,
                                  : 0.0;
             const auto y = shBasis(d);
             for (int j = 0; j < K; ++j) {
-                for (int k = 0; k < K; ++k) out.hide[std::size_t(j * K + k)] -= float(w * y[j] * y[k]);
+                for (int k = 0; k < K; ++k) out.hide[std::size_t(j * K + k)] -= float(ws * y[j] * y[k]);
                 for (int ch = 0; ch < 3; ++ch) {
-                    const double shown = w * g.albedo[ch] / kPi * y[j];
+                    const double shown = ws * g.albedo[ch] / kPi * y[j];
                     out.show[ch][j] += float(shown);
                     out.lit[ch][j] += float(shown * lit);
                 }
@@ -742,6 +760,28 @@ GroundTerm groundTerm(const glm::dvec3& p, const NearFieldScene& scene,
     }
     out.normal = n;
     out.any = out.samples > 0;
+    return out;
+}
+
+GroundTerm blendGroundTerms(const GroundTerm* const* terms, const double* weights, int count) {
+    GroundTerm out;
+    glm::dvec3 normal(0.0);
+    for (int i = 0; i < count; ++i) {
+        const GroundTerm& t = *terms[i];
+        if (!t.any) continue;
+        const float w = float(weights[i]);
+        for (std::size_t j = 0; j < out.hide.size(); ++j) out.hide[j] += w * t.hide[j];
+        for (int ch = 0; ch < 3; ++ch)
+            for (int k = 0; k < kShCoefficients; ++k) {
+                out.show[ch][k] += w * t.show[ch][k];
+                out.lit[ch][k] += w * t.lit[ch][k];
+            }
+        normal += weights[i] * t.normal;
+        out.samples += t.samples;
+        out.any = true;
+    }
+    const double length = glm::length(normal);
+    out.normal = length > 0.0 ? normal / length : glm::dvec3(0.0, 1.0, 0.0);
     return out;
 }
 
@@ -759,12 +799,17 @@ double WorldNearFieldScene::terrainLightVisibility(const glm::dvec3& from,
     const double horizontal = std::hypot(l.x, l.z);
     if (l.y <= 0.0) return 0.0;
     if (horizontal < 1e-6) return 1.0;
-    // Steps growing by half each time: 2 m near the point, about 60 m at the far end.
+    // Steps growing by half each time: 2 m near the point, about 60 m at the far end. The
+    // terrain's highest elevation above the light's, seen from `from`, fades the light over
+    // kPenumbra_rad (the sun's disc and then some), so a moving point meets no step.
+    constexpr double kPenumbra_rad = 0.02;
+    double above = -kPi;
     for (double d = 2.0; d <= kShadowReach_m; d *= 1.5) {
         const glm::dvec3 q = from + l * (d / horizontal);
-        if (world_.height(q.x, q.z) > q.y) return 0.0;
+        above = std::max(above, std::atan2(world_.height(q.x, q.z) - from.y, d) -
+                                    std::atan2(q.y - from.y, d));
     }
-    return 1.0;
+    return std::clamp(0.5 - above / kPenumbra_rad, 0.0, 1.0);
 }
 
 // ---- [SECTION] Cache ---------------------------------------------------------------------------
@@ -823,12 +868,49 @@ std::unique_ptr<NearFieldTransfer> NearField::build(const glm::dvec3& p,
     const std::vector<SphereOccluder>& caps0 = selfRadius_m > 0.0 ? others : all;
     GroundTerm ground;
     if (settings_.ground)
-        ground = groundTerm(p, scene_, caps0, all, settings_.groundRadius_m, light_.direction);
+        ground = selfRadius_m > 0.0
+                     ? objectGround(p)
+                     : groundTerm(p, scene_, caps0, all, settings_.groundRadius_m, light_.direction);
     std::vector<OccluderCap> caps = nearOccluders(p, caps0, horizon);
     if (caps.empty() && !ground.any) return nullptr;
     auto t = std::make_unique<NearFieldTransfer>(nearFieldTransfer(caps, &ground));
     updateLightTerm(*t, light_.direction);
     return t;
+}
+
+GroundTerm NearField::objectGround(const glm::dvec3& p) const {
+    const double lift = p.y - scene_.groundHeight(p.x, p.z);
+    // Quadratic B-spline weights of the three nearest lattice lines on each axis.
+    const auto spline = [](double u, double w[3]) {
+        const double f = u - std::round(u);
+        w[0] = 0.5 * (0.5 - f) * (0.5 - f), w[1] = 0.75 - f * f, w[2] = 0.5 * (0.5 + f) * (0.5 + f);
+        return std::round(u) - 1.0;
+    };
+    double wx[3], wz[3];
+    const double i0 = spline(p.x / kGroundCell_m, wx), k0 = spline(p.z / kGroundCell_m, wz);
+    if (groundCache_.size() + 9 > std::size_t(settings_.cacheEntries))
+        groundCache_.clear(), groundBytes_ = 0;
+    Key keys[9];
+    double weights[9];
+    for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) {
+            const double x = (i0 + a) * kGroundCell_m, z = (k0 + b) * kGroundCell_m;
+            const Key key{float(x), -2e30f, float(z), float(lift)};
+            keys[a * 3 + b] = key;
+            weights[a * 3 + b] = wx[a] * wz[b];
+            if (groundCache_.find(key) != groundCache_.end()) continue;
+            const glm::dvec3 q(x, scene_.groundHeight(x, z) + lift, z);
+            const std::vector<SphereOccluder> near = occluders(q);
+            // No plant stops the rays from a lattice point: one standing at it would take its
+            // ground out of the blend for an object that does not see that plant.
+            groundCache_.emplace(
+                key, groundTerm(q, scene_, {}, near, settings_.groundRadius_m, light_.direction));
+            groundBytes_ += sizeof(Key) + sizeof(GroundTerm) + 2 * sizeof(void*);
+        }
+    // Looked up only once all nine are in: an insertion may move the map's entries.
+    const GroundTerm* terms[9];
+    for (int i = 0; i < 9; ++i) terms[i] = &groundCache_.find(keys[i])->second;
+    return blendGroundTerms(terms, weights, 9);
 }
 
 ShRgb NearField::apply(const ShRgb& far, const glm::dvec3& point_m, double selfRadius_m) const {
@@ -1005,12 +1087,12 @@ ShRgb NearField::applyLocked(const ShRgb& far, const Key& key,
 
 std::size_t NearField::cachedPoints() const {
     std::lock_guard<std::mutex> lock(mutex_);
-    return cache_.size() + normalCache_.size();
+    return cache_.size() + normalCache_.size() + groundCache_.size();
 }
 
 std::size_t NearField::cacheBytes() const {
     std::lock_guard<std::mutex> lock(mutex_);
-    return bytes_ + normalBytes_;
+    return bytes_ + normalBytes_ + groundBytes_;
 }
 
 double NearField::seconds() const {

@@ -71,6 +71,12 @@
 //   T (the hide is the same for every channel); the light term is remade from lit, g and b when
 //   the light moves, with the visibility of the light the point was built in. A white ground
 //   under a uniform far field changes nothing.
+//   Objects move (the car): 32 directions swept over a tree's shadow or the albedo's noise would
+//   make the term jitter by a few per cent a frame. So an object's ground term is the quadratic
+//   B-spline blend (C1 in the position) of the terms at the 3 x 3 nearest points of a lattice of
+//   kGroundCell_m, each built once at the object's lift above the ground (no plant stopping its
+//   rays: the object's own caps hide what stands in front) and cached; terrain corners and road
+//   vertices, which never move, take their own.
 // [SECTION] Overlap (occluders must not darken twice)
 //   Caps are taken largest first; cap i keeps the weight w_i = f_i prod_{j<i} (1 - f_j O_ij /
 //   Omega_i), f its fade (see Radii), O_ij the solid angle it shares with an earlier cap j (the
@@ -78,7 +84,10 @@
 //   lighting", 2007). A cap inside an earlier one gets weight 0; caps apart keep f.
 // [SECTION] Guard
 //   What the caps hide must not take the irradiance below zero for any normal (below the far
-//   field's own minimum if that is negative). A sampled lower bound of the minimum of the far
+//   field's own minimum if that is negative). The ground's hide is not the caps': it takes the
+//   lower hemisphere's far radiance out only to put the ground's (never negative) in its place,
+//   and the far field's upper half alone sits at zero irradiance for a downward normal, so
+//   guarding it would switch on and off with rounding. The guard looks at the caps' part only. A sampled lower bound of the minimum of the far
 //   field less what is hidden comes first: the minimum over 160 normals less half a bound of the
 //   second derivative along great circles times the squared covering radius (at the true
 //   minimum the gradient vanishes). Only if it is negative is the exact minimum
@@ -118,6 +127,8 @@ class JsonFields;
 class World;
 
 inline constexpr double kNearFade = 0.25;  // see Radii
+
+inline constexpr double kGroundCell_m = 2.0;  // the objects' ground-term lattice (see Ground)
 
 struct NearFieldSettings {
     bool enabled = true;     // apply the near field at shading points (a method's switch)
@@ -200,7 +211,8 @@ struct OccluderCap {
     int behind = -1;  // the band a cap is seen against: it hides that band, not the far field
 };
 // The caps of `occluders` seen from `point`, with their overlap weights (largest first).
-// Occluders that hold the point are clamped to a 80-degree cap.
+// An occluder that holds the point is a cap wider than a hemisphere: 90 degrees at its surface,
+// the whole sphere at its centre.
 std::vector<OccluderCap> occluderCaps(const glm::dvec3& point_m,
                                       const std::vector<SphereOccluder>& occluders);
 
@@ -227,6 +239,8 @@ struct NearFieldTransfer {
     // The ground's light term (see Ground): g_c, lit_c, b and the ground's normal.
     std::array<std::array<float, kShCoefficients>, 3> groundShow{}, groundLit{};
     std::array<float, kShCoefficients> groundHideA{};
+    // The ground's part of hide: the guard leaves it out (see Guard).
+    std::array<float, kShCoefficients * kShCoefficients> groundHide{};
     glm::vec3 groundNormal{0.0f, 1.0f, 0.0f};
     bool ground = false;
     bool any = false;  // some occluder is near
@@ -241,8 +255,10 @@ NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps,
 
 // The transfer seen through one normal (see Through one normal).
 struct NormalTransfer {
-    std::array<float, kShCoefficients> hide{};      // h = hide^T a(n)
+    std::array<float, kShCoefficients> hide{};      // h = hide^T a(n), the caps' hide only
     std::array<float, 3 * kShCoefficients> show{};  // s_c = (T_c - hide)^T a(n), [c * 9 + k]
+                                                    // (the ground's hide included)
+    std::array<float, kShCoefficients> groundHide{};  // the ground's hide^T a(n)
     glm::vec3 light{0.0f};                          // s_c . Y(l), for lightEpoch's light
     // The ground's part through this normal: a(n) . g_c and a(n) . lit_c, and b (see Ground).
     glm::vec3 groundShow{0.0f}, groundLit{0.0f};
@@ -310,6 +326,8 @@ GroundTerm groundTerm(const glm::dvec3& point_m, const NearFieldScene& scene,
                       const std::vector<SphereOccluder>& seen,
                       const std::vector<SphereOccluder>& shading, double radius_m,
                       const glm::dvec3& lightDirection);
+// sum_i w_i terms_i (the normal renormalised); any if one of them is.
+GroundTerm blendGroundTerms(const GroundTerm* const* terms, const double* weights, int count);
 
 // The generated world's plants (Vegetation::spheres, scaled and placed).
 class WorldNearFieldScene final : public NearFieldScene {
@@ -377,6 +395,8 @@ class NearField {
                       const std::function<glm::dvec3()>& point, double selfRadius_m) const;
     // The plants near a point (all of them: build leaves an object's own out of its caps).
     std::vector<SphereOccluder> occluders(const glm::dvec3& point_m) const;
+    // An object's ground term: the B-spline blend of the lattice's (see Ground), cached.
+    GroundTerm objectGround(const glm::dvec3& point_m) const;
 
     const NearFieldScene& scene_;
     NearFieldSettings settings_;
@@ -387,6 +407,7 @@ class NearField {
     };
     mutable std::mutex mutex_;
     mutable tsl::hopscotch_map<Key, std::unique_ptr<NearFieldTransfer>, KeyHash> cache_;
+    mutable tsl::hopscotch_map<Key, GroundTerm, KeyHash> groundCache_;  // the objects' lattice
     // Through one normal: the point's index in normalTransfers_ (kNothingNear: none). Small
     // slots keep the map in cache; the transfers follow in the order the draw first asked.
     static constexpr std::uint32_t kNothingNear = ~0u;
@@ -409,7 +430,7 @@ class NearField {
     glm::dvec3 epochLight_{0.0};
     mutable double seconds_ = 0.0, buildSeconds_ = 0.0;
     mutable std::size_t points_ = 0, builds_ = 0;
-    mutable std::size_t bytes_ = 0, normalBytes_ = 0;  // the caches', structure included
+    mutable std::size_t bytes_ = 0, normalBytes_ = 0, groundBytes_ = 0;  // the caches', structure included
 };
 
 // A capturing method with the near field: its captures leave the near plants out
