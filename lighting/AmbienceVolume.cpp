@@ -120,7 +120,8 @@ bool sameNearField(const NearFieldSettings& a, const NearFieldSettings& b) {
            a.captureRadius_m == b.captureRadius_m && a.plants == b.plants &&
            a.smallRadius_m == b.smallRadius_m && a.terrain == b.terrain &&
            a.terrainRadius_m == b.terrainRadius_m && a.ground == b.ground &&
-           a.groundRadius_m == b.groundRadius_m && a.cacheEntries == b.cacheEntries &&
+           a.groundRadius_m == b.groundRadius_m && a.groundCell_m == b.groundCell_m &&
+           a.cacheEntries == b.cacheEntries &&
            a.objectRange_m == b.objectRange_m;
 }
 

@@ -28,6 +28,7 @@ void readNearFieldSettings(JsonFields& f, NearFieldSettings& s) {
     f.number("terrainRadius_m", s.terrainRadius_m, 1.0, 500.0);
     f.boolean("ground", s.ground);
     f.number("groundRadius_m", s.groundRadius_m, 0.5, 500.0);
+    f.number("groundCell_m", s.groundCell_m, 0.25, 64.0);
     f.integer("cacheEntries", s.cacheEntries, 1, 1 << 24);
     f.number("objectRange_m", s.objectRange_m, 0.0, 1e6);
 }
@@ -690,17 +691,17 @@ constexpr double kRim = 0.2;
 // How much the spheres block the segment from `origin` along unit `dir` for `length`: 1 - the
 // product of (1 - weight x coverage) over the spheres it passes (a faded plant blocks in part).
 double sphereBlock(const glm::dvec3& origin, const glm::dvec3& dir, double length,
-                   const std::vector<SphereOccluder>& occluders) {
+                   const std::vector<SphereOccluder>& occluders, double rim = kRim) {
     double open = 1.0;
     for (const SphereOccluder& o : occluders) {
         const glm::dvec3 d = o.centre_m - origin;
-        const double outer = (1.0 + kRim) * o.radius_m;
+        const double outer = (1.0 + rim) * o.radius_m;
         // The ray's nearest approach to the centre, within the segment.
         const double tc = std::clamp(glm::dot(d, dir), 0.0, length);
         const glm::dvec3 miss = d - dir * tc;
         const double q2 = glm::dot(miss, miss);
         if (q2 >= outer * outer) continue;
-        const double x = std::clamp((outer - std::sqrt(q2)) / (2.0 * kRim * o.radius_m), 0.0, 1.0);
+        const double x = std::clamp((outer - std::sqrt(q2)) / (2.0 * rim * o.radius_m), 0.0, 1.0);
         open *= 1.0 - std::clamp(o.weight, 0.0, 1.0) * x * x * (3.0 - 2.0 * x);
         if (open <= 0.0) break;
     }
@@ -887,14 +888,15 @@ GroundTerm NearField::objectGround(const glm::dvec3& p) const {
         return std::round(u) - 1.0;
     };
     double wx[3], wz[3];
-    const double i0 = spline(p.x / kGroundCell_m, wx), k0 = spline(p.z / kGroundCell_m, wz);
+    const double cell = settings_.groundCell_m;
+    const double i0 = spline(p.x / cell, wx), k0 = spline(p.z / cell, wz);
     if (groundCache_.size() + 9 > std::size_t(settings_.cacheEntries))
         groundCache_.clear(), groundBytes_ = 0;
     Key keys[9];
     double weights[9];
     for (int a = 0; a < 3; ++a)
         for (int b = 0; b < 3; ++b) {
-            const double x = (i0 + a) * kGroundCell_m, z = (k0 + b) * kGroundCell_m;
+            const double x = (i0 + a) * cell, z = (k0 + b) * cell;
             const Key key{float(x), -2e30f, float(z), float(lift)};
             keys[a * 3 + b] = key;
             weights[a * 3 + b] = wx[a] * wz[b];

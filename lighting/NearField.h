@@ -74,7 +74,7 @@
 //   Objects move (the car): 32 directions swept over a tree's shadow or the albedo's noise would
 //   make the term jitter by a few per cent a frame. So an object's ground term is the quadratic
 //   B-spline blend (C1 in the position) of the terms at the 3 x 3 nearest points of a lattice of
-//   kGroundCell_m, each built once at the object's lift above the ground (no plant stopping its
+//   groundCell_m, each built once at the object's lift above the ground (no plant stopping its
 //   rays: the object's own caps hide what stands in front) and cached; terrain corners and road
 //   vertices, which never move, take their own.
 // [SECTION] Overlap (occluders must not darken twice)
@@ -128,8 +128,6 @@ class World;
 
 inline constexpr double kNearFade = 0.25;  // see Radii
 
-inline constexpr double kGroundCell_m = 2.0;  // the objects' ground-term lattice (see Ground)
-
 struct NearFieldSettings {
     bool enabled = true;     // apply the near field at shading points (a method's switch)
     double radius_m = 20.0;  // r_near: occluders this close (horizontally) to a point are near
@@ -143,6 +141,7 @@ struct NearFieldSettings {
     double terrainRadius_m = 32.0;  // how far the near horizon is searched
     bool ground = true;             // the ground below the point (see Ground)
     double groundRadius_m = 16.0;   // how far from the point's foot the ground is its own
+    double groundCell_m = 4.0;      // the lattice whose ground terms objects blend (see Ground)
     // Points the draw asks for (terrain corners, objects) are cached with their transfer; the
     // cache is emptied when it holds more than this.
     int cacheEntries = 16384;  // about 1.7 kB each (objects), 0.2 kB (corners)
@@ -152,7 +151,7 @@ struct NearFieldSettings {
     double objectRange_m = 64.0;
 };
 // Reads {"enabled", "radius_m", "captureRadius_m", "smallRadius_m", "plants", "terrain",
-// "terrainRadius_m", "ground", "groundRadius_m", "cacheEntries", "objectRange_m"}
+// "terrainRadius_m", "ground", "groundRadius_m", "groundCell_m", "cacheEntries", "objectRange_m"}
 // (JsonFields, lighting/JsonFields.h).
 void readNearFieldSettings(JsonFields& fields, NearFieldSettings& settings);
 
