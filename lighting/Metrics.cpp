@@ -331,9 +331,11 @@ std::vector<BudgetTerms> ErrorMeter::objectBudget(ObjectKind kind) const {
 }
 
 // What the draw applies at a witness: the object path at the camera's ground point (ring 0: the
-// car on drives), the terrain-corner path at the rings' patch corners.
+// car on drives), the terrain-corner path at the rings' patch corners; each at the witness's
+// point, where the reference looks (a ground point inside a plant's footprint is moved out of
+// it, as probes are: the low flight's passes through crowns; a car on the road stays put).
 ShRgb appliedAt(const AmbienceMethod& method, const Witness& w, const glm::dvec3& point_m) {
-    return w.ring == 0 ? method.shAt(w.x_m, w.z_m) : method.cornerShAtPoint(point_m);
+    return w.ring == 0 ? method.shAt(point_m.x, point_m.z) : method.cornerShAtPoint(point_m);
 }
 
 glm::dvec3 ErrorMeter::witnessPoint(const Witness& w) const {

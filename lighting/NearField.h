@@ -141,7 +141,7 @@ struct NearFieldSettings {
     double terrainRadius_m = 32.0;  // how far the near horizon is searched
     bool ground = true;             // the ground below the point (see Ground)
     double groundRadius_m = 16.0;   // how far from the point's foot the ground is its own
-    double groundCell_m = 4.0;      // the lattice whose ground terms objects blend (see Ground)
+    double groundCell_m = 6.0;      // the lattice whose ground terms objects blend (see Ground)
     // Points the draw asks for (terrain corners, objects) are cached with their transfer; the
     // cache is emptied when it holds more than this.
     int cacheEntries = 16384;  // about 1.7 kB each (objects), 0.2 kB (corners)
