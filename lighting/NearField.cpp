@@ -729,6 +729,10 @@ GroundTerm groundTerm(const glm::dvec3& p, const NearFieldScene& scene,
     const bool lightAbove = glm::dot(lightDirection, n) > 0.0 && lightDirection.y > 0.0;
     const double terrainLit =
         lightAbove ? scene.terrainLightVisibility(p - n * (h - 0.5), lightDirection) : 0.0;
+    // Only spheres that reach below the point can stand between it and the ground.
+    std::vector<SphereOccluder> below;
+    for (const SphereOccluder& o : seen)
+        if (o.centre_m.y - (1.0 + kRim) * o.radius_m < p.y) below.push_back(o);
     constexpr int K = kShCoefficients;
     for (int ring = 0; ring < kGroundRings; ++ring) {
         const double c = cosMax + (1.0 - cosMax) * (ring + 0.5) / kGroundRings;  // cos from -n
@@ -738,11 +742,11 @@ GroundTerm groundTerm(const glm::dvec3& p, const NearFieldScene& scene,
             const glm::dvec3 d = -n * c + (t * std::cos(phi) + b * std::sin(phi)) * sn;
             const double reach = h / c;
             // A plant in front: its cap shows there, not the ground (in part at its rim).
-            const double ws = w * (1.0 - sphereBlock(p, d, reach, seen));
+            const double ws = w * (1.0 - sphereBlock(p, d, reach, below));
             if (ws <= 0.0) continue;
             const glm::dvec3 x = p + d * reach;
             GroundPoint g;
-            if (!scene.groundAt(x.x, x.z, g)) continue;
+            if (!scene.groundAt(x.x, x.z, g, &n)) continue;
             const double lit =
                 terrainLit > 0.0 ? terrainLit * (1.0 - sphereBlock(glm::dvec3(x.x, g.height_m, x.z),
                                                                    lightDirection, 1e30, shading))
@@ -786,12 +790,13 @@ GroundTerm blendGroundTerms(const GroundTerm* const* terms, const double* weight
     return out;
 }
 
-bool WorldNearFieldScene::groundAt(double x_m, double z_m, GroundPoint& out) const {
-    const GroundSample s = world_.sample(x_m, z_m);
-    out.height_m = s.height_m;
-    out.normal = s.normal;
+bool WorldNearFieldScene::groundAt(double x_m, double z_m, GroundPoint& out,
+                                   const glm::dvec3* normal) const {
+    double road = 0.0;
+    out.height_m = world_.heightAndRoad(x_m, z_m, &road);
+    out.normal = normal ? *normal : world_.normal(x_m, z_m);
     out.albedo = glm::dvec3(
-        albedo_.at(x_m, z_m, s.height_m, s.roadWeight, s.normal, TerrainPatch::kFinestSpacing_m));
+        albedo_.at(x_m, z_m, out.height_m, road, out.normal, TerrainPatch::kFinestSpacing_m));
     return std::isfinite(out.height_m);
 }
 
@@ -800,15 +805,16 @@ double WorldNearFieldScene::terrainLightVisibility(const glm::dvec3& from,
     const double horizontal = std::hypot(l.x, l.z);
     if (l.y <= 0.0) return 0.0;
     if (horizontal < 1e-6) return 1.0;
-    // Steps growing by half each time: 2 m near the point, about 60 m at the far end. The
-    // terrain's highest elevation above the light's, seen from `from`, fades the light over
-    // kPenumbra_rad (the sun's disc and then some), so a moving point meets no step.
+    // Steps doubling from 2 m, the last at kShadowReach_m. The terrain's highest elevation
+    // above the light's, seen from `from`, fades the light over kPenumbra_rad (the sun's disc
+    // and then some), so a moving point meets no step.
     constexpr double kPenumbra_rad = 0.02;
     double above = -kPi;
-    for (double d = 2.0; d <= kShadowReach_m; d *= 1.5) {
+    for (double d = 2.0;; d = std::min(2.0 * d, kShadowReach_m)) {
         const glm::dvec3 q = from + l * (d / horizontal);
         above = std::max(above, std::atan2(world_.height(q.x, q.z) - from.y, d) -
                                     std::atan2(q.y - from.y, d));
+        if (d >= kShadowReach_m) break;
     }
     return std::clamp(0.5 - above / kPenumbra_rad, 0.0, 1.0);
 }
