@@ -276,6 +276,7 @@ std::array<double, kShCoefficients> showFunctional(const OccluderCap& e) {
 
 }  // namespace
 
+namespace {
 // A(n)_k = Ahat_l Y_k(n): irradiance at n is A(n) . L.
 std::array<double, kShCoefficients> irradianceFunctional(const glm::dvec3& normal) {
     const auto y = shBasis(normal);
@@ -283,6 +284,7 @@ std::array<double, kShCoefficients> irradianceFunctional(const glm::dvec3& norma
     for (int k = 0; k < kShCoefficients; ++k) a[k] = kAhatBand[shBand(k)] * y[k];
     return a;
 }
+}  // namespace
 
 NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps, const GroundTerm* ground) {
     NearFieldTransfer t;
@@ -393,9 +395,7 @@ NormalTransfer normalTransfer(const NearFieldTransfer* t, const glm::dvec3& norm
     NormalTransfer n;
     if (!t || t->empty()) return n;
     constexpr int K = kShCoefficients;
-    const auto y = shBasis(normal);
-    std::array<double, K> a{};
-    for (int j = 0; j < K; ++j) a[j] = kAhatBand[shBand(j)] * y[j];
+    const auto a = irradianceFunctional(normal);
     for (int k = 0; k < K; ++k) {
         // The guard takes the caps' hide only: the ground's is a replacement (see Guard).
         double h = 0.0, hg = 0.0;
@@ -487,12 +487,7 @@ const GuardSamples& guardSamples() {
             return d;
         };
         const std::vector<glm::dvec3> samples = fibonacci(160);
-        for (const glm::dvec3& n : samples) {
-            const auto y = shBasis(n);
-            std::array<double, kShCoefficients> a{};
-            for (int k = 0; k < kShCoefficients; ++k) a[k] = kAhatBand[shBand(k)] * y[k];
-            out.ahatY.push_back(a);
-        }
+        for (const glm::dvec3& n : samples) out.ahatY.push_back(irradianceFunctional(n));
         // The covering radius, measured on a much denser set, with a margin.
         double cover = 0.0;
         for (const glm::dvec3& p : fibonacci(20000)) {
@@ -691,17 +686,17 @@ constexpr double kRim = 0.2;
 // How much the spheres block the segment from `origin` along unit `dir` for `length`: 1 - the
 // product of (1 - weight x coverage) over the spheres it passes (a faded plant blocks in part).
 double sphereBlock(const glm::dvec3& origin, const glm::dvec3& dir, double length,
-                   const std::vector<SphereOccluder>& occluders, double rim = kRim) {
+                   const std::vector<SphereOccluder>& occluders) {
     double open = 1.0;
     for (const SphereOccluder& o : occluders) {
         const glm::dvec3 d = o.centre_m - origin;
-        const double outer = (1.0 + rim) * o.radius_m;
+        const double outer = (1.0 + kRim) * o.radius_m;
         // The ray's nearest approach to the centre, within the segment.
         const double tc = std::clamp(glm::dot(d, dir), 0.0, length);
         const glm::dvec3 miss = d - dir * tc;
         const double q2 = glm::dot(miss, miss);
         if (q2 >= outer * outer) continue;
-        const double x = std::clamp((outer - std::sqrt(q2)) / (2.0 * rim * o.radius_m), 0.0, 1.0);
+        const double x = std::clamp((outer - std::sqrt(q2)) / (2.0 * kRim * o.radius_m), 0.0, 1.0);
         open *= 1.0 - std::clamp(o.weight, 0.0, 1.0) * x * x * (3.0 - 2.0 * x);
         if (open <= 0.0) break;
     }
