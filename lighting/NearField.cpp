@@ -58,13 +58,12 @@ std::array<double, 3> capZonal(double c) {
 }
 
 std::array<double, kShCoefficients> capSh(const glm::dvec3& direction, double cosHalfAngle) {
+    static const double rotate[3] = {std::sqrt(4.0 * kPi), std::sqrt(4.0 * kPi / 3.0),
+                                     std::sqrt(4.0 * kPi / 5.0)};
     const auto z = capZonal(cosHalfAngle);
     const auto y = shBasis(direction);
     std::array<double, kShCoefficients> out{};
-    for (int k = 0; k < kShCoefficients; ++k) {
-        const int l = shBand(k);
-        out[k] = std::sqrt(4.0 * kPi / (2 * l + 1)) * z[l] * y[k];
-    }
+    for (int k = 0; k < kShCoefficients; ++k) out[k] = rotate[shBand(k)] * z[shBand(k)] * y[k];
     return out;
 }
 
@@ -86,56 +85,57 @@ double lambertSpherePhase(double alpha) {
 
 std::vector<OccluderCap> occluderCaps(const glm::dvec3& point_m,
                                       const std::vector<SphereOccluder>& occluders) {
-    std::vector<OccluderCap> caps;
-    caps.reserve(occluders.size());
+    // The geometry first, in a small record (sorted, then tested pair by pair).
+    struct Seen {
+        glm::dvec3 direction;
+        double cosHalf, halfAngle, sinHalf, weight;
+        const SphereOccluder* occluder;
+    };
+    std::vector<Seen> seen;
+    seen.reserve(occluders.size());
     for (const SphereOccluder& o : occluders) {
         const glm::dvec3 to = o.centre_m - point_m;
         const double d = glm::length(to);
         if (!(o.radius_m > 0.0) || !std::isfinite(d) || d <= 0.0) continue;
         const double sinT = std::min(1.0, o.radius_m / d);
         if (sinT < kMinSinHalfAngle) continue;  // too small to matter (see NearField.h)
-        OccluderCap c;
-        c.direction = to / d;
         // Outside, sin t = r / d; inside, t grows on from 90 degrees to 180 at the centre, so a
         // point that passes through a crown sees it close around it without a step (where it
         // is nearly the whole sphere, its direction no longer matters).
-        c.cosHalfAngle = d >= o.radius_m ? std::sqrt(1.0 - sinT * sinT)
+        const double c = d >= o.radius_m ? std::sqrt(1.0 - sinT * sinT)
                                          : -std::sin(0.5 * kPi * (1.0 - d / o.radius_m));
-        c.albedo = o.albedo;
-        c.weight = std::clamp(o.weight, 0.0, 1.0);
-        caps.push_back(c);
+        seen.push_back({to / d, c, 0.0, 0.0, std::clamp(o.weight, 0.0, 1.0), &o});
     }
     // Largest first; each keeps what earlier ones leave of it.
-    std::sort(caps.begin(), caps.end(), [](const OccluderCap& a, const OccluderCap& b) {
-        return a.cosHalfAngle < b.cosHalfAngle;
-    });
-    std::vector<double> halfAngle(caps.size()), sinHalf(caps.size());
-    for (std::size_t i = 0; i < caps.size(); ++i) {
-        halfAngle[i] = std::acos(caps[i].cosHalfAngle);
-        sinHalf[i] = std::sin(halfAngle[i]);
-    }
-    for (std::size_t i = 0; i < caps.size(); ++i) {
-        const double omega = capSolidAngle(caps[i].cosHalfAngle);
-        double w = caps[i].weight;  // its fade (see Radii)
+    std::sort(seen.begin(), seen.end(),
+              [](const Seen& a, const Seen& b) { return a.cosHalf < b.cosHalf; });
+    for (Seen& e : seen) e.halfAngle = std::acos(e.cosHalf), e.sinHalf = std::sin(e.halfAngle);
+    std::vector<OccluderCap> caps;
+    caps.reserve(seen.size());
+    for (std::size_t i = 0; i < seen.size(); ++i) {
+        Seen& si = seen[i];
+        const double omega = capSolidAngle(si.cosHalf);
+        double w = si.weight;  // its fade (see Radii)
         for (std::size_t j = 0; j < i && w > 0.0; ++j) {
-            const double cosD = std::clamp(glm::dot(caps[i].direction, caps[j].direction), -1.0, 1.0);
+            const Seen& sj = seen[j];
+            const double cosD = std::clamp(glm::dot(si.direction, sj.direction), -1.0, 1.0);
             // Apart when the separation is at least a_i + a_j: cos d <= cos(a_i + a_j).
-            const double sumA = halfAngle[i] + halfAngle[j];
-            if (sumA < kPi && cosD <= caps[i].cosHalfAngle * caps[j].cosHalfAngle -
-                                          sinHalf[i] * sinHalf[j])
+            if (si.halfAngle + sj.halfAngle < kPi &&
+                cosD <= si.cosHalf * sj.cosHalf - si.sinHalf * sj.sinHalf)
                 continue;
-            w *= std::max(0.0, 1.0 - caps[j].weight *
-                                         capOverlap(halfAngle[i], halfAngle[j], std::acos(cosD)) /
-                                         omega);
+            w *= std::max(0.0, 1.0 - sj.weight * capOverlap(si.halfAngle, sj.halfAngle,
+                                                             std::acos(cosD)) / omega);
         }
-        caps[i].weight = w;
-    }
-    caps.erase(std::remove_if(caps.begin(), caps.end(),
-                              [](const OccluderCap& c) { return c.weight <= 0.0; }),
-               caps.end());
-    for (OccluderCap& c : caps) {
+        si.weight = w;  // later caps see what this one keeps
+        if (w <= 0.0) continue;
+        OccluderCap c;
+        c.direction = si.direction;
+        c.cosHalfAngle = si.cosHalf;
+        c.albedo = si.occluder->albedo;
+        c.weight = w;
         c.sh = capSh(c.direction, c.cosHalfAngle);
-        c.solidAngle = capSolidAngle(c.cosHalfAngle);
+        c.solidAngle = omega;
+        caps.push_back(c);
     }
     return caps;
 }
@@ -289,26 +289,33 @@ std::array<double, kShCoefficients> irradianceFunctional(const glm::dvec3& norma
 NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps, const GroundTerm* ground) {
     NearFieldTransfer t;
     constexpr int K = kShCoefficients;
+    // Each entry adds rank-one terms: hide -= (w c) (c / omega)^T, show_c += (w c) u_c^T. Summed
+    // in float, row by row, so the inner loops vectorise (a point has a few hundred entries).
     std::array<std::array<float, K * K>, 3> show{};  // what the caps show, per channel
-    for (const OccluderCap& e : caps) {
+    std::vector<std::array<double, K>> shows(caps.size());
+    for (std::size_t i = 0; i < caps.size(); ++i) shows[i] = showFunctional(caps[i]);
+    for (std::size_t i = 0; i < caps.size(); ++i) {
+        const OccluderCap& e = caps[i];
         const auto& c = e.sh;
-        const auto g = showFunctional(e);
-        if (e.behind < 0) {
-            // It hides the far field ...
-            for (int j = 0; j < K; ++j)
-                for (int k = 0; k < K; ++k)
-                    t.hide[j * K + k] -= float(e.weight * c[j] * c[k] / e.solidAngle);
-        }
-        // ... or, in front of a band, that band's radiance.
+        // It hides the far field, or, in front of a band, that band's radiance.
         const OccluderCap* b = e.behind >= 0 ? &caps[std::size_t(e.behind)] : nullptr;
-        const auto gb = b ? showFunctional(*b) : std::array<double, K>{};
-        for (int ch = 0; ch < 3; ++ch) {
-            const double rb = b ? b->albedo[ch] : 0.0;
-            for (int j = 0; j < K; ++j)
-                for (int k = 0; k < K; ++k) {
-                    show[ch][j * K + k] +=
-                        float(e.weight * c[j] * (e.albedo[ch] * g[k] - rb * gb[k]));
-                }
+        float cw[K], hideRow[K], u[3][K];
+        for (int k = 0; k < K; ++k) {
+            cw[k] = float(e.weight * c[k]);
+            hideRow[k] = b ? 0.0f : float(c[k] / e.solidAngle);
+            for (int ch = 0; ch < 3; ++ch)
+                u[ch][k] = float(e.albedo[ch] * shows[i][k] -
+                                 (b ? b->albedo[ch] * shows[std::size_t(e.behind)][k] : 0.0));
+        }
+        for (int j = 0; j < K; ++j) {
+            const float wj = cw[j];
+            float* h = &t.hide[std::size_t(j * K)];
+            if (!b)
+                for (int k = 0; k < K; ++k) h[k] -= wj * hideRow[k];
+            for (int ch = 0; ch < 3; ++ch) {
+                float* row = &show[std::size_t(ch)][std::size_t(j * K)];
+                for (int k = 0; k < K; ++k) row[k] += wj * u[ch][k];
+            }
         }
     }
     if (ground && ground->any) {
@@ -728,7 +735,16 @@ GroundTerm groundTerm(const glm::dvec3& p, const NearFieldScene& scene,
     std::vector<SphereOccluder> below;
     for (const SphereOccluder& o : seen)
         if (o.centre_m.y - (1.0 + kRim) * o.radius_m < p.y) below.push_back(o);
-    constexpr int K = kShCoefficients;
+    // The directions that meet the ground, and where.
+    struct Sample {
+        glm::dvec3 direction, at;
+        double weight;
+        GroundPoint ground;
+    };
+    std::vector<Sample> samples;
+    samples.reserve(kGroundRings * kGroundAzimuths);
+    const glm::dvec3 base = p - n * h;  // the foot on the tangent plane
+    double spread = 0.0;  // the samples' farthest from the foot
     for (int ring = 0; ring < kGroundRings; ++ring) {
         const double c = cosMax + (1.0 - cosMax) * (ring + 0.5) / kGroundRings;  // cos from -n
         const double sn = std::sqrt(std::max(0.0, 1.0 - c * c));
@@ -740,23 +756,40 @@ GroundTerm groundTerm(const glm::dvec3& p, const NearFieldScene& scene,
             const double ws = w * (1.0 - sphereBlock(p, d, reach, below));
             if (ws <= 0.0) continue;
             const glm::dvec3 x = p + d * reach;
-            GroundPoint g;
-            if (!scene.groundAt(x.x, x.z, g, &n)) continue;
-            const double lit =
-                terrainLit > 0.0 ? terrainLit * (1.0 - sphereBlock(glm::dvec3(x.x, g.height_m, x.z),
-                                                                   lightDirection, 1e30, shading))
-                                 : 0.0;
-            const auto y = shBasis(d);
-            for (int j = 0; j < K; ++j) {
-                for (int k = 0; k < K; ++k) out.hide[std::size_t(j * K + k)] -= float(ws * y[j] * y[k]);
-                for (int ch = 0; ch < 3; ++ch) {
-                    const double shown = ws * g.albedo[ch] / kPi * y[j];
-                    out.show[ch][j] += float(shown);
-                    out.lit[ch][j] += float(shown * lit);
-                }
-            }
-            ++out.samples;
+            Sample sample{d, x, ws, {}};
+            if (!scene.groundAt(x.x, x.z, sample.ground, &n)) continue;
+            sample.at.y = sample.ground.height_m;
+            spread = std::max(spread, glm::length(sample.at - base));
+            samples.push_back(sample);
         }
+    }
+    // Only spheres that pass within their outer rim of the light's line through the foot, give
+    // or take the samples' spread, can shade a sample.
+    std::vector<SphereOccluder> shades;
+    if (terrainLit > 0.0)
+        for (const SphereOccluder& o : shading) {
+            const glm::dvec3 q = o.centre_m - base;
+            const glm::dvec3 across = q - lightDirection * glm::dot(q, lightDirection);
+            const double reach = (1.0 + kRim) * o.radius_m + spread;
+            if (glm::dot(across, across) < reach * reach) shades.push_back(o);
+        }
+    constexpr int K = kShCoefficients;
+    for (const Sample& sample : samples) {
+        const double lit =
+            terrainLit > 0.0
+                ? terrainLit * (1.0 - sphereBlock(sample.at, lightDirection, 1e30, shades))
+                : 0.0;
+        const auto y = shBasis(sample.direction);
+        const double ws = sample.weight;
+        for (int j = 0; j < K; ++j) {
+            for (int k = 0; k < K; ++k) out.hide[std::size_t(j * K + k)] -= float(ws * y[j] * y[k]);
+            for (int ch = 0; ch < 3; ++ch) {
+                const double shown = ws * sample.ground.albedo[ch] / kPi * y[j];
+                out.show[ch][j] += float(shown);
+                out.lit[ch][j] += float(shown * lit);
+            }
+        }
+        ++out.samples;
     }
     out.normal = n;
     out.any = out.samples > 0;
