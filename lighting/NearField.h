@@ -273,9 +273,21 @@ struct NormalTransfer {
 NormalTransfer normalTransfer(const NearFieldTransfer* transfer, const glm::dvec3& normal);
 void updateLightTerm(NormalTransfer& transfer, const glm::dvec3& lightDirection,
                      std::uint32_t epoch);
-// The irradiance at `normal` of the far field with the near field applied, guarded for that
-// normal, clamped at 0 (as the draw clamps).
-glm::vec3 applyNormalTransfer(const NormalTransfer& transfer, const ShRgb& far,
+// What the draw reads of a NormalTransfer every frame, in the order ShRgb holds the far field:
+// E_c = w_c . L_c + light_c E_light,c, w_c = a + h + s_c, wherever (a + h) . L_c >= 0 (then the
+// guard cannot act); elsewhere the guarded sum, from a (the normal's) and h = (a + h) - a.
+struct NormalApply {
+    // w_c[k] at [k * 4 + c], [k * 4 + 3] = 0: four lanes a coefficient, so the sum vectorises.
+    alignas(16) std::array<float, 4 * kShCoefficients> whole{};
+    std::array<float, kShCoefficients> aHide{};      // a + h
+    glm::vec3 light{0.0f};                           // the NormalTransfer's
+    std::uint32_t lightEpoch = 0;
+    bool any = false;
+};
+NormalApply normalApply(const NormalTransfer& transfer, const glm::dvec3& normal);
+// The irradiance at `normal` (the one the transfer was made for) of the far field with the near
+// field applied, guarded for that normal, clamped at 0 (as the draw clamps).
+glm::vec3 applyNormalTransfer(const NormalApply& transfer, const ShRgb& far,
                               const glm::vec3& normal, const DirectionalLight& light);
 // Remakes S for the light direction.
 void updateLightTerm(NearFieldTransfer& transfer, const glm::dvec3& lightDirection);
@@ -417,7 +429,10 @@ class NearField {
     // slots keep the map in cache; the transfers follow in the order the draw first asked.
     static constexpr std::uint32_t kNothingNear = ~0u;
     mutable tsl::hopscotch_map<Key, std::uint32_t, KeyHash> normalCache_;
-    mutable std::vector<NormalTransfer> normalTransfers_;
+    mutable std::vector<NormalTransfer> normalTransfers_;  // read when the light moves
+    mutable std::vector<NormalApply> normalApplies_;       // read every frame
+    mutable std::vector<Key> batchKeys_;                   // the batch's, then a sequence's
+    mutable std::vector<std::uint32_t> batchIndex_;
     // The draw asks its batches (corners, road vertices) in nearly the same order every frame:
     // the last few batches' keys and indices are walked alongside, and the map is asked only
     // where the order changed (a random probe of the map misses the processor's caches).
