@@ -811,8 +811,9 @@ GroundTerm groundTerm(const glm::dvec3& p, const NearFieldScene& scene,
             if (ws <= 0.0) continue;
             const glm::dvec3 x = p + d * reach;
             Sample sample{d, x, ws, {}};
-            if (!scene.groundAt(x.x, x.z, sample.ground, &n)) continue;
-            sample.at.y = sample.ground.height_m;
+            GroundPoint plane;
+            plane.height_m = x.y, plane.normal = n;
+            if (!scene.groundAt(x.x, x.z, sample.ground, &plane)) continue;
             spread = std::max(spread, glm::length(sample.at - base));
             samples.push_back(sample);
         }
@@ -873,10 +874,15 @@ GroundTerm blendGroundTerms(const GroundTerm* const* terms, const double* weight
 }
 
 bool WorldNearFieldScene::groundAt(double x_m, double z_m, GroundPoint& out,
-                                   const glm::dvec3* normal) const {
+                                   const GroundPoint* plane) const {
     double road = 0.0;
-    out.height_m = world_.heightAndRoad(x_m, z_m, &road);
-    out.normal = normal ? *normal : world_.normal(x_m, z_m);
+    if (plane) {
+        out.height_m = plane->height_m, out.normal = plane->normal;
+        road = world_.roadWeight(x_m, z_m);
+    } else {
+        out.height_m = world_.heightAndRoad(x_m, z_m, &road);
+        out.normal = world_.normal(x_m, z_m);
+    }
     out.albedo = glm::dvec3(
         albedo_.at(x_m, z_m, out.height_m, road, out.normal, TerrainPatch::kFinestSpacing_m));
     return std::isfinite(out.height_m);

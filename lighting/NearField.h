@@ -320,11 +320,11 @@ class NearFieldScene {
         (void)point_m, (void)radius_m, (void)out;
     }
     // The ground at (x, z); false if the scene has none to offer (then no ground term). With
-    // `normal` given it is taken as the ground's normal there (the ground term's samples near a
-    // foot whose normal is known: cheaper than the terrain's own).
+    // `plane` given (the ground term's samples, on the tangent plane through a foot), the ground
+    // is taken to lie there, with the plane's normal, and only its albedo is looked up.
     virtual bool groundAt(double x_m, double z_m, GroundPoint& out,
-                          const glm::dvec3* normal = nullptr) const {
-        (void)x_m, (void)z_m, (void)out, (void)normal;
+                          const GroundPoint* plane = nullptr) const {
+        (void)x_m, (void)z_m, (void)out, (void)plane;
         return false;
     }
     // Whether terrain leaves the light (unit direction towards it) visible from `from`, in [0, 1].
@@ -357,7 +357,7 @@ class WorldNearFieldScene final : public NearFieldScene {
                      std::vector<HorizonWedge>& out) const override;
     // The terrain's height, normal and albedo as the patches draw them near the camera.
     bool groundAt(double x_m, double z_m, GroundPoint& out,
-                  const glm::dvec3* normal = nullptr) const override;
+                  const GroundPoint* plane = nullptr) const override;
     // Marched along the light out to kShadowReach_m, as far as the main view's shadows reach.
     double terrainLightVisibility(const glm::dvec3& from_m,
                                   const glm::dvec3& toLight) const override;

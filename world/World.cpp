@@ -62,20 +62,30 @@ const Vegetation& World::vegetation() const {
 
 // ---- [SECTION] Height with roads -------------------------------------------------------------
 
+namespace {
+// Flat on the carriageway, then a smooth (C1) blend back to the natural terrain across the
+// shoulder: cut and fill as a road builder would.
+double roadBlend(const RoadQuery& q) {
+    if (q.distance_m > q.halfWidth_m + World::kShoulder_m) return 0.0;
+    return 1.0 - smoothstep(q.halfWidth_m, q.halfWidth_m + World::kShoulder_m, q.distance_m);
+}
+}  // namespace
+
 double World::heightAndRoad(double x_m, double z_m, double* roadWeight) const {
     const double natural = heightfield_->height(x_m, z_m);
     double w = 0.0;
     double h = natural;
     if (auto q = roads_->nearest(x_m, z_m, kMaxRoadHalfWidth_m + kShoulder_m)) {
-        // Flat on the carriageway, then a smooth (C1) blend back to the natural terrain across
-        // the shoulder: cut and fill as a road builder would.
-        if (q->distance_m <= q->halfWidth_m + kShoulder_m) {
-            w = 1.0 - smoothstep(q->halfWidth_m, q->halfWidth_m + kShoulder_m, q->distance_m);
-            h = natural + w * (q->surfaceHeight_m - natural);
-        }
+        w = roadBlend(*q);
+        h = natural + w * (q->surfaceHeight_m - natural);
     }
     if (roadWeight) *roadWeight = w;
     return h;
+}
+
+double World::roadWeight(double x_m, double z_m) const {
+    const auto q = roads_->nearest(x_m, z_m, kMaxRoadHalfWidth_m + kShoulder_m);
+    return q ? roadBlend(*q) : 0.0;
 }
 
 double World::height(double x_m, double z_m) const {

@@ -47,6 +47,8 @@ class World {
 
     // Height with roads plus the road weight (1 on the road surface, 0 beyond the shoulder).
     double heightAndRoad(double x_m, double z_m, double* roadWeight) const;
+    // The road weight alone (no terrain height: cheap).
+    double roadWeight(double x_m, double z_m) const;
     // Material, moisture and albedo of a point whose height, road weight and normal are known
     // (lets grid samplers derive normals from their own height grid).
     GroundSample classify(double x_m, double z_m, double height_m, double roadWeight,

@@ -1,7 +1,8 @@
 // NearField_bench.cpp — cost of the near field on the highway drive's world, as the draw asks it:
 // building a terrain corner's transfer (a corner new to the cache: plants, horizon, ground) and
-// an object's (its own spheres left out, the ground from the lattice), and the lookup of cached
-// corners through their normals (every corner of the view, every frame).
+// an object's (its own spheres left out, the ground from the lattice), one ground term of that
+// lattice, and the lookup of cached corners through their normals (every corner of the view,
+// every frame).
 //   build/bin/ambience_bench --benchmark_filter=NearField --benchmark_repetitions=9
 //       --benchmark_report_aggregates_only=true   (one command line)
 // The frame's figure is ambience.nearField_ms in `ambience run`'s report; this splits it.
@@ -107,6 +108,26 @@ void BM_NearFieldObjectBuild(benchmark::State& state) {
         double(kObjects), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 BENCHMARK(BM_NearFieldObjectBuild)->Unit(benchmark::kMillisecond);
+
+// One ground term as the objects' lattice takes it (every plant near the lattice point shades
+// its ground, none stops its rays), at corners along the drive.
+void BM_NearFieldGroundTerm(benchmark::State& state) {
+    const Drive& d = drive();
+    const Corners c = corners(16, 2);
+    const NearFieldSettings settings;
+    const glm::dvec3 light = d.scene.mainLight(d.time_h).direction;
+    std::vector<std::vector<SphereOccluder>> near(c.points.size());
+    for (std::size_t i = 0; i < c.points.size(); ++i)
+        d.scene.occludersNear(c.points[i], settings.radius_m, settings.smallRadius_m, near[i]);
+    for (auto _ : state)
+        for (std::size_t i = 0; i < c.points.size(); ++i)
+            benchmark::DoNotOptimize(
+                groundTerm(c.points[i], d.scene, {}, near[i], settings.groundRadius_m, light));
+    state.counters["s_per_term"] = benchmark::Counter(
+        double(c.points.size()), benchmark::Counter::kIsIterationInvariantRate |
+                                     benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_NearFieldGroundTerm)->Unit(benchmark::kMillisecond);
 
 // A frame's corners, all cached (about as many as the highway's view asks).
 void BM_NearFieldCornerLookup(benchmark::State& state) {

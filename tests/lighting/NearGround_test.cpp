@@ -35,7 +35,7 @@ struct FlatGround final : NearFieldScene {
         return l;
     }
     double groundHeight(double, double) const override { return 0.0; }
-    bool groundAt(double x, double z, GroundPoint& out, const glm::dvec3* = nullptr) const override {
+    bool groundAt(double x, double z, GroundPoint& out, const GroundPoint* = nullptr) const override {
         out.height_m = 0.0;
         out.normal = {0.0, 1.0, 0.0};
         out.albedo = albedo(x, z);

@@ -56,6 +56,29 @@ TEST(World, HeightIsContinuousAcrossTheShoulder) {
     }
 }
 
+TEST(World, RoadWeightAloneIsTheHeightQuerysWeight) {
+    // Across a road from beyond one shoulder to beyond the other: 1 on the carriageway, 0 past
+    // the shoulder, and the cheap query equal to the one that also gives the height.
+    const World& w = defaultWorld();
+    const Road& road = w.roads().roads().front();
+    const std::size_t i = road.centreline.size() / 3;
+    const glm::dvec3 p = road.centreline[i];
+    const glm::dvec3 t = road.tangentAt(road.vertexDistance_m(i));
+    const glm::dvec3 side = glm::normalize(glm::dvec3(-t.z, 0.0, t.x));
+    const double reach = road.halfWidth_m + World::kShoulder_m + 4.0;
+    for (int s = -100; s <= 100; ++s) {
+        const glm::dvec3 q = p + side * (reach * s / 100.0);
+        double weight = -1.0;
+        w.heightAndRoad(q.x, q.z, &weight);
+        EXPECT_EQ(w.roadWeight(q.x, q.z), weight) << "at " << reach * s / 100.0 << " m";
+    }
+    EXPECT_EQ(w.roadWeight(p.x, p.z), 1.0);
+    const glm::dvec3 beyond = p + side * reach;
+    if (!w.roads().nearest(beyond.x, beyond.z, road.halfWidth_m + World::kShoulder_m + 1.0)) {
+        EXPECT_EQ(w.roadWeight(beyond.x, beyond.z), 0.0);
+    }
+}
+
 TEST(World, NormalMatchesDifferenceQuotientOfHeight) {
     const World& w = defaultWorld();
     for (int n = 0; n < 200; ++n) {
