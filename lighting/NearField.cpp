@@ -109,20 +109,33 @@ std::vector<OccluderCap> occluderCaps(const glm::dvec3& point_m,
     // Largest first; each keeps what earlier ones leave of it.
     std::sort(seen.begin(), seen.end(),
               [](const Seen& a, const Seen& b) { return a.cosHalf < b.cosHalf; });
-    for (Seen& e : seen) e.halfAngle = std::acos(e.cosHalf), e.sinHalf = std::sin(e.halfAngle);
+    const std::size_t n = seen.size();
+    // Which earlier caps touch a cap is asked of every pair: in float, one array a quantity, so
+    // the test vectorises (a pair at the edge overlaps by nearly nothing either way).
+    std::vector<float> dx(n), dy(n), dz(n), cosHalf(n), sinHalf(n), halfAngle(n);
+    std::vector<unsigned char> touches(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        Seen& e = seen[i];
+        e.halfAngle = std::acos(e.cosHalf), e.sinHalf = std::sin(e.halfAngle);
+        dx[i] = float(e.direction.x), dy[i] = float(e.direction.y), dz[i] = float(e.direction.z);
+        cosHalf[i] = float(e.cosHalf), sinHalf[i] = float(e.sinHalf), halfAngle[i] = float(e.halfAngle);
+    }
     std::vector<OccluderCap> caps;
-    caps.reserve(seen.size());
-    for (std::size_t i = 0; i < seen.size(); ++i) {
+    caps.reserve(n);
+    for (std::size_t i = 0; i < n; ++i) {
         Seen& si = seen[i];
         const double omega = capSolidAngle(si.cosHalf);
         double w = si.weight;  // its fade (see Radii)
+        // Apart when the separation is at least a_i + a_j: cos d <= cos(a_i + a_j).
+        const float xi = dx[i], yi = dy[i], zi = dz[i], ci = cosHalf[i], s_i = sinHalf[i],
+                    ai = halfAngle[i], pi = float(kPi);
+        for (std::size_t j = 0; j < i; ++j)
+            touches[j] = (xi * dx[j] + yi * dy[j] + zi * dz[j] > ci * cosHalf[j] - s_i * sinHalf[j]) |
+                         (ai + halfAngle[j] >= pi);
         for (std::size_t j = 0; j < i && w > 0.0; ++j) {
+            if (!touches[j]) continue;
             const Seen& sj = seen[j];
             const double cosD = std::clamp(glm::dot(si.direction, sj.direction), -1.0, 1.0);
-            // Apart when the separation is at least a_i + a_j: cos d <= cos(a_i + a_j).
-            if (si.halfAngle + sj.halfAngle < kPi &&
-                cosD <= si.cosHalf * sj.cosHalf - si.sinHalf * sj.sinHalf)
-                continue;
             w *= std::max(0.0, 1.0 - sj.weight * capOverlap(si.halfAngle, sj.halfAngle,
                                                              std::acos(cosD)) / omega);
         }

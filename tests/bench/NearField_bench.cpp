@@ -1,8 +1,8 @@
 // NearField_bench.cpp — cost of the near field on the highway drive's world, as the draw asks it:
 // building a terrain corner's transfer (a corner new to the cache: plants, horizon, ground) and
 // an object's (its own spheres left out, the ground from the lattice), one ground term of that
-// lattice, and the lookup of cached corners through their normals (every corner of the view,
-// every frame).
+// lattice, and the lookups of cached corners through their normals and of cached objects (every
+// frame).
 //   build/bin/ambience_bench --benchmark_filter=NearField --benchmark_repetitions=9
 //       --benchmark_report_aggregates_only=true   (one command line)
 // The frame's figure is ambience.nearField_ms in `ambience run`'s report; this splits it.
@@ -145,6 +145,30 @@ void BM_NearFieldCornerLookup(benchmark::State& state) {
     state.counters["corners"] = double(c.points.size());
 }
 BENCHMARK(BM_NearFieldCornerLookup)->Unit(benchmark::kMicrosecond);
+
+// A frame's objects near the camera, all cached: plants and the car take the far field with the
+// near field applied every frame (about 600 within objectRange_m on the highway).
+void BM_NearFieldObjectLookup(benchmark::State& state) {
+    const Drive& d = drive();
+    const glm::dvec3 cam = d.replay.sampleAt(0.5 * d.replay.duration_s()).position_m;
+    std::vector<double> x, z;
+    for (int i = 0; i < 24; ++i)
+        for (int k = 0; k < 25; ++k) x.push_back(cam.x - 60.0 + 5.0 * i), z.push_back(cam.z - 60.0 + 5.0 * k);
+    NearField near(d.scene, NearFieldSettings{});
+    near.setTimeOfDay(d.time_h);
+    ShRgb sky{};
+    sky.c[0] = glm::vec3(3.0f, 3.5f, 4.5f);
+    sky.c[2] = glm::vec3(1.0f, 1.2f, 1.6f);
+    for (std::size_t i = 0; i < x.size(); ++i)
+        near.applyAbove(sky, x[i], z[i], kShadingHeight_m, NearFieldMethod::kSelfRadius_m);
+    for (auto _ : state)
+        for (std::size_t i = 0; i < x.size(); ++i)
+            benchmark::DoNotOptimize(
+                near.applyAbove(sky, x[i], z[i], kShadingHeight_m, NearFieldMethod::kSelfRadius_m));
+    state.SetItemsProcessed(std::int64_t(state.iterations()) * std::int64_t(x.size()));
+    state.counters["objects"] = double(x.size());
+}
+BENCHMARK(BM_NearFieldObjectLookup)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace amb
