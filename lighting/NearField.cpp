@@ -45,6 +45,13 @@ constexpr double kMinSinHalfAngle = 0.015;
 // Terrain bands thinner than this (about a degree) are left out.
 constexpr double kMinBand_rad = 0.02;
 
+// Four floats as one value (GCC's and Clang's vector extension): the transfers' sums run four
+// lanes at a time whatever the optimiser does; the channels take lanes 0-2.
+using Lanes = float __attribute__((vector_size(16)));
+Lanes lanesOf(const glm::vec3& v) {
+    return Lanes{v.x, v.y, v.z, 0.0f};
+}
+
 double capSolidAngle(double cosHalfAngle) {
     return 2.0 * kPi * (1.0 - cosHalfAngle);
 }
@@ -365,7 +372,7 @@ NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps, const 
     for (int k = 0; k < K; ++k)
         for (int ch = 0; ch < 3; ++ch)
             for (int j = 0; j < K; ++j)
-                t.columns[std::size_t(k * 3 * K + ch * K + j)] =
+                t.columns[std::size_t((k * K + j) * 4 + ch)] =
                     show[ch][j * K + k] + t.hide[j * K + k];
     t.any = !caps.empty() || t.ground;
     return t;
@@ -400,7 +407,7 @@ void updateLightTerm(NearFieldTransfer& t, const glm::dvec3& lightDirection) {
         for (int j = 0; j < K; ++j) {
             double v = 0.0;
             for (int m = 0; m < K; ++m)
-                v += (t.columns[std::size_t(m * 3 * K + ch * K + j)] - t.hide[j * K + m]) * y[m];
+                v += (t.columns[std::size_t((m * K + j) * 4 + ch)] - t.hide[j * K + m]) * y[m];
             t.s[ch][j] = float(v);
         }
     if (t.ground) {
@@ -426,7 +433,7 @@ NormalTransfer normalTransfer(const NearFieldTransfer* t, const glm::dvec3& norm
         for (int ch = 0; ch < 3; ++ch) {
             double v = 0.0;
             for (int j = 0; j < K; ++j)
-                v += a[j] * (double(t->columns[std::size_t(k * 3 * K + ch * K + j)]) -
+                v += a[j] * (double(t->columns[std::size_t((k * K + j) * 4 + ch)]) -
                              double(t->hide[j * K + k]));
             n.show[std::size_t(ch * K + k)] = float(v + hg);
         }
@@ -520,7 +527,6 @@ glm::vec3 applyNormalTransfer(const NormalApply& t, const ShRgb& far, const glm:
     // The far field read four lanes at a time from each coefficient (the fourth lane is the next
     // coefficient's red, or 0 past the last, and meets a 0 in `whole`), in GCC's and Clang's
     // vector types, so the sum is nine four-lane multiply-adds whatever the optimiser does.
-    using Lanes = float __attribute__((vector_size(16)));
     float L[3 * K + 1];
     std::memcpy(L, far.c.data(), 3 * K * sizeof(float));
     L[3 * K] = 0.0f;
@@ -651,30 +657,30 @@ ShRgb applyTransfer(const NearFieldTransfer& t, const ShRgb& far, const Directio
         t.guardFar = far;
         t.guardValid = true;
     }
-    // out[ch][j] = far + S E + sum_k T_c[j][k] far[k], column by column (contiguous, so the
-    // inner loops vectorise).
-    float out[3][K];
-    for (int ch = 0; ch < 3; ++ch) {
-        const float e = float(light.irradiance[ch]);
-        for (int j = 0; j < K; ++j) out[ch][j] = far.c[j][ch] + t.s[ch][j] * e;
+    // out[j] = far[j] + S[j] E + sum_k T[j][k] far[k], the three channels in four lanes: 81
+    // four-lane multiply-adds.
+    const Lanes e = lanesOf(glm::vec3(light.irradiance));
+    Lanes out[K], f[K];
+    for (int j = 0; j < K; ++j) {
+        f[j] = lanesOf(far.c[j]);
+        out[j] = f[j] + lanesOf(glm::vec3(t.s[0][j], t.s[1][j], t.s[2][j])) * e;
     }
-    for (int k = 0; k < K; ++k) {
-        const float* col = &t.columns[std::size_t(k * 3 * K)];
-        for (int ch = 0; ch < 3; ++ch) {
-            const float f = far.c[k][ch];
-            for (int j = 0; j < K; ++j) out[ch][j] += col[ch * K + j] * f;
+    for (int k = 0; k < K; ++k)
+        for (int j = 0; j < K; ++j) {
+            Lanes col;
+            std::memcpy(&col, &t.columns[std::size_t((k * K + j) * 4)], sizeof col);
+            out[j] += col * f[k];
         }
-    }
+    ShRgb r;
+    for (int j = 0; j < K; ++j) r.c[j] = glm::vec3(out[j][0], out[j][1], out[j][2]);
     // A guard that scaled: put back (1 - scale) of what is hidden.
     for (int ch = 0; ch < 3; ++ch) {
         const float unhide = float(1.0 - t.guardScale[ch]);
         if (unhide <= 0.0f) continue;
         for (int j = 0; j < K; ++j)
             for (int k = 0; k < K; ++k)
-                out[ch][j] -= unhide * (t.hide[j * K + k] - t.groundHide[j * K + k]) * far.c[k][ch];
+                r.c[j][ch] -= unhide * (t.hide[j * K + k] - t.groundHide[j * K + k]) * far.c[k][ch];
     }
-    ShRgb r;
-    for (int j = 0; j < K; ++j) r.c[j] = glm::vec3(out[0][j], out[1][j], out[2][j]);
     return r;
 }
 
@@ -927,6 +933,44 @@ namespace {
 const double kLightMoved = std::cos(0.5 * kPi / 180.0);
 }  // namespace
 
+namespace {
+
+// The memory of one entry of each cache, the map's slot included.
+constexpr std::size_t kMapSlot = 2 * sizeof(void*);
+constexpr std::size_t kGroundEntryBytes = sizeof(std::array<float, 4>) + sizeof(GroundTerm) +
+                                          sizeof(std::uint64_t) + kMapSlot;
+constexpr std::size_t kNormalEntryBytes = sizeof(std::array<float, 4>) + sizeof(std::uint32_t) +
+                                          kMapSlot + sizeof(NormalTransfer) +
+                                          sizeof(NormalApply) + sizeof(std::uint64_t);
+std::size_t objectEntryBytes(const NearFieldTransfer* t) {
+    return sizeof(std::array<float, 4>) + sizeof(void*) + sizeof(std::uint64_t) + kMapSlot +
+           (t ? sizeof(NearFieldTransfer) : 0);
+}
+
+// The use below which the older half of `stamps` lies: entries used before it are dropped. If
+// no use is older than the median (one batch asked them all), all of them.
+std::uint64_t olderHalf(std::vector<std::uint64_t> stamps) {
+    if (stamps.empty()) return 0;
+    const auto mid = stamps.begin() + std::ptrdiff_t(stamps.size() / 2);
+    std::nth_element(stamps.begin(), mid, stamps.end());
+    const std::uint64_t cut = *mid;
+    const bool older = std::any_of(stamps.begin(), stamps.end(),
+                                   [cut](std::uint64_t u) { return u < cut; });
+    return older ? cut : std::numeric_limits<std::uint64_t>::max();
+}
+
+// Erases the entries of `map` last used before olderHalf of their uses.
+template <class Map, class Used>
+void dropOlderHalf(Map& map, Used used) {
+    std::vector<std::uint64_t> stamps;
+    stamps.reserve(map.size());
+    for (auto it = map.begin(); it != map.end(); ++it) stamps.push_back(used(it->second));
+    const std::uint64_t cut = olderHalf(std::move(stamps));
+    for (auto it = map.begin(); it != map.end();) it = used(it->second) < cut ? map.erase(it) : std::next(it);
+}
+
+}  // namespace
+
 std::size_t NearField::KeyHash::operator()(const Key& k) const {
     std::uint32_t b[4];
     std::memcpy(b, k.data(), sizeof b);
@@ -997,8 +1041,8 @@ GroundTerm NearField::objectGround(const glm::dvec3& p) const {
     double wx[3], wz[3];
     const double cell = settings_.groundCell_m;
     const double i0 = spline(p.x / cell, wx), k0 = spline(p.z / cell, wz);
-    if (groundCache_.size() + 9 > std::size_t(settings_.cacheEntries))
-        groundCache_.clear(), groundBytes_ = 0;
+    if (groundCache_.size() + 9 > std::size_t(settings_.cacheEntries)) evictGround();
+    const std::uint64_t now = ++uses_;
     Key keys[9];
     double weights[9];
     for (int a = 0; a < 3; ++a)
@@ -1007,18 +1051,23 @@ GroundTerm NearField::objectGround(const glm::dvec3& p) const {
             const Key key{float(x), -2e30f, float(z), float(lift)};
             keys[a * 3 + b] = key;
             weights[a * 3 + b] = wx[a] * wz[b];
-            if (groundCache_.find(key) != groundCache_.end()) continue;
+            if (auto it = groundCache_.find(key); it != groundCache_.end()) {
+                it.value().used = now;
+                continue;
+            }
             const glm::dvec3 q(x, scene_.groundHeight(x, z) + lift, z);
             const std::vector<SphereOccluder> near = occluders(q);
             // No plant stops the rays from a lattice point: one standing at it would take its
             // ground out of the blend for an object that does not see that plant.
             groundCache_.emplace(
-                key, groundTerm(q, scene_, {}, near, settings_.groundRadius_m, light_.direction));
-            groundBytes_ += sizeof(Key) + sizeof(GroundTerm) + 2 * sizeof(void*);
+                key, CachedGround{groundTerm(q, scene_, {}, near, settings_.groundRadius_m,
+                                             light_.direction),
+                                  now});
+            groundBytes_ += kGroundEntryBytes;
         }
     // Looked up only once all nine are in: an insertion may move the map's entries.
     const GroundTerm* terms[9];
-    for (int i = 0; i < 9; ++i) terms[i] = &groundCache_.find(keys[i])->second;
+    for (int i = 0; i < 9; ++i) terms[i] = &groundCache_.find(keys[i])->second.term;
     return blendGroundTerms(terms, weights, 9);
 }
 
@@ -1061,16 +1110,16 @@ void NearField::applyMany(std::size_t count, ShRgb* inOut, const glm::dvec3* poi
 }
 
 void NearField::applyAboveMany(std::size_t count, ShRgb* inOut, const double* x_m,
-                               const double* z_m, double height_m) const {
+                               const double* z_m, double height_m, double selfRadius_m) const {
     if (!settings_.enabled) return;
     const auto t0 = std::chrono::steady_clock::now();
     std::lock_guard<std::mutex> lock(mutex_);
     for (std::size_t i = 0; i < count; ++i) {
         const double x = x_m[i], z = z_m[i];
-        const Key key{float(x), -1e30f, float(z), 0.0f};
+        const Key key{float(x), -1e30f, float(z), float(selfRadius_m)};
         inOut[i] = applyLocked(
             inOut[i], key, [&] { return glm::dvec3(x, scene_.groundHeight(x, z) + height_m, z); },
-            0.0);
+            selfRadius_m);
     }
     points_ += count;
     seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -1080,20 +1129,15 @@ std::uint32_t NearField::normalIndex(const Key& key, const glm::dvec3& p,
                                      const glm::vec3& n) const {
     auto it = normalCache_.find(key);
     if (it != normalCache_.end()) return it->second;
-    if (normalCache_.size() >= std::size_t(settings_.cacheEntries)) {
-        normalCache_.clear(), normalTransfers_.clear(), normalApplies_.clear(), normalBytes_ = 0;
-        for (Sequence& q : sequences_) q.keys.clear(), q.index.clear();
-        ++clears_;
-    }
+    if (normalCache_.size() >= std::size_t(settings_.cacheEntries)) evictNormals();
     const auto b0 = std::chrono::steady_clock::now();
-    std::uint32_t index = kNothingNear;
-    if (const std::unique_ptr<NearFieldTransfer> full = build(p, 0.0)) {
-        index = std::uint32_t(normalTransfers_.size());
-        normalTransfers_.push_back(normalTransfer(full.get(), glm::dvec3(n)));
-        normalApplies_.push_back(normalApply(normalTransfers_.back(), glm::dvec3(n)));
-        normalBytes_ += sizeof(NormalTransfer) + sizeof(NormalApply);
-    }
-    normalBytes_ += sizeof(Key) + sizeof(std::uint32_t) + sizeof(void*);
+    // Nothing near: the entry has no transfer (any = false) and answers the far field.
+    const std::unique_ptr<NearFieldTransfer> full = build(p, 0.0);
+    const std::uint32_t index = std::uint32_t(normalTransfers_.size());
+    normalTransfers_.push_back(normalTransfer(full.get(), glm::dvec3(n)));
+    normalApplies_.push_back(normalApply(normalTransfers_.back(), glm::dvec3(n)));
+    normalUsed_.push_back(uses_);
+    normalBytes_ += kNormalEntryBytes;
     normalCache_.emplace(key, index);
     ++builds_;
     buildSeconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - b0).count();
@@ -1106,6 +1150,7 @@ void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::d
     static const NormalApply none;
     std::lock_guard<std::mutex> lock(mutex_);
     const std::uint64_t clears = clears_;
+    ++uses_;
     const auto keyOf = [&](std::size_t i) {
         const glm::dvec3& p = points_m[i];
         return Key{float(p.x), float(p.y), float(p.z), -1.0f};
@@ -1137,7 +1182,7 @@ void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::d
         if (settings_.enabled && std::isfinite(p.x + p.y + p.z) &&
             std::isfinite(n.x + n.y + n.z)) {
             const Key key = keyOf(i);
-            std::uint32_t index = kNothingNear;
+            std::uint32_t index = 0;
             bool found = false;
             for (std::size_t d = 0; d < kLookAhead && cursor + d < seq->keys.size(); ++d) {
                 if (seq->keys[cursor + d] == key) {
@@ -1149,15 +1194,14 @@ void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::d
             }
             if (!found) index = normalIndex(key, p, n);
             keys.push_back(key), indices.push_back(index);
-            if (index != kNothingNear) {
-                NormalApply& na = normalApplies_[index];
-                if (na.lightEpoch != lightEpoch_) {
-                    NormalTransfer& nt = normalTransfers_[index];
-                    updateLightTerm(nt, light_.direction, lightEpoch_);
-                    na.light = nt.light, na.lightEpoch = nt.lightEpoch;
-                }
-                t = &na;
+            NormalApply& na = normalApplies_[index];
+            if (na.any && na.lightEpoch != lightEpoch_) {
+                NormalTransfer& nt = normalTransfers_[index];
+                updateLightTerm(nt, light_.direction, lightEpoch_);
+                na.light = nt.light, na.lightEpoch = nt.lightEpoch;
             }
+            normalUsed_[index] = uses_;
+            t = &na;
         }
         out[i] = applyNormalTransfer(*t, far[i], n, light_);
     }
@@ -1175,23 +1219,24 @@ ShRgb NearField::applyLocked(const ShRgb& far, const Key& key,
                              const std::function<glm::dvec3()>& point, double selfRadius_m) const {
     if (!std::isfinite(double(key[0]) + double(key[2]))) return far;
     const NearFieldTransfer* t = nullptr;
+    const std::uint64_t now = ++uses_;
     auto it = cache_.find(key);
     if (it == cache_.end()) {
         const glm::dvec3 p = point();
         if (!std::isfinite(p.x + p.y + p.z)) return far;
-        if (cache_.size() >= std::size_t(settings_.cacheEntries)) cache_.clear(), bytes_ = 0;
-        bytes_ += sizeof(Key) + sizeof(std::unique_ptr<NearFieldTransfer>) +
-                  2 * sizeof(void*);  // the map's slot
+        if (cache_.size() >= std::size_t(settings_.cacheEntries)) evictObjects();
         const auto b0 = std::chrono::steady_clock::now();
-        t = cache_.emplace(key, build(p, selfRadius_m)).first->second.get();
-        if (t) bytes_ += sizeof(NearFieldTransfer);
+        std::unique_ptr<NearFieldTransfer> built = build(p, selfRadius_m);
+        bytes_ += objectEntryBytes(built.get());
+        t = cache_.emplace(key, Cached{std::move(built), now}).first->second.transfer.get();
         ++builds_;
         buildSeconds_ +=
             std::chrono::duration<double>(std::chrono::steady_clock::now() - b0).count();
     } else {
-        t = it->second.get();
+        it.value().used = now;
+        t = it->second.transfer.get();
         if (t && glm::dot(t->lightDirection, light_.direction) < kLightMoved)
-            updateLightTerm(*it.value(), light_.direction);
+            updateLightTerm(*it.value().transfer, light_.direction);
     }
     if (!t) return far;
     const ShRgb near = applyTransfer(*t, far, light_);
@@ -1199,6 +1244,47 @@ ShRgb NearField::applyLocked(const ShRgb& far, const Key& key,
     for (const auto& c : near.c)
         if (!std::isfinite(c.x + c.y + c.z)) return far;
     return near;
+}
+
+void NearField::evictObjects() const {
+    dropOlderHalf(cache_, [](const Cached& c) { return c.used; });
+    bytes_ = 0;
+    for (auto it = cache_.begin(); it != cache_.end(); ++it)
+        bytes_ += objectEntryBytes(it->second.transfer.get());
+}
+
+void NearField::evictGround() const {
+    dropOlderHalf(groundCache_, [](const CachedGround& c) { return c.used; });
+    groundBytes_ = groundCache_.size() * kGroundEntryBytes;
+}
+
+void NearField::evictNormals() const {
+    // The kept entries move down in their vectors; the map follows.
+    const std::uint64_t cut = olderHalf(normalUsed_);
+    constexpr std::uint32_t kGone = ~0u;
+    std::vector<std::uint32_t> moved(normalUsed_.size(), kGone);
+    std::uint32_t kept = 0;
+    for (std::size_t i = 0; i < normalUsed_.size(); ++i) {
+        if (normalUsed_[i] < cut) continue;
+        normalTransfers_[kept] = normalTransfers_[i];
+        normalApplies_[kept] = normalApplies_[i];
+        normalUsed_[kept] = normalUsed_[i];
+        moved[i] = kept++;
+    }
+    normalTransfers_.resize(kept), normalApplies_.resize(kept), normalUsed_.resize(kept);
+    for (auto it = normalCache_.begin(); it != normalCache_.end();) {
+        const std::uint32_t to = moved[it->second];
+        if (to == kGone) {
+            it = normalCache_.erase(it);
+        } else {
+            it.value() = to;
+            ++it;
+        }
+    }
+    normalBytes_ = normalCache_.size() * kNormalEntryBytes;
+    // The sequences' indices are stale (see irradianceMany).
+    for (Sequence& q : sequences_) q.keys.clear(), q.index.clear();
+    ++clears_;
 }
 
 std::size_t NearField::cachedPoints() const {
@@ -1265,6 +1351,21 @@ ShRgb NearFieldMethod::shAt(double x_m, double z_m) const {
     if (std::hypot(x_m - camera_m_.x, z_m - camera_m_.z) > near_->settings().objectRange_m)
         return far;
     return near_->applyAbove(far, x_m, z_m, kShadingHeight_m, kSelfRadius_m);
+}
+
+void NearFieldMethod::shAt(std::size_t count, const double* x_m, const double* z_m,
+                           ShRgb* out) const {
+    far_->shAt(count, x_m, z_m, out);
+    nearIndex_.clear(), nearX_.clear(), nearZ_.clear(), nearSh_.clear();
+    for (std::size_t i = 0; i < count; ++i) {
+        if (std::hypot(x_m[i] - camera_m_.x, z_m[i] - camera_m_.z) > near_->settings().objectRange_m)
+            continue;
+        nearIndex_.push_back(i), nearX_.push_back(x_m[i]), nearZ_.push_back(z_m[i]);
+        nearSh_.push_back(out[i]);
+    }
+    near_->applyAboveMany(nearSh_.size(), nearSh_.data(), nearX_.data(), nearZ_.data(),
+                          kShadingHeight_m, kSelfRadius_m);
+    for (std::size_t j = 0; j < nearIndex_.size(); ++j) out[nearIndex_[j]] = nearSh_[j];
 }
 
 ShRgb NearFieldMethod::cornerShAt(double x_m, double z_m) const {

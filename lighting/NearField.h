@@ -144,9 +144,10 @@ struct NearFieldSettings {
     bool ground = true;             // the ground below the point (see Ground)
     double groundRadius_m = 16.0;   // how far from the point's foot the ground is its own
     double groundCell_m = 6.0;      // the lattice whose ground terms objects blend (see Ground)
-    // Points the draw asks for (terrain corners, objects) are cached with their transfer; the
-    // cache is emptied when it holds more than this.
-    int cacheEntries = 16384;  // about 2.1 kB each (objects), 0.25 kB (corners)
+    // Points the draw asks for (terrain corners, objects) are cached with their transfer; when a
+    // cache holds this many, the half of it used least recently is dropped (the view's points,
+    // asked every frame, stay).
+    int cacheEntries = 16384;  // about 2.1 kB each (objects), 0.45 kB (corners)
     // Objects (shAt: plants, the car) farther than this from the camera take the far field
     // alone: a few pixels tall, they show no near field, and they are most of the draw's
     // lookups (4 600 of 7 500 a frame on the highway). Terrain corners and roads always take it.
@@ -232,9 +233,9 @@ std::vector<OccluderCap> nearOccluders(const glm::dvec3& point_m,
 // for every channel) and what they show.
 struct NearFieldTransfer {
     std::array<float, kShCoefficients * kShCoefficients> hide{};  // row-major
-    // T_c = hide + what the caps show, by column for the apply: columns[(k * 3 + ch) * 9 + j]
-    // = T_c[j][k].
-    std::array<float, 3 * kShCoefficients * kShCoefficients> columns{};
+    // T_c = hide + what the caps show, by column for the apply, the channels in four lanes:
+    // columns[(k * 9 + j) * 4 + ch] = T_c[j][k], columns[(k * 9 + j) * 4 + 3] = 0.
+    alignas(16) std::array<float, 4 * kShCoefficients * kShCoefficients> columns{};
     std::array<std::array<float, kShCoefficients>, 3> s{};  // S_c for lightDirection
     glm::dvec3 lightDirection{0.0};
     // The ground's light term (see Ground): g_c, lit_c, b and the ground's normal.
@@ -386,7 +387,7 @@ class NearField {
     // The same for many points at once (corners: no self radius), in place.
     void applyMany(std::size_t count, ShRgb* inOut, const glm::dvec3* points_m) const;
     void applyAboveMany(std::size_t count, ShRgb* inOut, const double* x_m, const double* z_m,
-                        double height_m) const;
+                        double height_m, double selfRadius_m = 0.0) const;
     // The irradiance at fixed points for their normals (corners, road vertices: a point always
     // comes with the same normal), clamped at 0, from the far field there (see Through one
     // normal); cached by the point.
@@ -423,14 +424,28 @@ class NearField {
         std::size_t operator()(const Key& k) const;
     };
     mutable std::mutex mutex_;
-    mutable tsl::hopscotch_map<Key, std::unique_ptr<NearFieldTransfer>, KeyHash> cache_;
-    mutable tsl::hopscotch_map<Key, GroundTerm, KeyHash> groundCache_;  // the objects' lattice
-    // Through one normal: the point's index in normalTransfers_ (kNothingNear: none). Small
-    // slots keep the map in cache; the transfers follow in the order the draw first asked.
-    static constexpr std::uint32_t kNothingNear = ~0u;
+    // Every entry carries the use clock's reading when it was last asked (see cacheEntries).
+    mutable std::uint64_t uses_ = 0;
+    struct Cached {
+        std::unique_ptr<NearFieldTransfer> transfer;  // null: nothing near
+        std::uint64_t used = 0;
+    };
+    struct CachedGround {
+        GroundTerm term;
+        std::uint64_t used = 0;
+    };
+    mutable tsl::hopscotch_map<Key, Cached, KeyHash> cache_;
+    mutable tsl::hopscotch_map<Key, CachedGround, KeyHash> groundCache_;  // the objects' lattice
+    // Through one normal: the point's index in the vectors below. Small slots keep the map in
+    // cache; the transfers follow in the order the draw first asked.
     mutable tsl::hopscotch_map<Key, std::uint32_t, KeyHash> normalCache_;
     mutable std::vector<NormalTransfer> normalTransfers_;  // read when the light moves
     mutable std::vector<NormalApply> normalApplies_;       // read every frame
+    mutable std::vector<std::uint64_t> normalUsed_;
+    // Each drops the half of its cache used least recently (all of it if no use is older).
+    void evictObjects() const;
+    void evictGround() const;
+    void evictNormals() const;
     mutable std::vector<Key> batchKeys_;                   // the batch's, then a sequence's
     mutable std::vector<std::uint32_t> batchIndex_;
     // The draw asks its batches (corners, road vertices) in nearly the same order every frame:
@@ -470,6 +485,8 @@ class NearFieldMethod final : public AmbienceMethod {
     void captureStage() override { far_->captureStage(); }
     void storeStage() override { far_->storeStage(); }
     ShRgb shAt(double x_m, double z_m) const override;
+    // A frame's objects at once: one lock and one timing for the lot.
+    void shAt(std::size_t count, const double* x_m, const double* z_m, ShRgb* out) const override;
     ShRgb cornerShAt(double x_m, double z_m) const override;
     void cornerShAt(std::size_t count, const double* x_m, const double* z_m,
                     ShRgb* out) const override;
@@ -498,6 +515,10 @@ class NearFieldMethod final : public AmbienceMethod {
     std::unique_ptr<NearFieldScene> scene_;
     std::unique_ptr<NearField> near_;
     glm::dvec3 camera_m_{0.0};  // of the latest predictStage
+    // Scratch of the batch shAt: the objects within objectRange_m and their SH.
+    mutable std::vector<std::size_t> nearIndex_;
+    mutable std::vector<double> nearX_, nearZ_;
+    mutable std::vector<ShRgb> nearSh_;
 };
 
 }  // namespace amb

@@ -43,6 +43,12 @@ class AmbientSource {
     // Appends the set for an object at `position_m` to `sets` if needed; returns its index.
     virtual std::uint32_t objectSet(const glm::dvec3& position_m,
                                     std::vector<AmbientSet>& sets) const = 0;
+    // The same for `count` objects at once (a frame's plants): index[i] for position i. One by
+    // one by default.
+    virtual void objectSets(std::size_t count, const glm::dvec3* positions_m,
+                            std::vector<AmbientSet>& sets, std::uint32_t* index) const {
+        for (std::size_t i = 0; i < count; ++i) index[i] = objectSet(positions_m[i], sets);
+    }
 };
 
 struct RenderStats {

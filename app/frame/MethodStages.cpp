@@ -89,6 +89,22 @@ std::uint32_t MethodAmbient::objectSet(const glm::dvec3& position_m,
     return std::uint32_t(sets.size() - 1);
 }
 
+void MethodAmbient::objectSets(std::size_t count, const glm::dvec3* positions_m,
+                               std::vector<AmbientSet>& sets, std::uint32_t* index) const {
+    const auto t0 = Clock::now();
+    batchX_.resize(count), batchZ_.resize(count), batchSh_.resize(count);
+    for (std::size_t i = 0; i < count; ++i) batchX_[i] = positions_m[i].x, batchZ_[i] = positions_m[i].z;
+    method_.shAt(count, batchX_.data(), batchZ_.data(), batchSh_.data());
+    for (std::size_t i = 0; i < count; ++i) {
+        const ShIrradianceMatrices m = shIrradianceMatrices(batchSh_[i]);
+        sets.push_back(AmbientSet{m.r, m.g, m.b});
+        index[i] = std::uint32_t(sets.size() - 1);
+        note(positions_m[i]);
+    }
+    lookups_ += count;
+    lookup_ms_ += elapsed_ms(t0);
+}
+
 // ---- FixedMethod -----------------------------------------------------------------------------
 
 void FixedMethod::predictStage(const glm::dvec3&, const glm::dvec3&, double timeOfDay_h, double) {

@@ -41,6 +41,9 @@ class MethodAmbient final : public AmbientSource {
                                const glm::dvec3* normals, glm::vec3* out) const override;
     std::uint32_t objectSet(const glm::dvec3& position_m,
                             std::vector<AmbientSet>& sets) const override;
+    // The batch through the method's batch shAt (one timing, one lock of the near field).
+    void objectSets(std::size_t count, const glm::dvec3* positions_m,
+                    std::vector<AmbientSet>& sets, std::uint32_t* index) const override;
     // Lookups and CPU time spent answering them since the last reset (they run inside the draw
     // stage, where the scene asks for them), and where they were.
     std::size_t lookups() const { return lookups_; }
@@ -56,6 +59,8 @@ class MethodAmbient final : public AmbientSource {
     mutable double lookup_ms_ = 0.0;
     mutable std::vector<double> x_, z_;
     mutable std::vector<glm::dvec3> batchAt_;  // scratch of the batch: the shading points
+    mutable std::vector<double> batchX_, batchZ_;  // and the objects' ground points
+    mutable std::vector<ShRgb> batchSh_;
 };
 
 // The SH of the fixed ambients (AmbientMode): the same at every point, from the sky model.

@@ -388,7 +388,8 @@ void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewP
                 glm::dvec3 rel = p.position_m - centre_m;
                 if (!capture) rel.y = drawnBase_m(terrainSurface_, p) - centre_m.y;
                 inst.positionScale = glm::vec4(float(rel.x), float(rel.y), float(rel.z), p.scale);
-                std::uint32_t set;
+                const std::size_t batch = base + std::size_t(lod * kPlantKinds + kind);
+                std::uint32_t set = 0;
                 if (lod == 2) {
                     if (tileSet < 0) {
                         const double h = 0.5 * Vegetation::kTile_m;
@@ -396,14 +397,24 @@ void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewP
                     }
                     set = std::uint32_t(tileSet);
                 } else {
-                    set = ambient.objectSet(p.position_m, out.ambientSets);
+                    // Asked for below, all at once.
+                    pendingSets_.push_back({batch, out.objects[batch].instances.size(), p.position_m});
                 }
                 inst.rotationSet = glm::vec2(p.rotation_rad, float(set));
-                out.objects[base + lod * kPlantKinds + kind].instances.push_back(inst);
+                out.objects[batch].instances.push_back(inst);
                 ++count;
             }
         }
     }
+    // The plants' own sets in one batch (lighting's batch lookups: one lock, one timing).
+    pendingAt_.clear();
+    for (const PendingSet& q : pendingSets_) pendingAt_.push_back(q.position_m);
+    pendingIndex_.resize(pendingAt_.size());
+    ambient.objectSets(pendingAt_.size(), pendingAt_.data(), out.ambientSets, pendingIndex_.data());
+    for (std::size_t i = 0; i < pendingSets_.size(); ++i)
+        out.objects[pendingSets_[i].batch].instances[pendingSets_[i].instance].rotationSet.y =
+            float(pendingIndex_[i]);
+    pendingSets_.clear();
     // Nearest first within each batch, so the early depth test rejects hidden fragments.
     if (!capture) {
         for (size_t b = base; b < out.objects.size(); ++b) {

@@ -115,6 +115,14 @@ class RendererScene {
     double vehicleMeshPitch_rad_ = 0.0;
     std::optional<VehiclePose> vehicle_;
     TerrainSurface terrainSurface_;  // the drawn terrain, where plants stand in the main view
+    // addPlants' scratch: the instances whose own ambient set is asked for in one batch.
+    struct PendingSet {
+        std::size_t batch, instance;
+        glm::dvec3 position_m;
+    };
+    std::vector<PendingSet> pendingSets_;
+    std::vector<glm::dvec3> pendingAt_;
+    std::vector<std::uint32_t> pendingIndex_;
 };
 
 }  // namespace amb

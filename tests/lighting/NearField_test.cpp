@@ -322,6 +322,84 @@ TEST(NearField, CachedBatchesEqualUncachedWhateverTheOrder) {
     }
 }
 
+TEST(NearField, AFullCacheKeepsThePointsInUse) {
+    // A view of 24 corners and 24 objects asked every frame, and 8 of each new every frame (an
+    // edge moving on), through caches of 64 entries: the caches overflow every few frames, and
+    // only the new points are ever built after the first frame (emptying the caches instead
+    // would build the whole view again). At the end the view answers what a fresh NearField
+    // answers, exactly.
+    struct Scene final : NearFieldScene {
+        void occludersNear(const glm::dvec3& p, double radius_m, double,
+                           std::vector<SphereOccluder>& out) const override {
+            for (int i = -30; i <= 30; ++i) {
+                const glm::dvec3 c(9.0 * i, 5.0, 4.0 * (i % 3));
+                if (std::hypot(c.x - p.x, c.z - p.z) < radius_m)
+                    out.push_back({c, 2.0, glm::dvec3(0.2, 0.4, 0.1)});
+            }
+        }
+        DirectionalLight mainLight(double) const override {
+            DirectionalLight l;
+            l.direction = glm::normalize(glm::dvec3(0.3, 0.8, 0.2));
+            l.irradiance = glm::dvec3(3.0);
+            return l;
+        }
+        double groundHeight(double, double) const override { return 0.0; }
+        bool groundAt(double x, double, GroundPoint& out, const GroundPoint*) const override {
+            out.height_m = 0.0, out.normal = {0.0, 1.0, 0.0};
+            out.albedo = glm::dvec3(0.1 + 0.2 * (std::fmod(std::abs(x), 7.0) > 3.5));
+            return true;
+        }
+    } scene;
+    NearFieldSettings settings;
+    settings.cacheEntries = 64;
+    NearField cached(scene, settings);
+    cached.setTimeOfDay(12.0);
+    const ShRgb far = toFloat(constantSky(glm::dvec3(1.0, 0.9, 0.8)));
+    std::vector<glm::dvec3> view, normals;
+    for (int i = 0; i < 24; ++i) {
+        view.push_back(glm::dvec3(3.0 * i - 36.0, 2.0, 1.5 * (i % 4)));
+        normals.push_back(glm::normalize(glm::dvec3(0.05 * (i % 3), 1.0, 0.0)));
+    }
+    const auto frame = [&](const NearField& near, int f, std::vector<glm::vec3>& corners,
+                           std::vector<ShRgb>& objects) {
+        std::vector<glm::dvec3> points = view, n = normals;
+        for (int k = 0; k < 8; ++k) {
+            points.push_back(glm::dvec3(40.0 + 8.0 * f + k, 2.0, -3.0)), n.push_back(normals[0]);
+        }
+        std::vector<ShRgb> fars(points.size(), far);
+        corners.resize(points.size());
+        near.irradianceMany(points.size(), fars.data(), points.data(), n.data(), corners.data());
+        objects.clear();
+        for (const glm::dvec3& p : points)
+            objects.push_back(near.apply(far, p + glm::dvec3(0.0, 0.5, 0.0), 0.05));
+    };
+    std::vector<glm::vec3> corners;
+    std::vector<ShRgb> objects;
+    int overflowed = 0;
+    std::size_t before = 0;
+    for (int f = 0; f < 40; ++f) {
+        cached.resetCounters();
+        frame(cached, f, corners, objects);
+        if (f > 0) {
+            EXPECT_EQ(cached.builds(), 16u) << "frame " << f;
+        }
+        if (cached.cachedPoints() < before) ++overflowed;
+        before = cached.cachedPoints();
+        EXPECT_LE(cached.cachedPoints(), 3u * 64u);
+    }
+    EXPECT_GE(overflowed, 5);
+    NearField fresh(scene, settings);
+    fresh.setTimeOfDay(12.0);
+    std::vector<glm::vec3> freshCorners;
+    std::vector<ShRgb> freshObjects;
+    frame(fresh, 39, freshCorners, freshObjects);
+    for (std::size_t i = 0; i < corners.size(); ++i) {
+        EXPECT_EQ(corners[i], freshCorners[i]) << "corner " << i;
+        for (int k = 0; k < kShCoefficients; ++k)
+            EXPECT_EQ(objects[i].c[k], freshObjects[i].c[k]) << "object " << i << " k " << k;
+    }
+}
+
 TEST(NearField, CapOverlapClosedCases) {
     EXPECT_EQ(capOverlap(0.2, 0.3, 0.6), 0.0);
     EXPECT_NEAR(capOverlap(0.2, 0.5, 0.1), 2.0 * kPi * (1.0 - std::cos(0.2)), 1e-12);
