@@ -143,8 +143,13 @@ std::vector<OccluderCap> occluderCaps(const glm::dvec3& point_m,
             if (!touches[j]) continue;
             const Seen& sj = seen[j];
             const double cosD = std::clamp(glm::dot(si.direction, sj.direction), -1.0, 1.0);
-            w *= std::max(0.0, 1.0 - sj.weight * capOverlap(si.halfAngle, sj.halfAngle,
-                                                             std::acos(cosD)) / omega);
+            // capOverlap, its cosines known: one cap within the other (d <= |a_i - a_j|, cos d
+            // >= cos(a_i - a_j)) shares all of the smaller, else the blend needs d itself.
+            const double shared =
+                cosD >= si.cosHalf * sj.cosHalf + si.sinHalf * sj.sinHalf
+                    ? capSolidAngle(std::max(si.cosHalf, sj.cosHalf))
+                    : capOverlap(si.halfAngle, sj.halfAngle, std::acos(cosD));
+            w *= std::max(0.0, 1.0 - sj.weight * shared / omega);
         }
         si.weight = w;  // later caps see what this one keeps
         if (w <= 0.0) continue;
@@ -165,6 +170,7 @@ std::vector<OccluderCap> nearOccluders(const glm::dvec3& point_m,
                                        const std::vector<HorizonWedge>& horizon) {
     std::vector<OccluderCap> all = terrainBands(horizon);
     const std::size_t bands = all.size();
+    if (bands == 0) return occluderCaps(point_m, occluders);
     for (OccluderCap& c : occluderCaps(point_m, occluders)) {
         // A plant whose centre is seen against a raised band hides that band, not the far field.
         const double phi = std::atan2(c.direction.z, c.direction.x);
@@ -727,20 +733,37 @@ void WorldNearFieldScene::terrainNear(const glm::dvec3& p, double radius_m,
         const double phi0 = 2.0 * kPi * w / kWedges, phi1 = 2.0 * kPi * (w + 1) / kWedges;
         const double phi = 0.5 * (phi0 + phi1);
         const glm::dvec2 dir(std::cos(phi), std::sin(phi));
-        double best = -0.5 * kPi, bestX = p.x, bestZ = p.z;
+        // The highest sample, and the slope along the wedge there (from the sample before).
+        const double broadAlong = gx * dir.x + gz * dir.y;
+        double best = -0.5 * kPi, bestX = p.x, bestZ = p.z, bestH = 0.0, bestRoad = 0.0;
+        double bestSlope = broadAlong, lastD = 0.0, lastH = 0.0;
+        bool first = true;
         for (int i = 1; i <= kSteps; ++i) {
             const double t = double(i) / kSteps, d = radius_m * t * t;
             if (d < 1.0) continue;
             const double x = p.x + d * dir.x, z = p.z + d * dir.y;
-            const double e = std::atan2(world_.height(x, z) - p.y, d);
-            if (e > best) best = e, bestX = x, bestZ = z;
+            double road = 0.0;
+            const double height = world_.heightAndRoad(x, z, &road);
+            const double e = std::atan2(height - p.y, d);
+            if (e > best) {
+                best = e, bestX = x, bestZ = z, bestH = height, bestRoad = road;
+                bestSlope = first ? broadAlong : (height - lastH) / (d - lastD);
+            }
+            first = false, lastD = d, lastH = height;
         }
         HorizonWedge h;
         h.azimuth0 = phi0, h.azimuth1 = phi1;
-        h.lower = std::atan(gx * dir.x + gz * dir.y);
+        h.lower = std::atan(broadAlong);
         h.upper = best;
-        h.albedo = glm::dvec3(world_.albedo(bestX, bestZ));
-        if (h.upper > h.lower) out.push_back(h);
+        if (h.upper > h.lower) {
+            // The wall's albedo as the patches draw it: the broad slope across the wedge, the
+            // sampled one along it.
+            const glm::dvec2 g = glm::dvec2(gx, gz) + (bestSlope - broadAlong) * dir;
+            const glm::dvec3 normal = glm::normalize(glm::dvec3(-g.x, 1.0, -g.y));
+            h.albedo = glm::dvec3(albedo_.at(bestX, bestZ, bestH, bestRoad, normal,
+                                             TerrainPatch::kFinestSpacing_m));
+            out.push_back(h);
+        }
     }
 }
 
