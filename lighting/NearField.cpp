@@ -7,6 +7,8 @@
 #include <cstring>
 #include <limits>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <glm/geometric.hpp>
 
 #include "lighting/JsonFields.h"
@@ -1207,35 +1209,57 @@ void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::d
     keys.reserve(count), indices.reserve(count);
     std::size_t cursor = 0;
     constexpr std::size_t kLookAhead = 16;  // points dropped from the batch since last time
-    for (std::size_t i = 0; i < count; ++i) {
+    constexpr std::uint32_t kNone = ~0u;    // a point not asked of the cache (disabled, not finite)
+    // The point's entry, built if new, its light term brought up to date.
+    const auto resolve = [&](std::size_t i) {
         const glm::dvec3& p = points_m[i];
         const glm::vec3 n(normals[i]);
-        const NormalApply* t = &none;
-        if (settings_.enabled && std::isfinite(p.x + p.y + p.z) &&
-            std::isfinite(n.x + n.y + n.z)) {
-            const Key key = keyOf(i);
-            std::uint32_t index = 0;
-            bool found = false;
-            for (std::size_t d = 0; d < kLookAhead && cursor + d < seq->keys.size(); ++d) {
-                if (seq->keys[cursor + d] == key) {
-                    index = seq->index[cursor + d];
-                    cursor += d + 1;
-                    found = true;
-                    break;
-                }
+        if (!settings_.enabled || !std::isfinite(p.x + p.y + p.z) || !std::isfinite(n.x + n.y + n.z))
+            return kNone;
+        const Key key = keyOf(i);
+        std::uint32_t index = 0;
+        bool found = false;
+        for (std::size_t d = 0; d < kLookAhead && cursor + d < seq->keys.size(); ++d) {
+            if (seq->keys[cursor + d] == key) {
+                index = seq->index[cursor + d];
+                cursor += d + 1;
+                found = true;
+                break;
             }
-            if (!found) index = normalIndex(key, p, n);
-            keys.push_back(key), indices.push_back(index);
-            NormalApply& na = normalApplies_[index];
-            if (na.any && na.lightEpoch != lightEpoch_) {
-                NormalTransfer& nt = normalTransfers_[index];
-                updateLightTerm(nt, light_.direction, lightEpoch_);
-                na.light = nt.light, na.lightEpoch = nt.lightEpoch;
-            }
-            normalUsed_[index] = uses_;
-            t = &na;
         }
-        out[i] = applyNormalTransfer(*t, far[i], n, light_);
+        if (!found) index = normalIndex(key, p, n);
+        keys.push_back(key), indices.push_back(index);
+        NormalApply& na = normalApplies_[index];
+        if (na.any && na.lightEpoch != lightEpoch_) {
+            NormalTransfer& nt = normalTransfers_[index];
+            updateLightTerm(nt, light_.direction, lightEpoch_);
+            na.light = nt.light, na.lightEpoch = nt.lightEpoch;
+        }
+        normalUsed_[index] = uses_;
+        return index;
+    };
+    const auto answer = [&](std::size_t i, std::uint32_t index) {
+        out[i] = applyNormalTransfer(index == kNone ? none : normalApplies_[index], far[i],
+                                     glm::vec3(normals[i]), light_);
+    };
+    // Every point's entry first, then the sums, which only read: on two threads for a frame's
+    // corners (a sum is ~30 ns). If the caches dropped entries meanwhile (the batch's earlier
+    // indices are stale), point by point instead.
+    std::vector<std::uint32_t>& at = batchAt_;
+    at.resize(count);
+    for (std::size_t i = 0; i < count; ++i) at[i] = resolve(i);
+    if (clears_ != clears) {
+        for (std::size_t i = 0; i < count; ++i) answer(i, resolve(i));
+    } else {
+        constexpr std::size_t kGrain = 2048;
+        if (count <= kGrain) {
+            for (std::size_t i = 0; i < count; ++i) answer(i, at[i]);
+        } else {
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, kGrain),
+                              [&](const tbb::blocked_range<std::size_t>& r) {
+                                  for (std::size_t i = r.begin(); i != r.end(); ++i) answer(i, at[i]);
+                              });
+        }
     }
     // normalIndex may have emptied the caches (and the sequences with them): then this batch's
     // indices before that point are stale, so it is not kept.

@@ -448,6 +448,7 @@ class NearField {
     void evictNormals() const;
     mutable std::vector<Key> batchKeys_;                   // the batch's, then a sequence's
     mutable std::vector<std::uint32_t> batchIndex_;
+    mutable std::vector<std::uint32_t> batchAt_;  // each point's entry in the batch
     // The draw asks its batches (corners, road vertices) in nearly the same order every frame:
     // the last few batches' keys and indices are walked alongside, and the map is asked only
     // where the order changed (a random probe of the map misses the processor's caches).

@@ -400,6 +400,48 @@ TEST(NearField, AFullCacheKeepsThePointsInUse) {
     }
 }
 
+TEST(NearField, ALargeBatchAnswersAsPointByPoint) {
+    // A frame's worth of corners (sums on several threads) against the same points asked one by
+    // one of a fresh NearField: equal exactly.
+    struct Scene final : NearFieldScene {
+        void occludersNear(const glm::dvec3& p, double radius_m, double,
+                           std::vector<SphereOccluder>& out) const override {
+            for (int i = -6; i <= 6; ++i)
+                for (int k = -6; k <= 6; ++k) {
+                    const glm::dvec3 c(11.0 * i, 5.0, 9.0 * k + 2.0 * (i % 2));
+                    if (std::hypot(c.x - p.x, c.z - p.z) < radius_m)
+                        out.push_back({c, 2.0 + 0.1 * ((i + k) % 3), glm::dvec3(0.2, 0.4, 0.1)});
+                }
+        }
+        DirectionalLight mainLight(double) const override {
+            DirectionalLight l;
+            l.direction = glm::normalize(glm::dvec3(0.3, 0.8, 0.2));
+            l.irradiance = glm::dvec3(3.0);
+            return l;
+        }
+        double groundHeight(double, double) const override { return 0.0; }
+    } scene;
+    const NearFieldSettings settings;
+    NearField batch(scene, settings), single(scene, settings);
+    batch.setTimeOfDay(12.0), single.setTimeOfDay(12.0);
+    std::vector<glm::dvec3> points, normals;
+    std::vector<ShRgb> fars;
+    for (int i = 0; i < 80; ++i)
+        for (int k = 0; k < 64; ++k) {
+            points.push_back(glm::dvec3(1.5 * i - 60.0, 2.0, 1.5 * k - 48.0));
+            normals.push_back(glm::normalize(glm::dvec3(0.02 * (i % 5), 1.0, -0.03 * (k % 4))));
+            fars.push_back(toFloat(constantSky(glm::dvec3(1.0 + 0.01 * (i % 7), 0.9, 0.8))));
+        }
+    std::vector<glm::vec3> got(points.size());
+    for (int round = 0; round < 2; ++round)  // built, then cached
+        batch.irradianceMany(points.size(), fars.data(), points.data(), normals.data(), got.data());
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        glm::vec3 want;
+        single.irradianceMany(1, &fars[i], &points[i], &normals[i], &want);
+        ASSERT_EQ(got[i], want) << "point " << i;
+    }
+}
+
 TEST(NearField, CapOverlapClosedCases) {
     EXPECT_EQ(capOverlap(0.2, 0.3, 0.6), 0.0);
     EXPECT_NEAR(capOverlap(0.2, 0.5, 0.1), 2.0 * kPi * (1.0 - std::cos(0.2)), 1e-12);
