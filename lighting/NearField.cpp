@@ -717,7 +717,8 @@ void WorldNearFieldScene::occludersNear(const glm::dvec3& point_m, double radius
     const double reach = std::max(radius_m, smallRadius_m);
     for (const Plant& p : world_.vegetation().inDisc(point_m.x, point_m.z, reach)) {
         const bool small = p.kind == PlantKind::Bush || p.kind == PlantKind::Rock;
-        const double d = std::hypot(p.position_m.x - point_m.x, p.position_m.z - point_m.z);
+        const double dx = p.position_m.x - point_m.x, dz = p.position_m.z - point_m.z;
+        const double d = std::sqrt(dx * dx + dz * dz);  // (hypot's care for overflow costs)
         const double r = small ? smallRadius_m : radius_m;
         if (d >= r) continue;
         // Faded out over the last quarter of the radius: a moving point gains and loses plants
@@ -1048,8 +1049,10 @@ std::unique_ptr<NearFieldTransfer> NearField::build(const glm::dvec3& p,
     std::vector<SphereOccluder> others;
     if (selfRadius_m > 0.0) {
         // An object's own spheres sit on its axis, above its base.
-        for (const SphereOccluder& o : all)
-            if (std::hypot(o.centre_m.x - p.x, o.centre_m.z - p.z) >= selfRadius_m) others.push_back(o);
+        for (const SphereOccluder& o : all) {
+            const double dx = o.centre_m.x - p.x, dz = o.centre_m.z - p.z;
+            if (dx * dx + dz * dz >= selfRadius_m * selfRadius_m) others.push_back(o);
+        }
     }
     const std::vector<SphereOccluder>& caps0 = selfRadius_m > 0.0 ? others : all;
     GroundTerm ground;
@@ -1227,7 +1230,9 @@ void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::d
                 break;
             }
         }
-        if (!found) index = normalIndex(key, p, n);
+        // Found in the map, or new: marked as used now (a sequence's entries count as used when
+        // the cache is full: see evictNormals).
+        if (!found) index = normalIndex(key, p, n), normalUsed_[index] = uses_;
         keys.push_back(key), indices.push_back(index);
         NormalApply& na = normalApplies_[index];
         if (na.any && na.lightEpoch != lightEpoch_) {
@@ -1235,7 +1240,6 @@ void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::d
             updateLightTerm(nt, light_.direction, lightEpoch_);
             na.light = nt.light, na.lightEpoch = nt.lightEpoch;
         }
-        normalUsed_[index] = uses_;
         return index;
     };
     const auto answer = [&](std::size_t i, std::uint32_t index) {
@@ -1265,7 +1269,7 @@ void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::d
     // indices before that point are stale, so it is not kept.
     if (clears_ == clears) {
         seq->keys.swap(keys), seq->index.swap(indices);
-        seq->used = ++batches_;
+        seq->used = uses_;  // this batch's reading of the use clock
     }
     points_ += count;
     seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -1315,6 +1319,10 @@ void NearField::evictGround() const {
 }
 
 void NearField::evictNormals() const {
+    // The last batches' entries were used when those batches were asked (irradianceMany marks
+    // only the entries it finds off its sequences).
+    for (const Sequence& q : sequences_)
+        for (std::uint32_t i : q.index) normalUsed_[i] = std::max(normalUsed_[i], q.used);
     // The kept entries move down in their vectors; the map follows.
     const std::uint64_t cut = olderHalf(normalUsed_);
     constexpr std::uint32_t kGone = ~0u;

@@ -455,11 +455,11 @@ class NearField {
     struct Sequence {
         std::vector<Key> keys;
         std::vector<std::uint32_t> index;
-        std::uint64_t used = 0;
+        std::uint64_t used = 0;  // the use clock when this batch was last asked
     };
     static constexpr int kSequences = 4;
     mutable std::array<Sequence, kSequences> sequences_;
-    mutable std::uint64_t batches_ = 0, clears_ = 0;
+    mutable std::uint64_t clears_ = 0;
     std::uint32_t normalIndex(const Key& key, const glm::dvec3& point_m,
                               const glm::vec3& normal) const;
     std::uint32_t lightEpoch_ = 1;  // counts the light's moves of more than 0.5 degrees
