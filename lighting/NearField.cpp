@@ -1234,6 +1234,8 @@ void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::d
         // the cache is full: see evictNormals).
         if (!found) index = normalIndex(key, p, n), normalUsed_[index] = uses_;
         keys.push_back(key), indices.push_back(index);
+        // A point on a sequence last asked under this light has its light term already.
+        if (found && seq->lightEpoch == lightEpoch_) return index;
         NormalApply& na = normalApplies_[index];
         if (na.any && na.lightEpoch != lightEpoch_) {
             NormalTransfer& nt = normalTransfers_[index];
@@ -1270,6 +1272,7 @@ void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::d
     if (clears_ == clears) {
         seq->keys.swap(keys), seq->index.swap(indices);
         seq->used = uses_;  // this batch's reading of the use clock
+        seq->lightEpoch = lightEpoch_;
     }
     points_ += count;
     seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

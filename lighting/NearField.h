@@ -456,6 +456,7 @@ class NearField {
         std::vector<Key> keys;
         std::vector<std::uint32_t> index;
         std::uint64_t used = 0;  // the use clock when this batch was last asked
+        std::uint32_t lightEpoch = 0;  // the light its entries' light terms were brought to
     };
     static constexpr int kSequences = 4;
     mutable std::array<Sequence, kSequences> sequences_;
