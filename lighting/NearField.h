@@ -38,7 +38,7 @@
 //   delta in the far field, so its term uses the same map: S_c = (T_c - hide) Y(l), exactly the
 //   order-2 projection in l of the phase law (within 0.8 % of its peak) and, for terrain bands,
 //   of a wall's cosine (within 9 %, as order-2 irradiance always is). T is cached per point (the
-//   points the draw asks for do not move), 2.1 kB with the ground's terms, whatever the number of
+//   points the draw asks for do not move), 2.5 kB with the ground's terms, whatever the number of
 //   occluders.
 // [SECTION] Terrain
 //   The terrain cannot be left out of a capture (it would leave a hole), so the anchors hold the
@@ -101,10 +101,11 @@
 //   The draw needs the SH at terrain corners and road vertices only through their own normal n
 //   (it interpolates the irradiance, not the SH). There E(n) = a(n) . L' with a_k = Ahat_l
 //   Y_k(n), so the 9 x 9 maps collapse to vectors: E_c = a . L_c + g_c (h . L_c) + s_c . L_c +
-//   (s_c . Y(l)) E_light,c, h = hide^T a, s_c = (T_c - hide)^T a: 40 floats a point (57 with the
-//   ground's light term), not 500,
-//   and no matrix product per frame. The guard is then exact for that normal: what is hidden
-//   never takes E(n) below min(0, a . L), g_c < 1 only where it would.
+//   (s_c . Y(l)) E_light,c, h = hide^T a, s_c = (T_c - hide)^T a: 57 floats a point with the
+//   ground's light term (NormalTransfer), not 500, and no matrix product per frame. The guard is
+//   then exact for that normal: what is hidden never takes E(n) below min(0, a . L), g_c < 1
+//   only where it would. The draw reads 48 of them a frame (NormalApply: w_c = a + h + s_c in
+//   four lanes a coefficient, and a + h, whose sign says whether the guard can act at all).
 #pragma once
 
 #include <array>
@@ -147,7 +148,7 @@ struct NearFieldSettings {
     // Points the draw asks for (terrain corners, objects) are cached with their transfer; when a
     // cache holds this many, the half of it used least recently is dropped (the view's points,
     // asked every frame, stay).
-    int cacheEntries = 16384;  // about 2.1 kB each (objects), 0.45 kB (corners)
+    int cacheEntries = 16384;  // about 2.5 kB each (objects), 0.5 kB (corners)
     // Objects (shAt: plants, the car) farther than this from the camera take the far field
     // alone: a few pixels tall, they show no near field, and they are most of the draw's
     // lookups (4 600 of 7 500 a frame on the highway). Terrain corners and roads always take it.

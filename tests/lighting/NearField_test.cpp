@@ -271,10 +271,21 @@ TEST(NearField, ThroughOneNormalEqualsTheShPathAndStaysNonNegative) {
     EXPECT_GT(guarded, 50);
 }
 
+// A scene under one fixed light over flat ground at height 0; the cache tests add their plants.
+struct FixedLightScene : NearFieldScene {
+    DirectionalLight mainLight(double) const override {
+        DirectionalLight l;
+        l.direction = glm::normalize(glm::dvec3(0.3, 0.8, 0.2));
+        l.irradiance = glm::dvec3(3.0);
+        return l;
+    }
+    double groundHeight(double, double) const override { return 0.0; }
+};
+
 TEST(NearField, CachedBatchesEqualUncachedWhateverTheOrder) {
     // A scene of a few plants; the same points asked as batches in changing orders (points
     // dropped, added, moved) answer exactly what a fresh NearField answers for each point.
-    struct Scene final : NearFieldScene {
+    struct Scene final : FixedLightScene {
         void occludersNear(const glm::dvec3& p, double radius_m, double,
                            std::vector<SphereOccluder>& out) const override {
             for (int i = 0; i < 6; ++i) {
@@ -283,13 +294,6 @@ TEST(NearField, CachedBatchesEqualUncachedWhateverTheOrder) {
                     out.push_back({c, 2.5, glm::dvec3(0.2, 0.4, 0.1)});
             }
         }
-        DirectionalLight mainLight(double) const override {
-            DirectionalLight l;
-            l.direction = glm::normalize(glm::dvec3(0.3, 0.8, 0.2));
-            l.irradiance = glm::dvec3(3.0);
-            return l;
-        }
-        double groundHeight(double, double) const override { return 0.0; }
     } scene;
     NearFieldSettings settings;
     settings.cacheEntries = 50;  // forces the cache to empty mid-batch
@@ -328,7 +332,7 @@ TEST(NearField, AFullCacheKeepsThePointsInUse) {
     // only the new points are ever built after the first frame (emptying the caches instead
     // would build the whole view again). At the end the view answers what a fresh NearField
     // answers, exactly.
-    struct Scene final : NearFieldScene {
+    struct Scene final : FixedLightScene {
         void occludersNear(const glm::dvec3& p, double radius_m, double,
                            std::vector<SphereOccluder>& out) const override {
             for (int i = -30; i <= 30; ++i) {
@@ -337,13 +341,6 @@ TEST(NearField, AFullCacheKeepsThePointsInUse) {
                     out.push_back({c, 2.0, glm::dvec3(0.2, 0.4, 0.1)});
             }
         }
-        DirectionalLight mainLight(double) const override {
-            DirectionalLight l;
-            l.direction = glm::normalize(glm::dvec3(0.3, 0.8, 0.2));
-            l.irradiance = glm::dvec3(3.0);
-            return l;
-        }
-        double groundHeight(double, double) const override { return 0.0; }
         bool groundAt(double x, double, GroundPoint& out, const GroundPoint*) const override {
             out.height_m = 0.0, out.normal = {0.0, 1.0, 0.0};
             out.albedo = glm::dvec3(0.1 + 0.2 * (std::fmod(std::abs(x), 7.0) > 3.5));
@@ -403,7 +400,7 @@ TEST(NearField, AFullCacheKeepsThePointsInUse) {
 TEST(NearField, ALargeBatchAnswersAsPointByPoint) {
     // A frame's worth of corners (sums on several threads) against the same points asked one by
     // one of a fresh NearField: equal exactly.
-    struct Scene final : NearFieldScene {
+    struct Scene final : FixedLightScene {
         void occludersNear(const glm::dvec3& p, double radius_m, double,
                            std::vector<SphereOccluder>& out) const override {
             for (int i = -6; i <= 6; ++i)
@@ -413,13 +410,6 @@ TEST(NearField, ALargeBatchAnswersAsPointByPoint) {
                         out.push_back({c, 2.0 + 0.1 * ((i + k) % 3), glm::dvec3(0.2, 0.4, 0.1)});
                 }
         }
-        DirectionalLight mainLight(double) const override {
-            DirectionalLight l;
-            l.direction = glm::normalize(glm::dvec3(0.3, 0.8, 0.2));
-            l.irradiance = glm::dvec3(3.0);
-            return l;
-        }
-        double groundHeight(double, double) const override { return 0.0; }
     } scene;
     const NearFieldSettings settings;
     NearField batch(scene, settings), single(scene, settings);
