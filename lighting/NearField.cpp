@@ -539,18 +539,12 @@ namespace {
 glm::vec3 applyNormalTransfer(const NormalApply& t, const ShRgb& far, const glm::vec3& normal,
                               const DirectionalLight& light) {
     constexpr int K = kShCoefficients;
-    static_assert(sizeof(ShRgb) == 3 * K * sizeof(float), "ShRgb holds 27 floats");
     if (!t.any) return guardedNormalApply(t, far, normal, light);
-    // The far field read four lanes at a time from each coefficient (the fourth lane is the next
-    // coefficient's red, or 0 past the last, and meets a 0 in `whole`), in GCC's and Clang's
-    // vector types, so the sum is nine four-lane multiply-adds whatever the optimiser does.
-    float L[3 * K + 1];
-    std::memcpy(L, far.c.data(), 3 * K * sizeof(float));
-    L[3 * K] = 0.0f;
+    // Nine four-lane multiply-adds, the channels in lanes 0-2.
     Lanes e = {0.0f, 0.0f, 0.0f, 0.0f}, kept = {0.0f, 0.0f, 0.0f, 0.0f};
     for (int k = 0; k < K; ++k) {
-        Lanes l, w;
-        std::memcpy(&l, &L[3 * k], sizeof l);
+        const Lanes l = lanesOf(far.c[k]);
+        Lanes w;
         std::memcpy(&w, &t.whole[std::size_t(4 * k)], sizeof w);
         e += w * l;
         kept += t.aHide[std::size_t(k)] * l;
@@ -717,8 +711,7 @@ void WorldNearFieldScene::occludersNear(const glm::dvec3& point_m, double radius
     const double reach = std::max(radius_m, smallRadius_m);
     for (const Plant& p : world_.vegetation().inDisc(point_m.x, point_m.z, reach)) {
         const bool small = p.kind == PlantKind::Bush || p.kind == PlantKind::Rock;
-        const double dx = p.position_m.x - point_m.x, dz = p.position_m.z - point_m.z;
-        const double d = std::sqrt(dx * dx + dz * dz);  // (hypot's care for overflow costs)
+        const double d = std::hypot(p.position_m.x - point_m.x, p.position_m.z - point_m.z);
         const double r = small ? smallRadius_m : radius_m;
         if (d >= r) continue;
         // Faded out over the last quarter of the radius: a moving point gains and loses plants
@@ -966,9 +959,6 @@ double WorldNearFieldScene::terrainLightVisibility(const glm::dvec3& from,
 namespace {
 // A cached light term is remade when the light has moved more than 0.5 degrees.
 const double kLightMoved = std::cos(0.5 * kPi / 180.0);
-}  // namespace
-
-namespace {
 
 // The memory of one entry of each cache, the map's slot included.
 constexpr std::size_t kMapSlot = 2 * sizeof(void*);
@@ -1049,10 +1039,8 @@ std::unique_ptr<NearFieldTransfer> NearField::build(const glm::dvec3& p,
     std::vector<SphereOccluder> others;
     if (selfRadius_m > 0.0) {
         // An object's own spheres sit on its axis, above its base.
-        for (const SphereOccluder& o : all) {
-            const double dx = o.centre_m.x - p.x, dz = o.centre_m.z - p.z;
-            if (dx * dx + dz * dz >= selfRadius_m * selfRadius_m) others.push_back(o);
-        }
+        for (const SphereOccluder& o : all)
+            if (std::hypot(o.centre_m.x - p.x, o.centre_m.z - p.z) >= selfRadius_m) others.push_back(o);
     }
     const std::vector<SphereOccluder>& caps0 = selfRadius_m > 0.0 ? others : all;
     GroundTerm ground;
@@ -1414,10 +1402,12 @@ void NearFieldMethod::predictStage(const glm::dvec3& cameraPosition_m,
 
 ShRgb NearFieldMethod::shAt(double x_m, double z_m) const {
     const ShRgb far = far_->shAt(x_m, z_m);
-    // Objects far from the camera take the far field alone (see NearFieldSettings::objectRange_m).
-    if (std::hypot(x_m - camera_m_.x, z_m - camera_m_.z) > near_->settings().objectRange_m)
-        return far;
+    if (!objectInRange(x_m, z_m)) return far;
     return near_->applyAbove(far, x_m, z_m, kShadingHeight_m, kSelfRadius_m);
+}
+
+bool NearFieldMethod::objectInRange(double x_m, double z_m) const {
+    return std::hypot(x_m - camera_m_.x, z_m - camera_m_.z) <= near_->settings().objectRange_m;
 }
 
 void NearFieldMethod::shAt(std::size_t count, const double* x_m, const double* z_m,
@@ -1425,8 +1415,7 @@ void NearFieldMethod::shAt(std::size_t count, const double* x_m, const double* z
     far_->shAt(count, x_m, z_m, out);
     nearIndex_.clear(), nearX_.clear(), nearZ_.clear(), nearSh_.clear();
     for (std::size_t i = 0; i < count; ++i) {
-        if (std::hypot(x_m[i] - camera_m_.x, z_m[i] - camera_m_.z) > near_->settings().objectRange_m)
-            continue;
+        if (!objectInRange(x_m[i], z_m[i])) continue;
         nearIndex_.push_back(i), nearX_.push_back(x_m[i]), nearZ_.push_back(z_m[i]);
         nearSh_.push_back(out[i]);
     }

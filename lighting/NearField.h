@@ -283,7 +283,7 @@ struct NormalApply {
     alignas(16) std::array<float, 4 * kShCoefficients> whole{};
     std::array<float, kShCoefficients> aHide{};      // a + h
     glm::vec3 light{0.0f};                           // the NormalTransfer's
-    std::uint32_t lightEpoch = 0;
+    std::uint32_t lightEpoch = 0;  // its too, kept here so the check reads only this entry
     bool any = false;
 };
 NormalApply normalApply(const NormalTransfer& transfer, const glm::dvec3& normal);
@@ -518,6 +518,8 @@ class NearFieldMethod final : public AmbienceMethod {
     std::unique_ptr<NearFieldScene> scene_;
     std::unique_ptr<NearField> near_;
     glm::dvec3 camera_m_{0.0};  // of the latest predictStage
+    // Objects farther from the camera take the far field alone (NearFieldSettings::objectRange_m).
+    bool objectInRange(double x_m, double z_m) const;
     // Scratch of the batch shAt: the objects within objectRange_m and their SH.
     mutable std::vector<std::size_t> nearIndex_;
     mutable std::vector<double> nearX_, nearZ_;

@@ -78,20 +78,16 @@ void MethodAmbient::cornerIrradianceBatch(std::size_t count, const glm::dvec3* p
 
 std::uint32_t MethodAmbient::objectSet(const glm::dvec3& position_m,
                                        std::vector<AmbientSet>& sets) const {
-    const auto t0 = Clock::now();
-    // Objects (thesis 8.6, 9.4): one SH set at the object's ground point, evaluated per pixel
-    // with the normal through R&H's matrices.
-    const ShIrradianceMatrices m = shIrradianceMatrices(method_.shAt(position_m.x, position_m.z));
-    sets.push_back(AmbientSet{m.r, m.g, m.b});
-    ++lookups_;
-    note(position_m);
-    lookup_ms_ += elapsed_ms(t0);
-    return std::uint32_t(sets.size() - 1);
+    std::uint32_t index = 0;
+    objectSets(1, &position_m, sets, &index);
+    return index;
 }
 
 void MethodAmbient::objectSets(std::size_t count, const glm::dvec3* positions_m,
                                std::vector<AmbientSet>& sets, std::uint32_t* index) const {
     const auto t0 = Clock::now();
+    // Objects (thesis 8.6, 9.4): one SH set at the object's ground point, evaluated per pixel
+    // with the normal through R&H's matrices.
     batchX_.resize(count), batchZ_.resize(count), batchSh_.resize(count);
     for (std::size_t i = 0; i < count; ++i) batchX_[i] = positions_m[i].x, batchZ_[i] = positions_m[i].z;
     method_.shAt(count, batchX_.data(), batchZ_.data(), batchSh_.data());

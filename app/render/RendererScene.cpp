@@ -398,7 +398,8 @@ void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewP
                     set = std::uint32_t(tileSet);
                 } else {
                     // Asked for below, all at once.
-                    pendingSets_.push_back({batch, out.objects[batch].instances.size(), p.position_m});
+                    pendingSlot_.push_back({batch, out.objects[batch].instances.size()});
+                    pendingAt_.push_back(p.position_m);
                 }
                 inst.rotationSet = glm::vec2(p.rotation_rad, float(set));
                 out.objects[batch].instances.push_back(inst);
@@ -407,14 +408,13 @@ void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewP
         }
     }
     // The plants' own sets in one batch (lighting's batch lookups: one lock, one timing).
-    pendingAt_.clear();
-    for (const PendingSet& q : pendingSets_) pendingAt_.push_back(q.position_m);
     pendingIndex_.resize(pendingAt_.size());
     ambient.objectSets(pendingAt_.size(), pendingAt_.data(), out.ambientSets, pendingIndex_.data());
-    for (std::size_t i = 0; i < pendingSets_.size(); ++i)
-        out.objects[pendingSets_[i].batch].instances[pendingSets_[i].instance].rotationSet.y =
-            float(pendingIndex_[i]);
-    pendingSets_.clear();
+    for (std::size_t i = 0; i < pendingSlot_.size(); ++i) {
+        const auto [batch, instance] = pendingSlot_[i];
+        out.objects[batch].instances[instance].rotationSet.y = float(pendingIndex_[i]);
+    }
+    pendingSlot_.clear(), pendingAt_.clear();
     // Nearest first within each batch, so the early depth test rejects hidden fragments.
     if (!capture) {
         for (size_t b = base; b < out.objects.size(); ++b) {

@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <memory>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include <glm/mat4x4.hpp>
@@ -115,12 +116,9 @@ class RendererScene {
     double vehicleMeshPitch_rad_ = 0.0;
     std::optional<VehiclePose> vehicle_;
     TerrainSurface terrainSurface_;  // the drawn terrain, where plants stand in the main view
-    // addPlants' scratch: the instances whose own ambient set is asked for in one batch.
-    struct PendingSet {
-        std::size_t batch, instance;
-        glm::dvec3 position_m;
-    };
-    std::vector<PendingSet> pendingSets_;
+    // addPlants' scratch: the instances (batch, instance) whose own ambient set is asked for in
+    // one batch, where they stand, and the sets' indices.
+    std::vector<std::pair<std::size_t, std::size_t>> pendingSlot_;
     std::vector<glm::dvec3> pendingAt_;
     std::vector<std::uint32_t> pendingIndex_;
 };
