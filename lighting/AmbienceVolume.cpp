@@ -122,7 +122,7 @@ bool sameNearField(const NearFieldSettings& a, const NearFieldSettings& b) {
            a.terrainRadius_m == b.terrainRadius_m && a.ground == b.ground &&
            a.groundRadius_m == b.groundRadius_m && a.groundCell_m == b.groundCell_m &&
            a.cacheEntries == b.cacheEntries &&
-           a.objectRange_m == b.objectRange_m;
+           a.objectRange_m == b.objectRange_m && a.cornerRange_m == b.cornerRange_m;
 }
 
 }  // namespace

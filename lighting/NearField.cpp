@@ -9,6 +9,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 #include <glm/geometric.hpp>
 
 #include "lighting/JsonFields.h"
@@ -33,6 +34,13 @@ void readNearFieldSettings(JsonFields& f, NearFieldSettings& s) {
     f.number("groundCell_m", s.groundCell_m, 0.25, 64.0);
     f.integer("cacheEntries", s.cacheEntries, 1, 1 << 24);
     f.number("objectRange_m", s.objectRange_m, 0.0, 1e6);
+    f.number("cornerRange_m", s.cornerRange_m, 0.0, 1e6);
+}
+
+double rangeWeight(double distance_m, double range_m) {
+    if (!(distance_m < range_m)) return 0.0;
+    const double x = std::clamp((range_m - distance_m) / (kNearFade * range_m), 0.0, 1.0);
+    return x * x * (3.0 - 2.0 * x);
 }
 
 // ---- [SECTION] Closed forms --------------------------------------------------------------------
@@ -504,8 +512,8 @@ NormalApply normalApply(const NormalTransfer& t, const glm::dvec3& normal) {
 
 namespace {
 
-// applyNormalTransfer where the guard may act (rare: one point in a hundred on a drive), or
-// nothing is near, or the sum overflowed: the far field's own irradiance and what is hidden, the
+// applyNormalTransfer where the guard may act (rare: one point in a hundred on a drive) or the
+// sum overflowed: the far field's own irradiance and what is hidden, the
 // hidden part scaled where it would take the irradiance below min(0, a . L).
 [[gnu::cold, gnu::noinline]] glm::vec3 guardedNormalApply(const NormalApply& t, const ShRgb& far,
                                                          const glm::vec3& normal,
@@ -539,7 +547,7 @@ namespace {
 glm::vec3 applyNormalTransfer(const NormalApply& t, const ShRgb& far, const glm::vec3& normal,
                               const DirectionalLight& light) {
     constexpr int K = kShCoefficients;
-    if (!t.any) return guardedNormalApply(t, far, normal, light);
+    if (!t.any) return glm::max(shIrradiance(far, normal), glm::vec3(0.0f));
     // Nine four-lane multiply-adds, the channels in lanes 0-2.
     Lanes e = {0.0f, 0.0f, 0.0f, 0.0f}, kept = {0.0f, 0.0f, 0.0f, 0.0f};
     for (int k = 0; k < K; ++k) {
@@ -1029,8 +1037,8 @@ std::vector<SphereOccluder> NearField::occluders(const glm::dvec3& p) const {
     return out;
 }
 
-std::unique_ptr<NearFieldTransfer> NearField::build(const glm::dvec3& p,
-                                                    double selfRadius_m) const {
+std::unique_ptr<NearFieldTransfer> NearField::build(const glm::dvec3& p, double selfRadius_m,
+                                                    const GroundTerm* objectGroundTerm) const {
     std::vector<HorizonWedge> horizon;
     if (settings_.terrain && selfRadius_m <= 0.0)
         scene_.terrainNear(p, settings_.terrainRadius_m, horizon);
@@ -1046,7 +1054,7 @@ std::unique_ptr<NearFieldTransfer> NearField::build(const glm::dvec3& p,
     GroundTerm ground;
     if (settings_.ground)
         ground = selfRadius_m > 0.0
-                     ? objectGround(p)
+                     ? (objectGroundTerm ? *objectGroundTerm : objectGround(p))
                      : groundTerm(p, scene_, caps0, all, settings_.groundRadius_m, light_.direction);
     std::vector<OccluderCap> caps = nearOccluders(p, caps0, horizon);
     if (caps.empty() && !ground.any) return nullptr;
@@ -1055,7 +1063,8 @@ std::unique_ptr<NearFieldTransfer> NearField::build(const glm::dvec3& p,
     return t;
 }
 
-GroundTerm NearField::objectGround(const glm::dvec3& p) const {
+void NearField::latticeOf(const glm::dvec3& p, Key keys[9], double weights[9],
+                          glm::dvec3 points[9]) const {
     const double lift = p.y - scene_.groundHeight(p.x, p.z);
     // Quadratic B-spline weights of the three nearest lattice lines on each axis.
     const auto spline = [](double u, double w[3]) {
@@ -1066,34 +1075,105 @@ GroundTerm NearField::objectGround(const glm::dvec3& p) const {
     double wx[3], wz[3];
     const double cell = settings_.groundCell_m;
     const double i0 = spline(p.x / cell, wx), k0 = spline(p.z / cell, wz);
-    if (groundCache_.size() + 9 > std::size_t(settings_.cacheEntries)) evictGround();
-    const std::uint64_t now = ++uses_;
-    Key keys[9];
-    double weights[9];
     for (int a = 0; a < 3; ++a)
         for (int b = 0; b < 3; ++b) {
             const double x = (i0 + a) * cell, z = (k0 + b) * cell;
-            const Key key{float(x), -2e30f, float(z), float(lift)};
-            keys[a * 3 + b] = key;
+            keys[a * 3 + b] = Key{float(x), -2e30f, float(z), float(lift)};
             weights[a * 3 + b] = wx[a] * wz[b];
-            if (auto it = groundCache_.find(key); it != groundCache_.end()) {
-                it.value().used = now;
-                continue;
-            }
-            const glm::dvec3 q(x, scene_.groundHeight(x, z) + lift, z);
-            const std::vector<SphereOccluder> near = occluders(q);
-            // No plant stops the rays from a lattice point: one standing at it would take its
-            // ground out of the blend for an object that does not see that plant.
-            groundCache_.emplace(
-                key, CachedGround{groundTerm(q, scene_, {}, near, settings_.groundRadius_m,
-                                             light_.direction),
-                                  now});
-            groundBytes_ += kGroundEntryBytes;
+            points[a * 3 + b] = glm::dvec3(x, lift, z);  // the lift for now (see latticeTerm)
         }
+}
+
+GroundTerm NearField::latticeTerm(const glm::dvec3& at) const {
+    const glm::dvec3 q(at.x, scene_.groundHeight(at.x, at.z) + at.y, at.z);
+    // No plant stops the rays from a lattice point: one standing at it would take its ground out
+    // of the blend for an object that does not see that plant.
+    return groundTerm(q, scene_, {}, occluders(q), settings_.groundRadius_m, light_.direction);
+}
+
+GroundTerm NearField::objectGround(const glm::dvec3& p) const {
+    Key keys[9];
+    double weights[9];
+    glm::dvec3 points[9];
+    latticeOf(p, keys, weights, points);
+    if (groundCache_.size() + 9 > std::size_t(settings_.cacheEntries)) evictGround();
+    const std::uint64_t now = ++uses_;
+    for (int i = 0; i < 9; ++i) {
+        if (auto it = groundCache_.find(keys[i]); it != groundCache_.end()) {
+            it.value().used = now;
+            continue;
+        }
+        groundCache_.emplace(keys[i], CachedGround{latticeTerm(points[i]), now});
+        groundBytes_ += kGroundEntryBytes;
+    }
     // Looked up only once all nine are in: an insertion may move the map's entries.
     const GroundTerm* terms[9];
     for (int i = 0; i < 9; ++i) terms[i] = &groundCache_.find(keys[i])->second.term;
     return blendGroundTerms(terms, weights, 9);
+}
+
+void NearField::buildObjects(std::size_t count, const Key* keys, const glm::dvec3* points_m,
+                             double selfRadius_m) const {
+    // The points not in the cache, each once.
+    std::vector<std::size_t> missing;
+    {
+        tsl::hopscotch_map<Key, char, KeyHash> seen;
+        for (std::size_t i = 0; i < count; ++i) {
+            const glm::dvec3& p = points_m[i];
+            if (!std::isfinite(p.x + p.y + p.z) || !std::isfinite(double(keys[i][0]) + keys[i][2]))
+                continue;
+            if (cache_.count(keys[i]) || !seen.emplace(keys[i], 0).second) continue;
+            missing.push_back(i);
+        }
+    }
+    if (missing.size() < 2) return;  // applyLocked builds a lone point itself
+    const auto b0 = std::chrono::steady_clock::now();
+    // An object's ground blends lattice terms: the missing ones first, on every thread.
+    std::vector<GroundTerm> grounds(missing.size());
+    const bool objectGrounds = settings_.ground && selfRadius_m > 0.0;
+    if (objectGrounds) {
+        std::vector<Key> latticeKeys;
+        std::vector<glm::dvec3> latticeAt;
+        tsl::hopscotch_map<Key, char, KeyHash> seen;
+        for (std::size_t i : missing) {
+            Key k[9];
+            double w[9];
+            glm::dvec3 at[9];
+            latticeOf(points_m[i], k, w, at);
+            for (int j = 0; j < 9; ++j)
+                if (!groundCache_.count(k[j]) && seen.emplace(k[j], 0).second)
+                    latticeKeys.push_back(k[j]), latticeAt.push_back(at[j]);
+        }
+        if (groundCache_.size() + latticeKeys.size() + 9 > std::size_t(settings_.cacheEntries))
+            evictGround();
+        std::vector<GroundTerm> terms(latticeKeys.size());
+        tbb::this_task_arena::isolate([&] {
+            tbb::parallel_for(std::size_t(0), terms.size(),
+                              [&](std::size_t j) { terms[j] = latticeTerm(latticeAt[j]); });
+        });
+        const std::uint64_t now = ++uses_;
+        for (std::size_t j = 0; j < terms.size(); ++j) {
+            groundCache_.emplace(latticeKeys[j], CachedGround{terms[j], now});
+            groundBytes_ += kGroundEntryBytes;
+        }
+        for (std::size_t m = 0; m < missing.size(); ++m) grounds[m] = objectGround(points_m[missing[m]]);
+    }
+    // Then the transfers, which read only the scene, the light and those terms.
+    std::vector<std::unique_ptr<NearFieldTransfer>> built(missing.size());
+    tbb::this_task_arena::isolate([&] {
+        tbb::parallel_for(std::size_t(0), missing.size(), [&](std::size_t m) {
+            built[m] = build(points_m[missing[m]], selfRadius_m,
+                             objectGrounds ? &grounds[m] : nullptr);
+        });
+    });
+    if (cache_.size() + missing.size() > std::size_t(settings_.cacheEntries)) evictObjects();
+    const std::uint64_t now = ++uses_;
+    for (std::size_t m = 0; m < missing.size(); ++m) {
+        bytes_ += objectEntryBytes(built[m].get());
+        cache_.emplace(keys[missing[m]], Cached{std::move(built[m]), now});
+    }
+    builds_ += missing.size();
+    buildSeconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - b0).count();
 }
 
 ShRgb NearField::apply(const ShRgb& far, const glm::dvec3& point_m, double selfRadius_m) const {
@@ -1125,11 +1205,14 @@ void NearField::applyMany(std::size_t count, ShRgb* inOut, const glm::dvec3* poi
     if (!settings_.enabled) return;
     const auto t0 = std::chrono::steady_clock::now();
     std::lock_guard<std::mutex> lock(mutex_);
+    std::vector<Key> keys(count);
     for (std::size_t i = 0; i < count; ++i) {
         const glm::dvec3& p = points_m[i];
-        const Key key{float(p.x), float(p.y), float(p.z), 0.0f};
-        inOut[i] = applyLocked(inOut[i], key, [&] { return p; }, 0.0);
+        keys[i] = Key{float(p.x), float(p.y), float(p.z), 0.0f};
     }
+    buildObjects(count, keys.data(), points_m, 0.0);
+    for (std::size_t i = 0; i < count; ++i)
+        inOut[i] = applyLocked(inOut[i], keys[i], [&] { return points_m[i]; }, 0.0);
     points_ += count;
     seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -1139,42 +1222,40 @@ void NearField::applyAboveMany(std::size_t count, ShRgb* inOut, const double* x_
     if (!settings_.enabled) return;
     const auto t0 = std::chrono::steady_clock::now();
     std::lock_guard<std::mutex> lock(mutex_);
+    std::vector<Key> keys(count);
+    std::vector<glm::dvec3> points(count);
     for (std::size_t i = 0; i < count; ++i) {
         const double x = x_m[i], z = z_m[i];
-        const Key key{float(x), -1e30f, float(z), float(selfRadius_m)};
-        inOut[i] = applyLocked(
-            inOut[i], key, [&] { return glm::dvec3(x, scene_.groundHeight(x, z) + height_m, z); },
-            selfRadius_m);
+        keys[i] = Key{float(x), -1e30f, float(z), float(selfRadius_m)};
+        // The ground's height only for points not yet cached (as applyAbove).
+        points[i] = cache_.count(keys[i])
+                        ? glm::dvec3(x, 0.0, z)
+                        : glm::dvec3(x, scene_.groundHeight(x, z) + height_m, z);
     }
+    buildObjects(count, keys.data(), points.data(), selfRadius_m);
+    for (std::size_t i = 0; i < count; ++i)
+        inOut[i] = applyLocked(inOut[i], keys[i], [&] { return points[i]; }, selfRadius_m);
     points_ += count;
     seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-std::uint32_t NearField::normalIndex(const Key& key, const glm::dvec3& p,
-                                     const glm::vec3& n) const {
-    auto it = normalCache_.find(key);
-    if (it != normalCache_.end()) return it->second;
-    if (normalCache_.size() >= std::size_t(settings_.cacheEntries)) evictNormals();
-    const auto b0 = std::chrono::steady_clock::now();
-    // Nothing near: the entry has no transfer (any = false) and answers the far field.
-    const std::unique_ptr<NearFieldTransfer> full = build(p, 0.0);
+std::uint32_t NearField::addNormalEntry(const Key& key, const NormalTransfer& transfer,
+                                       const NormalApply& apply) const {
     const std::uint32_t index = std::uint32_t(normalTransfers_.size());
-    normalTransfers_.push_back(normalTransfer(full.get(), glm::dvec3(n)));
-    normalApplies_.push_back(normalApply(normalTransfers_.back(), glm::dvec3(n)));
+    normalTransfers_.push_back(transfer);
+    normalApplies_.push_back(apply);
     normalUsed_.push_back(uses_);
     normalBytes_ += kNormalEntryBytes;
     normalCache_.emplace(key, index);
-    ++builds_;
-    buildSeconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - b0).count();
     return index;
 }
 
 void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::dvec3* points_m,
-                               const glm::dvec3* normals, glm::vec3* out) const {
+                               const glm::dvec3* normals, glm::vec3* out,
+                               const float* weights) const {
     const auto t0 = std::chrono::steady_clock::now();
     static const NormalApply none;
     std::lock_guard<std::mutex> lock(mutex_);
-    const std::uint64_t clears = clears_;
     ++uses_;
     const auto keyOf = [&](std::size_t i) {
         const glm::dvec3& p = points_m[i];
@@ -1182,86 +1263,149 @@ void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::d
     };
     // The sequence this batch follows: the one that began with the same point, else the least
     // recently used.
-    Sequence* seq = &sequences_[0];
-    if (count > 0) {
+    const auto sequenceOf = [&]() {
+        Sequence* seq = &sequences_[0];
+        if (count == 0) return seq;
         const Key first = keyOf(0);
         for (Sequence& q : sequences_) {
-            if (!q.keys.empty() && q.keys[0] == first) {
-                seq = &q;
-                break;
-            }
+            if (!q.keys.empty() && q.first == first) return &q;
             if (q.used < seq->used) seq = &q;
         }
-    }
+        return seq;
+    };
+    constexpr std::uint32_t kNone = ~0u;      // a point not asked of the cache (disabled, not finite)
+    constexpr std::uint32_t kMissing = ~1u;   // a point with no entry yet
+    constexpr std::size_t kLookAhead = 16;    // points dropped from the batch since last time
     // This batch's keys and indices go into buffers kept from the last batch (no allocation).
     std::vector<Key>& keys = batchKeys_;
-    std::vector<std::uint32_t>& indices = batchIndex_;
-    keys.clear(), indices.clear();
-    keys.reserve(count), indices.reserve(count);
-    std::size_t cursor = 0;
-    constexpr std::size_t kLookAhead = 16;  // points dropped from the batch since last time
-    constexpr std::uint32_t kNone = ~0u;    // a point not asked of the cache (disabled, not finite)
-    // The point's entry, built if new, its light term brought up to date.
-    const auto resolve = [&](std::size_t i) {
-        const glm::dvec3& p = points_m[i];
-        const glm::vec3 n(normals[i]);
-        if (!settings_.enabled || !std::isfinite(p.x + p.y + p.z) || !std::isfinite(n.x + n.y + n.z))
-            return kNone;
-        const Key key = keyOf(i);
-        std::uint32_t index = 0;
-        bool found = false;
-        for (std::size_t d = 0; d < kLookAhead && cursor + d < seq->keys.size(); ++d) {
-            if (seq->keys[cursor + d] == key) {
-                index = seq->index[cursor + d];
-                cursor += d + 1;
-                found = true;
-                break;
+    std::vector<std::uint32_t>& at = batchAt_;
+    std::vector<std::size_t>& missing = batchMissing_;
+    Sequence* seq = nullptr;
+    // Every point's entry, found on its sequence or in the map, or kMissing; the points without
+    // an entry in `missing` (each key once).
+    const auto find = [&]() {
+        seq = sequenceOf();
+        keys.clear(), at.assign(count, kNone), missing.clear();
+        keys.reserve(count);
+        std::size_t cursor = 0;
+        for (std::size_t i = 0; i < count; ++i) {
+            const glm::dvec3& p = points_m[i];
+            const glm::dvec3& n = normals[i];
+            if (!settings_.enabled || !std::isfinite(p.x + p.y + p.z) ||
+                !std::isfinite(n.x + n.y + n.z) || (weights && !(weights[i] > 0.0f))) {
+                keys.push_back(Key{});
+                continue;
+            }
+            const Key key = keyOf(i);
+            keys.push_back(key);
+            bool found = false;
+            for (std::size_t d = 0; d < kLookAhead && cursor + d < seq->keys.size(); ++d) {
+                if (seq->keys[cursor + d] == key) {
+                    at[i] = seq->index[cursor + d];
+                    cursor += d + 1;
+                    found = true;
+                    break;
+                }
+            }
+            if (found) {
+                // A point on a sequence last asked under this light has its light term already
+                // (its entry counts as used when the cache is full: see evictNormals).
+                if (seq->lightEpoch == lightEpoch_) continue;
+            } else {
+                auto it = normalCache_.find(key);
+                if (it == normalCache_.end()) {
+                    at[i] = kMissing;
+                    missing.push_back(i);
+                    continue;
+                }
+                at[i] = it->second;
+                normalUsed_[at[i]] = uses_;
+            }
+            NormalApply& na = normalApplies_[at[i]];
+            if (na.any && na.lightEpoch != lightEpoch_) {
+                NormalTransfer& nt = normalTransfers_[at[i]];
+                updateLightTerm(nt, light_.direction, lightEpoch_);
+                na.light = nt.light, na.lightEpoch = nt.lightEpoch;
             }
         }
-        // Found in the map, or new: marked as used now (a sequence's entries count as used when
-        // the cache is full: see evictNormals).
-        if (!found) index = normalIndex(key, p, n), normalUsed_[index] = uses_;
-        keys.push_back(key), indices.push_back(index);
-        // A point on a sequence last asked under this light has its light term already.
-        if (found && seq->lightEpoch == lightEpoch_) return index;
-        NormalApply& na = normalApplies_[index];
-        if (na.any && na.lightEpoch != lightEpoch_) {
-            NormalTransfer& nt = normalTransfers_[index];
-            updateLightTerm(nt, light_.direction, lightEpoch_);
-            na.light = nt.light, na.lightEpoch = nt.lightEpoch;
+    };
+    find();
+    if (!missing.empty()) {
+        // Room first: evicting moves the kept entries (and clears the sequences), so the batch
+        // is found again. A batch larger than the cache's room stays whole until the next.
+        if (normalCache_.size() + missing.size() > std::size_t(settings_.cacheEntries)) {
+            evictNormals();
+            find();
         }
-        return index;
-    };
-    const auto answer = [&](std::size_t i, std::uint32_t index) {
-        out[i] = applyNormalTransfer(index == kNone ? none : normalApplies_[index], far[i],
-                                     glm::vec3(normals[i]), light_);
-    };
-    // Every point's entry first, then the sums, which only read: on two threads for a frame's
-    // corners (a sum is ~30 ns). If the caches dropped entries meanwhile (the batch's earlier
-    // indices are stale), point by point instead.
-    std::vector<std::uint32_t>& at = batchAt_;
-    at.resize(count);
-    for (std::size_t i = 0; i < count; ++i) at[i] = resolve(i);
-    if (clears_ != clears) {
-        for (std::size_t i = 0; i < count; ++i) answer(i, resolve(i));
-    } else {
-        constexpr std::size_t kGrain = 2048;
-        if (count <= kGrain) {
-            for (std::size_t i = 0; i < count; ++i) answer(i, at[i]);
+        const auto b0 = std::chrono::steady_clock::now();
+        // A point asked twice in one batch is built once.
+        std::vector<std::size_t>& unique = batchUnique_;
+        unique.clear();
+        {
+            tsl::hopscotch_map<Key, std::uint32_t, KeyHash> first;
+            for (std::size_t i : missing)
+                if (first.emplace(keys[i], std::uint32_t(unique.size())).second) unique.push_back(i);
+        }
+        // The builds only read the scene and the light: on every thread (a corner's is ~0.2 ms,
+        // and a frame that refines patches asks hundreds).
+        std::vector<NormalTransfer> transfers(unique.size());
+        std::vector<NormalApply> applies(unique.size());
+        const auto buildOne = [&](std::size_t u) {
+            const std::size_t i = unique[u];
+            // Nothing near: the entry has no transfer (any = false) and answers the far field.
+            const std::unique_ptr<NearFieldTransfer> full = build(points_m[i], 0.0);
+            NormalTransfer& nt = transfers[u];
+            nt = normalTransfer(full.get(), normals[i]);
+            if (full) updateLightTerm(nt, light_.direction, lightEpoch_);
+            applies[u] = normalApply(nt, normals[i]);
+        };
+        if (unique.size() == 1) {
+            buildOne(0);
         } else {
+            tbb::this_task_arena::isolate([&] {
+                tbb::parallel_for(std::size_t(0), unique.size(), buildOne);
+            });
+        }
+        for (std::size_t u = 0; u < unique.size(); ++u)
+            addNormalEntry(keys[unique[u]], transfers[u], applies[u]);
+        for (std::size_t i : missing) at[i] = normalCache_.find(keys[i])->second;
+        builds_ += unique.size();
+        buildSeconds_ +=
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - b0).count();
+    }
+    // The sums only read: on two threads for a frame's corners (a sum is ~30 ns).
+    const auto answer = [&](std::size_t i) {
+        const glm::vec3 n(normals[i]);
+        if (at[i] == kNone) {
+            out[i] = applyNormalTransfer(none, far[i], n, light_);
+            return;
+        }
+        out[i] = applyNormalTransfer(normalApplies_[at[i]], far[i], n, light_);
+        if (weights && weights[i] < 1.0f)
+            out[i] = glm::mix(applyNormalTransfer(none, far[i], n, light_), out[i], weights[i]);
+    };
+    constexpr std::size_t kGrain = 2048;
+    if (count <= kGrain) {
+        for (std::size_t i = 0; i < count; ++i) answer(i);
+    } else {
+        tbb::this_task_arena::isolate([&] {
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, kGrain),
                               [&](const tbb::blocked_range<std::size_t>& r) {
-                                  for (std::size_t i = r.begin(); i != r.end(); ++i) answer(i, at[i]);
+                                  for (std::size_t i = r.begin(); i != r.end(); ++i) answer(i);
                               });
-        }
+        });
     }
-    // normalIndex may have emptied the caches (and the sequences with them): then this batch's
-    // indices before that point are stale, so it is not kept.
-    if (clears_ == clears) {
-        seq->keys.swap(keys), seq->index.swap(indices);
-        seq->used = uses_;  // this batch's reading of the use clock
-        seq->lightEpoch = lightEpoch_;
-    }
+    // The points asked of the cache become the batch's sequence.
+    std::vector<std::uint32_t>& indices = batchIndex_;
+    indices.clear();
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < count; ++i)
+        if (at[i] != kNone) keys[kept++] = keys[i], indices.push_back(at[i]);
+    keys.resize(kept);
+    seq->keys.swap(keys), seq->index.swap(indices);
+    if (count > 0) seq->first = keyOf(0);
+    seq->used = uses_;  // this batch's reading of the use clock
+    seq->lightEpoch = lightEpoch_;
     points_ += count;
     seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -1313,7 +1457,8 @@ void NearField::evictNormals() const {
     // The last batches' entries were used when those batches were asked (irradianceMany marks
     // only the entries it finds off its sequences).
     for (const Sequence& q : sequences_)
-        for (std::uint32_t i : q.index) normalUsed_[i] = std::max(normalUsed_[i], q.used);
+        for (std::uint32_t i : q.index)
+            if (i < normalUsed_.size()) normalUsed_[i] = std::max(normalUsed_[i], q.used);
     // The kept entries move down in their vectors; the map follows.
     const std::uint64_t cut = olderHalf(normalUsed_);
     constexpr std::uint32_t kGone = ~0u;
@@ -1339,7 +1484,6 @@ void NearField::evictNormals() const {
     normalBytes_ = normalCache_.size() * kNormalEntryBytes;
     // The sequences' indices are stale (see irradianceMany).
     for (Sequence& q : sequences_) q.keys.clear(), q.index.clear();
-    ++clears_;
 }
 
 std::size_t NearField::cachedPoints() const {
@@ -1400,42 +1544,72 @@ void NearFieldMethod::predictStage(const glm::dvec3& cameraPosition_m,
     far_->predictStage(cameraPosition_m, cameraVelocity_mps, timeOfDay_h, dt_s);
 }
 
-ShRgb NearFieldMethod::shAt(double x_m, double z_m) const {
-    const ShRgb far = far_->shAt(x_m, z_m);
-    if (!objectInRange(x_m, z_m)) return far;
-    return near_->applyAbove(far, x_m, z_m, kShadingHeight_m, kSelfRadius_m);
+namespace {
+
+// far + w (near - far): the near field faded in by w (see Range).
+ShRgb fadedNear(const ShRgb& far, const ShRgb& near, double w) {
+    return w >= 1.0 ? near : lerp(far, near, float(w));
 }
 
-bool NearFieldMethod::objectInRange(double x_m, double z_m) const {
-    return std::hypot(x_m - camera_m_.x, z_m - camera_m_.z) <= near_->settings().objectRange_m;
+}  // namespace
+
+double NearFieldMethod::weight(double x_m, double z_m, double range_m) const {
+    return rangeWeight(std::hypot(x_m - camera_m_.x, z_m - camera_m_.z), range_m);
+}
+
+ShRgb NearFieldMethod::shAt(double x_m, double z_m) const {
+    const ShRgb far = far_->shAt(x_m, z_m);
+    const double w = weight(x_m, z_m, near_->settings().objectRange_m);
+    if (w <= 0.0) return far;
+    return fadedNear(far, near_->applyAbove(far, x_m, z_m, kShadingHeight_m, kSelfRadius_m), w);
+}
+
+void NearFieldMethod::gather(std::size_t count, const double* x_m, const double* z_m,
+                             const ShRgb* far, double range_m) const {
+    nearIndex_.clear(), nearX_.clear(), nearZ_.clear(), nearSh_.clear(), nearWeight_.clear();
+    for (std::size_t i = 0; i < count; ++i) {
+        const double w = weight(x_m[i], z_m[i], range_m);
+        if (w <= 0.0) continue;
+        nearIndex_.push_back(i), nearX_.push_back(x_m[i]), nearZ_.push_back(z_m[i]);
+        nearSh_.push_back(far[i]), nearWeight_.push_back(w);
+    }
+}
+
+void NearFieldMethod::scatter(ShRgb* out) const {
+    for (std::size_t j = 0; j < nearIndex_.size(); ++j)
+        out[nearIndex_[j]] = fadedNear(out[nearIndex_[j]], nearSh_[j], nearWeight_[j]);
 }
 
 void NearFieldMethod::shAt(std::size_t count, const double* x_m, const double* z_m,
                            ShRgb* out) const {
     far_->shAt(count, x_m, z_m, out);
-    nearIndex_.clear(), nearX_.clear(), nearZ_.clear(), nearSh_.clear();
-    for (std::size_t i = 0; i < count; ++i) {
-        if (!objectInRange(x_m[i], z_m[i])) continue;
-        nearIndex_.push_back(i), nearX_.push_back(x_m[i]), nearZ_.push_back(z_m[i]);
-        nearSh_.push_back(out[i]);
-    }
+    gather(count, x_m, z_m, out, near_->settings().objectRange_m);
     near_->applyAboveMany(nearSh_.size(), nearSh_.data(), nearX_.data(), nearZ_.data(),
                           kShadingHeight_m, kSelfRadius_m);
-    for (std::size_t j = 0; j < nearIndex_.size(); ++j) out[nearIndex_[j]] = nearSh_[j];
+    scatter(out);
 }
 
 ShRgb NearFieldMethod::cornerShAt(double x_m, double z_m) const {
-    return near_->applyAbove(far_->cornerShAt(x_m, z_m), x_m, z_m, kShadingHeight_m);
+    const ShRgb far = far_->cornerShAt(x_m, z_m);
+    const double w = weight(x_m, z_m, near_->settings().cornerRange_m);
+    if (w <= 0.0) return far;
+    return fadedNear(far, near_->applyAbove(far, x_m, z_m, kShadingHeight_m), w);
 }
 
 void NearFieldMethod::cornerShAt(std::size_t count, const double* x_m, const double* z_m,
                                  ShRgb* out) const {
     far_->cornerShAt(count, x_m, z_m, out);
-    near_->applyAboveMany(count, out, x_m, z_m, kShadingHeight_m);
+    gather(count, x_m, z_m, out, near_->settings().cornerRange_m);
+    near_->applyAboveMany(nearSh_.size(), nearSh_.data(), nearX_.data(), nearZ_.data(),
+                          kShadingHeight_m);
+    scatter(out);
 }
 
 ShRgb NearFieldMethod::cornerShAtPoint(const glm::dvec3& point_m) const {
-    return near_->apply(far_->cornerShAt(point_m.x, point_m.z), point_m);
+    const ShRgb far = far_->cornerShAt(point_m.x, point_m.z);
+    const double w = weight(point_m.x, point_m.z, near_->settings().cornerRange_m);
+    if (w <= 0.0) return far;
+    return fadedNear(far, near_->apply(far, point_m), w);
 }
 
 void NearFieldMethod::cornerShAtPoints(std::size_t count, const glm::dvec3* points_m,
@@ -1443,7 +1617,12 @@ void NearFieldMethod::cornerShAtPoints(std::size_t count, const glm::dvec3* poin
     std::vector<double> x(count), z(count);
     for (std::size_t i = 0; i < count; ++i) x[i] = points_m[i].x, z[i] = points_m[i].z;
     far_->cornerShAt(count, x.data(), z.data(), out);
-    near_->applyMany(count, out, points_m);
+    gather(count, x.data(), z.data(), out, near_->settings().cornerRange_m);
+    std::vector<glm::dvec3> points;
+    points.reserve(nearIndex_.size());
+    for (std::size_t i : nearIndex_) points.push_back(points_m[i]);
+    near_->applyMany(points.size(), nearSh_.data(), points.data());
+    scatter(out);
 }
 
 void NearFieldMethod::cornerIrradianceAtPoints(std::size_t count, const glm::dvec3* points_m,
@@ -1452,7 +1631,10 @@ void NearFieldMethod::cornerIrradianceAtPoints(std::size_t count, const glm::dve
     for (std::size_t i = 0; i < count; ++i) x[i] = points_m[i].x, z[i] = points_m[i].z;
     std::vector<ShRgb> far(count);
     far_->cornerShAt(count, x.data(), z.data(), far.data());
-    near_->irradianceMany(count, far.data(), points_m, normals, out);
+    std::vector<float> w(count);
+    const double range = near_->settings().cornerRange_m;
+    for (std::size_t i = 0; i < count; ++i) w[i] = float(weight(x[i], z[i], range));
+    near_->irradianceMany(count, far.data(), points_m, normals, out, w.data());
 }
 
 MethodStatistics NearFieldMethod::methodStatistics() const {

@@ -16,6 +16,15 @@
 //   never in a capture, so they are near out to smallRadius_m. A plant's weight fades from 1 to 0
 //   over the last kNearFade of its radius (smoothstep), so a moving point (the car) gains and
 //   loses plants without a step.
+// [SECTION] Range
+//   The near field is put back where the picture can show it. Objects farther than
+//   objectRange_m from the camera (plants a few pixels tall) and terrain corners and road
+//   vertices farther than cornerRange_m (where a terrain patch is hundreds of metres across, so
+//   one corner's plants would colour the whole patch, and a road is a few pixels wide) take the
+//   far field alone. The near field fades out over the last kNearFade of each range
+//   (rangeWeight), so a point the camera leaves behind loses it without a step. Most of a
+//   frame's road vertices lie kilometres away: on the highway the range takes the near field's
+//   builds from about 5 to 1 a frame.
 // [SECTION] Caps
 //   An occluder is a sphere (world/Vegetation.h: crowns, trunks, rocks as spheres). Seen from a
 //   point p it is a cap of half-angle theta (sin theta = r / |c - p|) around d = (c - p) / |c - p|.
@@ -151,11 +160,18 @@ struct NearFieldSettings {
     int cacheEntries = 16384;  // about 2.5 kB each (objects), 0.5 kB (corners)
     // Objects (shAt: plants, the car) farther than this from the camera take the far field
     // alone: a few pixels tall, they show no near field, and they are most of the draw's
-    // lookups (4 600 of 7 500 a frame on the highway). Terrain corners and roads always take it.
+    // lookups (4 600 of 7 500 a frame on the highway).
     double objectRange_m = 64.0;
+    // Terrain corners and road vertices farther than this take the far field alone (see
+    // Range): there a patch is hundreds of metres across and a road a few pixels wide.
+    double cornerRange_m = 1000.0;
 };
+// The near field's weight at distance_m (horizontal) from the camera for a range: 1 out to
+// (1 - kNearFade) range, 0 from range on, smoothstep between (see Range).
+double rangeWeight(double distance_m, double range_m);
 // Reads {"enabled", "radius_m", "captureRadius_m", "smallRadius_m", "plants", "terrain",
-// "terrainRadius_m", "ground", "groundRadius_m", "groundCell_m", "cacheEntries", "objectRange_m"}
+// "terrainRadius_m", "ground", "groundRadius_m", "groundCell_m", "cacheEntries", "objectRange_m",
+// "cornerRange_m"}
 // (JsonFields, lighting/JsonFields.h).
 void readNearFieldSettings(JsonFields& fields, NearFieldSettings& settings);
 
@@ -392,8 +408,11 @@ class NearField {
     // The irradiance at fixed points for their normals (corners, road vertices: a point always
     // comes with the same normal), clamped at 0, from the far field there (see Through one
     // normal); cached by the point.
+    // With `weights`, each point's near field is faded in by its weight (0: the far field's
+    // irradiance, and the point is not asked of the cache).
     void irradianceMany(std::size_t count, const ShRgb* far, const glm::dvec3* points_m,
-                        const glm::dvec3* normals, glm::vec3* out) const;
+                        const glm::dvec3* normals, glm::vec3* out,
+                        const float* weights = nullptr) const;
     std::size_t cachedPoints() const;
     std::size_t cacheBytes() const;
     // Wall time spent in apply and the points it answered since the last resetCounters.
@@ -406,7 +425,12 @@ class NearField {
 
   private:
     // Null when nothing is near the point.
-    std::unique_ptr<NearFieldTransfer> build(const glm::dvec3& point_m, double selfRadius_m) const;
+    std::unique_ptr<NearFieldTransfer> build(const glm::dvec3& point_m, double selfRadius_m,
+                                             const GroundTerm* objectGroundTerm = nullptr) const;
+    // The batch's points not in the object cache, built on every thread and put in (a lone
+    // one is left to applyLocked).
+    void buildObjects(std::size_t count, const std::array<float, 4>* keys,
+                      const glm::dvec3* points_m, double selfRadius_m) const;
     ShRgb applyKeyed(const ShRgb& far, const std::array<float, 4>& key,
                      const std::function<glm::dvec3()>& point, double selfRadius_m) const;
     // The same with the lock held and without timing.
@@ -416,6 +440,11 @@ class NearField {
     std::vector<SphereOccluder> occluders(const glm::dvec3& point_m) const;
     // An object's ground term: the B-spline blend of the lattice's (see Ground), cached.
     GroundTerm objectGround(const glm::dvec3& point_m) const;
+    // The nine lattice points an object's ground term blends: their keys, weights and
+    // (x, lift above the ground, z).
+    void latticeOf(const glm::dvec3& point_m, std::array<float, 4> keys[9], double weights[9],
+                   glm::dvec3 points[9]) const;
+    GroundTerm latticeTerm(const glm::dvec3& latticePoint) const;
 
     const NearFieldScene& scene_;
     NearFieldSettings settings_;
@@ -450,10 +479,12 @@ class NearField {
     mutable std::vector<Key> batchKeys_;                   // the batch's, then a sequence's
     mutable std::vector<std::uint32_t> batchIndex_;
     mutable std::vector<std::uint32_t> batchAt_;  // each point's entry in the batch
+    mutable std::vector<std::size_t> batchMissing_, batchUnique_;  // the points to build
     // The draw asks its batches (corners, road vertices) in nearly the same order every frame:
     // the last few batches' keys and indices are walked alongside, and the map is asked only
     // where the order changed (a random probe of the map misses the processor's caches).
     struct Sequence {
+        Key first{};  // the batch's first point (asked of the cache or not)
         std::vector<Key> keys;
         std::vector<std::uint32_t> index;
         std::uint64_t used = 0;  // the use clock when this batch was last asked
@@ -461,9 +492,9 @@ class NearField {
     };
     static constexpr int kSequences = 4;
     mutable std::array<Sequence, kSequences> sequences_;
-    mutable std::uint64_t clears_ = 0;
-    std::uint32_t normalIndex(const Key& key, const glm::dvec3& point_m,
-                              const glm::vec3& normal) const;
+    // A new entry of the through-one-normal cache, marked used now; its index.
+    std::uint32_t addNormalEntry(const Key& key, const NormalTransfer& transfer,
+                                 const NormalApply& apply) const;
     std::uint32_t lightEpoch_ = 1;  // counts the light's moves of more than 0.5 degrees
     glm::dvec3 epochLight_{0.0};
     mutable double seconds_ = 0.0, buildSeconds_ = 0.0;
@@ -474,8 +505,8 @@ class NearField {
 // A capturing method with the near field: its captures leave the near plants out
 // (CaptureSettings::nearField, CubeCapture::captureFar) and every shading point gets them back.
 // Objects (shAt) within objectRange_m of the camera take theirs at kShadingHeight_m above their
-// ground point without their own spheres; terrain corners (cornerShAt) at kShadingHeight_m
-// above the corner.
+// ground point without their own spheres; terrain corners (cornerShAt) within cornerRange_m at
+// kShadingHeight_m above the corner. Both fade out over the last kNearFade of their range.
 class NearFieldMethod final : public AmbienceMethod {
   public:
     NearFieldMethod(std::unique_ptr<AmbienceMethod> far, std::unique_ptr<NearFieldScene> scene,
@@ -518,11 +549,15 @@ class NearFieldMethod final : public AmbienceMethod {
     std::unique_ptr<NearFieldScene> scene_;
     std::unique_ptr<NearField> near_;
     glm::dvec3 camera_m_{0.0};  // of the latest predictStage
-    // Objects farther from the camera take the far field alone (NearFieldSettings::objectRange_m).
-    bool objectInRange(double x_m, double z_m) const;
-    // Scratch of the batch shAt: the objects within objectRange_m and their SH.
+    // The near field's weight at (x, z) for a range (objectRange_m, cornerRange_m; see Range).
+    double weight(double x_m, double z_m, double range_m) const;
+    // The batches' points of weight > 0 with their far SH, into the scratch below; then the
+    // near field's answers faded into `out` at their indices.
+    void gather(std::size_t count, const double* x_m, const double* z_m, const ShRgb* far,
+                double range_m) const;
+    void scatter(ShRgb* out) const;
     mutable std::vector<std::size_t> nearIndex_;
-    mutable std::vector<double> nearX_, nearZ_;
+    mutable std::vector<double> nearX_, nearZ_, nearWeight_;
     mutable std::vector<ShRgb> nearSh_;
 };
 

@@ -215,6 +215,9 @@ const SettingInfo kRows[] = {
     {"nearField.objectRange_m", Kind::Number, 0.0, 1000.0, false,
      "objects farther than this from the camera take the far field alone [m]",
      [](S& s) -> void* { return &s.capture.nearField.objectRange_m; }, false},
+    {"nearField.cornerRange_m", Kind::Number, 0.0, 100000.0, false,
+     "terrain corners and road vertices farther than this take the far field alone [m]",
+     [](S& s) -> void* { return &s.capture.nearField.cornerRange_m; }, false},
 };
 
 std::vector<SettingInfo> makeTable() {

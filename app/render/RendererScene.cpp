@@ -240,7 +240,10 @@ void RendererScene::buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj
     const std::size_t drawnPatches = visible.size();
     addRoads(eye_m, &viewProj, settings_.terrain.viewRadius_m, ambient, out);
     std::size_t objects = 0;
-    addPlants(eye_m, &viewProj, false, ambient, out, &objects);
+    // The car's set is asked with the plants': new points in one batch are built together.
+    std::uint32_t vehicleSet = 0;
+    addPlants(eye_m, &viewProj, false, ambient, out, &objects, 0.0,
+              vehicle_ ? &vehicle_->position_m : nullptr, &vehicleSet);
     if (vehicle_) {
         // The camera's own car (docs/ARCHITECTURE.md "Terrain and objects": vegetation and vehicle
         // get per-pixel SH).
@@ -254,8 +257,7 @@ void RendererScene::buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj
         const glm::dvec3 rel =
             vehicle_->position_m + glm::dvec3(0.0, settings_.roadLift_m, 0.0) - eye_m;
         inst.positionScale = glm::vec4(float(rel.x), float(rel.y), float(rel.z), 1.0f);
-        inst.rotationSet = glm::vec2(float(vehicle_->heading_rad),
-                                     float(ambient.objectSet(vehicle_->position_m, out.ambientSets)));
+        inst.rotationSet = glm::vec2(float(vehicle_->heading_rad), float(vehicleSet));
         out.objects.push_back({&vehicleMesh_, {inst}});
         ++objects;
     }
@@ -321,7 +323,8 @@ static double drawnBase_m(const TerrainSurface& surface, const Plant& p) {
 
 void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewProj, bool capture,
                               const AmbientSource& ambient, DrawList& out, std::size_t* drawn,
-                              double nearRadius_m) {
+                              double nearRadius_m, const glm::dvec3* alsoAt,
+                              std::uint32_t* alsoSet) {
     const Vegetation& veg = world_.vegetation();
     const double range = capture ? settings_.captureTreeRange_m : settings_.plantRange_m;
     Frustum frustum{};
@@ -408,8 +411,10 @@ void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewP
         }
     }
     // The plants' own sets in one batch (lighting's batch lookups: one lock, one timing).
+    if (alsoAt) pendingAt_.push_back(*alsoAt);
     pendingIndex_.resize(pendingAt_.size());
     ambient.objectSets(pendingAt_.size(), pendingAt_.data(), out.ambientSets, pendingIndex_.data());
+    if (alsoAt) *alsoSet = pendingIndex_.back();
     for (std::size_t i = 0; i < pendingSlot_.size(); ++i) {
         const auto [batch, instance] = pendingSlot_[i];
         out.objects[batch].instances[instance].rotationSet.y = float(pendingIndex_[i]);

@@ -84,9 +84,11 @@ class RendererScene {
     void updateTerrain(const glm::dvec3& eye_m);
     void addRoads(const glm::dvec3& eye_m, const glm::mat4* viewProj, double range_m,
                   const AmbientSource& ambient, DrawList& out);
+    // With `alsoAt`, that point's set (the car's) is asked in the plants' batch, into *alsoSet.
     void addPlants(const glm::dvec3& centre_m, const glm::mat4* viewProj, bool capture,
                    const AmbientSource& ambient, DrawList& out, std::size_t* drawn,
-                   double nearRadius_m = 0.0);
+                   double nearRadius_m = 0.0, const glm::dvec3* alsoAt = nullptr,
+                   std::uint32_t* alsoSet = nullptr);
     // Plants casting into a light frustum: trees only (`treesOnly`, the capture scene) or every
     // kind, at a LOD by size in texels (texel_m 0: proxies).
     void addPlantCasters(const glm::dvec3& eye_m, const glm::mat4& lightViewProj,

@@ -432,6 +432,94 @@ TEST(NearField, ALargeBatchAnswersAsPointByPoint) {
     }
 }
 
+TEST(NearField, AnObjectBatchAnswersAsPointByPoint) {
+    // New objects asked in one batch (built together, their ground's lattice terms first)
+    // against the same objects asked one by one of a fresh NearField: equal exactly, with the
+    // ground term on (its lattice shared by neighbours) and plants near.
+    struct Scene final : FixedLightScene {
+        void occludersNear(const glm::dvec3& p, double radius_m, double,
+                           std::vector<SphereOccluder>& out) const override {
+            for (int i = -4; i <= 4; ++i) {
+                const glm::dvec3 c(7.0 * i, 4.0, 2.0 * (i % 2));
+                if (std::hypot(c.x - p.x, c.z - p.z) < radius_m)
+                    out.push_back({c, 1.8, glm::dvec3(0.2, 0.4, 0.1)});
+            }
+        }
+        bool groundAt(double x, double, GroundPoint& out, const GroundPoint*) const override {
+            out.height_m = 0.0, out.normal = {0.0, 1.0, 0.0};
+            out.albedo = glm::dvec3(0.1 + 0.2 * (std::fmod(std::abs(x), 5.0) > 2.5));
+            return true;
+        }
+    } scene;
+    const NearFieldSettings settings;
+    NearField batch(scene, settings), single(scene, settings);
+    batch.setTimeOfDay(12.0), single.setTimeOfDay(12.0);
+    const ShRgb far = toFloat(constantSky(glm::dvec3(1.0, 0.9, 0.8)));
+    std::vector<double> x, z;
+    for (int i = 0; i < 30; ++i) x.push_back(1.3 * i - 19.0), z.push_back(0.7 * (i % 6) - 2.0);
+    x.push_back(x[3]), z.push_back(z[3]);  // one object asked twice
+    std::vector<ShRgb> got(x.size(), far);
+    batch.applyAboveMany(x.size(), got.data(), x.data(), z.data(), 1.0, 0.05);
+    EXPECT_EQ(batch.builds(), 30u);
+    for (std::size_t i = 0; i < x.size(); ++i) {
+        const ShRgb want = single.applyAbove(far, x[i], z[i], 1.0, 0.05);
+        for (int k = 0; k < kShCoefficients; ++k)
+            ASSERT_EQ(got[i].c[k], want.c[k]) << "object " << i << " k " << k;
+    }
+    // The near field did something: a plant's neighbour is darker than the sky alone.
+    EXPECT_LT(got[0].c[0].x, far.c[0].x);
+}
+
+TEST(NearField, RangeWeightFadesOverTheLastQuarter) {
+    EXPECT_EQ(rangeWeight(0.0, 100.0), 1.0);
+    EXPECT_EQ(rangeWeight(75.0, 100.0), 1.0);
+    EXPECT_EQ(rangeWeight(100.0, 100.0), 0.0);
+    EXPECT_EQ(rangeWeight(1e9, 100.0), 0.0);
+    EXPECT_EQ(rangeWeight(5.0, 0.0), 0.0);
+    EXPECT_DOUBLE_EQ(rangeWeight(87.5, 100.0), 0.5);  // smoothstep's middle
+    EXPECT_EQ(rangeWeight(std::nan(""), 100.0), 0.0);
+    // Monotone, and without a step: neighbouring distances differ by at most the slope's bound
+    // (smoothstep's 1.5 over the fade's 25 m).
+    double last = 1.0;
+    for (double d = 0.0; d <= 110.0; d += 0.01) {
+        const double w = rangeWeight(d, 100.0);
+        EXPECT_LE(w, last);
+        EXPECT_LE(last - w, 1.5 / 25.0 * 0.01 + 1e-12) << d;
+        last = w;
+    }
+}
+
+TEST(NearField, AWeightFadesACornersNearFieldAndZeroAsksNothing) {
+    struct Scene final : FixedLightScene {
+        void occludersNear(const glm::dvec3& p, double radius_m, double,
+                           std::vector<SphereOccluder>& out) const override {
+            const glm::dvec3 c(2.0, 5.0, 0.0);
+            if (std::hypot(c.x - p.x, c.z - p.z) < radius_m)
+                out.push_back({c, 2.5, glm::dvec3(0.2, 0.4, 0.1)});
+        }
+    } scene;
+    const NearFieldSettings settings;
+    NearField near(scene, settings);
+    near.setTimeOfDay(12.0);
+    const ShRgb far = toFloat(constantSky(glm::dvec3(1.0, 0.9, 0.8)));
+    const glm::dvec3 p(0.0, 2.0, 0.0), n = glm::normalize(glm::dvec3(0.1, 1.0, 0.0));
+    glm::vec3 full, zero, half;
+    const float w0 = 0.0f, w1 = 1.0f, wh = 0.25f;
+    near.irradianceMany(1, &far, &p, &n, &zero, &w0);
+    EXPECT_EQ(near.builds(), 0u);  // weight 0: not asked of the cache
+    EXPECT_EQ(near.cachedPoints(), 0u);
+    const glm::vec3 farOnly = glm::max(shIrradiance(far, glm::vec3(n)), glm::vec3(0.0f));
+    EXPECT_EQ(zero, farOnly);
+    near.irradianceMany(1, &far, &p, &n, &full, &w1);
+    glm::vec3 unweighted;
+    near.irradianceMany(1, &far, &p, &n, &unweighted);
+    EXPECT_EQ(full, unweighted);
+    EXPECT_LT(full.x, 0.95f * farOnly.x);  // the sphere overhead darkens
+    near.irradianceMany(1, &far, &p, &n, &half, &wh);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(half[c], 0.75f * farOnly[c] + 0.25f * full[c], 1e-5f);
+    EXPECT_EQ(near.builds(), 1u);
+}
+
 TEST(NearField, CapOverlapClosedCases) {
     EXPECT_EQ(capOverlap(0.2, 0.3, 0.6), 0.0);
     EXPECT_NEAR(capOverlap(0.2, 0.5, 0.1), 2.0 * kPi * (1.0 - std::cos(0.2)), 1e-12);
