@@ -121,6 +121,7 @@ bool sameNearField(const NearFieldSettings& a, const NearFieldSettings& b) {
            a.smallRadius_m == b.smallRadius_m && a.terrain == b.terrain &&
            a.terrainRadius_m == b.terrainRadius_m && a.ground == b.ground &&
            a.groundRadius_m == b.groundRadius_m && a.groundCell_m == b.groundCell_m &&
+           a.latticeRange_m == b.latticeRange_m &&
            a.cacheEntries == b.cacheEntries &&
            a.objectRange_m == b.objectRange_m && a.cornerRange_m == b.cornerRange_m;
 }

@@ -32,6 +32,7 @@ void readNearFieldSettings(JsonFields& f, NearFieldSettings& s) {
     f.boolean("ground", s.ground);
     f.number("groundRadius_m", s.groundRadius_m, 0.5, 500.0);
     f.number("groundCell_m", s.groundCell_m, 0.25, 64.0);
+    f.number("latticeRange_m", s.latticeRange_m, 0.0, 1e6);
     f.integer("cacheEntries", s.cacheEntries, 1, 1 << 24);
     f.number("objectRange_m", s.objectRange_m, 0.0, 1e6);
     f.number("cornerRange_m", s.cornerRange_m, 0.0, 1e6);
@@ -1030,6 +1031,16 @@ void NearField::setTimeOfDay(double timeOfDay_h) {
     }
 }
 
+void NearField::setViewer(const glm::dvec3& camera_m) {
+    if (!std::isfinite(camera_m.x + camera_m.z)) return;
+    std::lock_guard<std::mutex> lock(mutex_);
+    viewer_ = camera_m, viewerKnown_ = true;
+}
+
+bool NearField::blendsLattice(const glm::dvec3& p) const {
+    return !viewerKnown_ || std::hypot(p.x - viewer_.x, p.z - viewer_.z) < settings_.latticeRange_m;
+}
+
 std::vector<SphereOccluder> NearField::occluders(const glm::dvec3& p) const {
     std::vector<SphereOccluder> out;
     if (!settings_.plants) return out;
@@ -1053,8 +1064,9 @@ std::unique_ptr<NearFieldTransfer> NearField::build(const glm::dvec3& p, double 
     const std::vector<SphereOccluder>& caps0 = selfRadius_m > 0.0 ? others : all;
     GroundTerm ground;
     if (settings_.ground)
-        ground = selfRadius_m > 0.0
-                     ? (objectGroundTerm ? *objectGroundTerm : objectGround(p))
+        ground = objectGroundTerm ? *objectGroundTerm
+                 : selfRadius_m > 0.0 && blendsLattice(p)
+                     ? objectGround(p)
                      : groundTerm(p, scene_, caps0, all, settings_.groundRadius_m, light_.direction);
     std::vector<OccluderCap> caps = nearOccluders(p, caps0, horizon);
     if (caps.empty() && !ground.any) return nullptr;
@@ -1130,12 +1142,16 @@ void NearField::buildObjects(std::size_t count, const Key* keys, const glm::dvec
     const auto b0 = std::chrono::steady_clock::now();
     // An object's ground blends lattice terms: the missing ones first, on every thread.
     std::vector<GroundTerm> grounds(missing.size());
-    const bool objectGrounds = settings_.ground && selfRadius_m > 0.0;
-    if (objectGrounds) {
+    std::vector<char> lattice(missing.size(), 0);
+    for (std::size_t m = 0; m < missing.size(); ++m)
+        lattice[m] = settings_.ground && selfRadius_m > 0.0 && blendsLattice(points_m[missing[m]]);
+    if (std::count(lattice.begin(), lattice.end(), 1) > 0) {
         std::vector<Key> latticeKeys;
         std::vector<glm::dvec3> latticeAt;
         tsl::hopscotch_map<Key, char, KeyHash> seen;
-        for (std::size_t i : missing) {
+        for (std::size_t m = 0; m < missing.size(); ++m) {
+            if (!lattice[m]) continue;
+            const std::size_t i = missing[m];
             Key k[9];
             double w[9];
             glm::dvec3 at[9];
@@ -1156,14 +1172,15 @@ void NearField::buildObjects(std::size_t count, const Key* keys, const glm::dvec
             groundCache_.emplace(latticeKeys[j], CachedGround{terms[j], now});
             groundBytes_ += kGroundEntryBytes;
         }
-        for (std::size_t m = 0; m < missing.size(); ++m) grounds[m] = objectGround(points_m[missing[m]]);
+        for (std::size_t m = 0; m < missing.size(); ++m)
+            if (lattice[m]) grounds[m] = objectGround(points_m[missing[m]]);
     }
     // Then the transfers, which read only the scene, the light and those terms.
     std::vector<std::unique_ptr<NearFieldTransfer>> built(missing.size());
     tbb::this_task_arena::isolate([&] {
         tbb::parallel_for(std::size_t(0), missing.size(), [&](std::size_t m) {
             built[m] = build(points_m[missing[m]], selfRadius_m,
-                             objectGrounds ? &grounds[m] : nullptr);
+                             lattice[m] ? &grounds[m] : nullptr);
         });
     });
     if (cache_.size() + missing.size() > std::size_t(settings_.cacheEntries)) evictObjects();
@@ -1202,7 +1219,7 @@ ShRgb NearField::applyKeyed(const ShRgb& far, const Key& key,
 }
 
 void NearField::applyMany(std::size_t count, ShRgb* inOut, const glm::dvec3* points_m) const {
-    if (!settings_.enabled) return;
+    if (!settings_.enabled || count == 0) return;
     const auto t0 = std::chrono::steady_clock::now();
     std::lock_guard<std::mutex> lock(mutex_);
     std::vector<Key> keys(count);
@@ -1219,7 +1236,7 @@ void NearField::applyMany(std::size_t count, ShRgb* inOut, const glm::dvec3* poi
 
 void NearField::applyAboveMany(std::size_t count, ShRgb* inOut, const double* x_m,
                                const double* z_m, double height_m, double selfRadius_m) const {
-    if (!settings_.enabled) return;
+    if (!settings_.enabled || count == 0) return;
     const auto t0 = std::chrono::steady_clock::now();
     std::lock_guard<std::mutex> lock(mutex_);
     std::vector<Key> keys(count);
@@ -1253,6 +1270,7 @@ std::uint32_t NearField::addNormalEntry(const Key& key, const NormalTransfer& tr
 void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::dvec3* points_m,
                                const glm::dvec3* normals, glm::vec3* out,
                                const float* weights) const {
+    if (count == 0) return;
     const auto t0 = std::chrono::steady_clock::now();
     static const NormalApply none;
     std::lock_guard<std::mutex> lock(mutex_);
@@ -1540,7 +1558,10 @@ void NearFieldMethod::predictStage(const glm::dvec3& cameraPosition_m,
                                    double dt_s) {
     near_->resetCounters();
     if (std::isfinite(timeOfDay_h)) near_->setTimeOfDay(timeOfDay_h);
-    if (std::isfinite(cameraPosition_m.x + cameraPosition_m.z)) camera_m_ = cameraPosition_m;
+    if (std::isfinite(cameraPosition_m.x + cameraPosition_m.z)) {
+        camera_m_ = cameraPosition_m;
+        near_->setViewer(cameraPosition_m);
+    }
     far_->predictStage(cameraPosition_m, cameraVelocity_mps, timeOfDay_h, dt_s);
 }
 
@@ -1631,10 +1652,26 @@ void NearFieldMethod::cornerIrradianceAtPoints(std::size_t count, const glm::dve
     for (std::size_t i = 0; i < count; ++i) x[i] = points_m[i].x, z[i] = points_m[i].z;
     std::vector<ShRgb> far(count);
     far_->cornerShAt(count, x.data(), z.data(), far.data());
-    std::vector<float> w(count);
+    // Points out of range take the far field's irradiance here (what the far method alone
+    // would give); the near field is asked for the rest, in the batch's order.
     const double range = near_->settings().cornerRange_m;
-    for (std::size_t i = 0; i < count; ++i) w[i] = float(weight(x[i], z[i], range));
-    near_->irradianceMany(count, far.data(), points_m, normals, out, w.data());
+    std::vector<std::size_t> index;
+    std::vector<ShRgb> nearFar;
+    std::vector<glm::dvec3> nearAt, nearNormal;
+    std::vector<float> w;
+    for (std::size_t i = 0; i < count; ++i) {
+        const double wi = weight(x[i], z[i], range);
+        if (wi <= 0.0) {
+            out[i] = glm::max(shIrradiance(far[i], glm::vec3(normals[i])), glm::vec3(0.0f));
+            continue;
+        }
+        index.push_back(i), nearFar.push_back(far[i]), nearAt.push_back(points_m[i]);
+        nearNormal.push_back(normals[i]), w.push_back(float(wi));
+    }
+    std::vector<glm::vec3> near(index.size());
+    near_->irradianceMany(index.size(), nearFar.data(), nearAt.data(), nearNormal.data(),
+                          near.data(), w.data());
+    for (std::size_t j = 0; j < index.size(); ++j) out[index[j]] = near[j];
 }
 
 MethodStatistics NearFieldMethod::methodStatistics() const {

@@ -154,6 +154,10 @@ struct NearFieldSettings {
     bool ground = true;             // the ground below the point (see Ground)
     double groundRadius_m = 16.0;   // how far from the point's foot the ground is its own
     double groundCell_m = 6.0;      // the lattice whose ground terms objects blend (see Ground)
+    // Objects first built this close to the camera (the car, which moves) blend the lattice's
+    // terms; those first built farther (plants entering objectRange_m, which stand still) take
+    // their own, as corners do (see Ground).
+    double latticeRange_m = 16.0;
     // Points the draw asks for (terrain corners, objects) are cached with their transfer; when a
     // cache holds this many, the half of it used least recently is dropped (the view's points,
     // asked every frame, stay).
@@ -170,8 +174,8 @@ struct NearFieldSettings {
 // (1 - kNearFade) range, 0 from range on, smoothstep between (see Range).
 double rangeWeight(double distance_m, double range_m);
 // Reads {"enabled", "radius_m", "captureRadius_m", "smallRadius_m", "plants", "terrain",
-// "terrainRadius_m", "ground", "groundRadius_m", "groundCell_m", "cacheEntries", "objectRange_m",
-// "cornerRange_m"}
+// "terrainRadius_m", "ground", "groundRadius_m", "groundCell_m", "latticeRange_m", "cacheEntries",
+// "objectRange_m", "cornerRange_m"}
 // (JsonFields, lighting/JsonFields.h).
 void readNearFieldSettings(JsonFields& fields, NearFieldSettings& settings);
 
@@ -393,6 +397,9 @@ class NearField {
     NearField(const NearFieldScene& scene, const NearFieldSettings& settings);
     const NearFieldSettings& settings() const { return settings_; }
     void setTimeOfDay(double timeOfDay_h);
+    // Where the camera is (see NearFieldSettings::latticeRange_m); until told, every object
+    // blends the lattice.
+    void setViewer(const glm::dvec3& camera_m);
     // The far field at `point_m` with the near field applied, cached by the point. With
     // selfRadius_m > 0 an object's own spheres (on its axis: centres within selfRadius_m
     // horizontally of the point) are left out.
@@ -496,6 +503,10 @@ class NearField {
     std::uint32_t addNormalEntry(const Key& key, const NormalTransfer& transfer,
                                  const NormalApply& apply) const;
     std::uint32_t lightEpoch_ = 1;  // counts the light's moves of more than 0.5 degrees
+    glm::dvec3 viewer_{0.0};
+    bool viewerKnown_ = false;
+    // Whether an object built at `point_m` now blends the lattice (see latticeRange_m).
+    bool blendsLattice(const glm::dvec3& point_m) const;
     glm::dvec3 epochLight_{0.0};
     mutable double seconds_ = 0.0, buildSeconds_ = 0.0;
     mutable std::size_t points_ = 0, builds_ = 0;

@@ -90,7 +90,7 @@ TEST(TuningPanel, EveryKeyOfTheSettingsFileIsInTheTable) {
         "asideFraction", "relightBySkyLevel", "nearField.enabled", "nearField.radius_m",
         "nearField.captureRadius_m", "nearField.plants", "nearField.smallRadius_m",
         "nearField.terrain", "nearField.terrainRadius_m", "nearField.ground",
-        "nearField.groundRadius_m", "nearField.groundCell_m", "nearField.cacheEntries",
+        "nearField.groundRadius_m", "nearField.groundCell_m", "nearField.latticeRange_m", "nearField.cacheEntries",
         "nearField.objectRange_m", "nearField.cornerRange_m"};
     EXPECT_EQ(tunableSettings().size(), std::size(keys));
     for (const char* key : keys) EXPECT_NE(findSetting(key), nullptr) << key;

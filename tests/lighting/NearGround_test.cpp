@@ -215,5 +215,33 @@ TEST(NearGround, AMovingObjectsGroundTermChangesSmoothly) {
     EXPECT_NEAR(meanA, meanB, 0.03 * meanB);
 }
 
+TEST(NearGround, AnObjectFirstBuiltFarFromTheCameraTakesItsOwnGroundTerm) {
+    // A plant entering the objects' range stands still: it takes the ground term of its own
+    // point, as a corner there does (exactly: no plants, so nothing of its own to leave out).
+    // The car, near the camera, blends the lattice instead, which differs on a checkered ground.
+    FlatGround scene;
+    scene.lightIrradiance = glm::dvec3(500.0);
+    scene.albedo = [](double x, double z) {
+        const bool odd = (int(std::floor(x / 3.0)) + int(std::floor(z / 3.0))) % 2 != 0;
+        return glm::dvec3(odd ? 0.4 : 0.1);
+    };
+    const NearFieldSettings settings;
+    NearField still(scene, settings), moving(scene, settings), point(scene, settings);
+    for (NearField* n : {&still, &moving, &point}) n->setTimeOfDay(12.0);
+    const double x = 4.3, z = 1.9;
+    still.setViewer({x + 60.0, 0.0, z});  // beyond latticeRange_m
+    moving.setViewer({x + 5.0, 0.0, z});
+    const ShRgb far{};
+    const ShRgb s = still.applyAbove(far, x, z, 2.0, NearFieldMethod::kSelfRadius_m);
+    const ShRgb m = moving.applyAbove(far, x, z, 2.0, NearFieldMethod::kSelfRadius_m);
+    const ShRgb p = point.apply(far, glm::dvec3(x, 2.0, z));
+    for (int k = 0; k < kShCoefficients; ++k) EXPECT_EQ(s.c[k], p.c[k]) << k;
+    const float own = shIrradiance(s, glm::vec3(0, -1, 0)).g;
+    const float blended = shIrradiance(m, glm::vec3(0, -1, 0)).g;
+    EXPECT_GT(own, 0.0f);
+    EXPECT_GT(std::abs(own - blended), 0.01f * own);
+}
+
 }  // namespace
 }  // namespace amb
+
