@@ -81,12 +81,14 @@
 //   T (the hide is the same for every channel); the light term is remade from lit, g and b when
 //   the light moves, with the visibility of the light the point was built in. A white ground
 //   under a uniform far field changes nothing.
-//   Objects move (the car): 32 directions swept over a tree's shadow or the albedo's noise would
-//   make the term jitter by a few per cent a frame. So an object's ground term is the quadratic
-//   B-spline blend (C1 in the position) of the terms at the 3 x 3 nearest points of a lattice of
-//   groundCell_m, each built once at the object's lift above the ground (no plant stopping its
-//   rays: the object's own caps hide what stands in front) and cached; terrain corners and road
-//   vertices, which never move, take their own.
+//   The car moves: 32 directions swept over a tree's shadow or the albedo's noise would make
+//   the term jitter by a few per cent a frame. So an object first built within latticeRange_m
+//   of the camera takes the quadratic B-spline blend (C1 in the position) of the terms at the
+//   3 x 3 nearest points of a lattice of groundCell_m, each built once at the object's lift
+//   above the ground (no plant stopping its rays: the object's own caps hide what stands in
+//   front) and cached. Plants, first built as they enter objectRange_m, and terrain corners and
+//   road vertices never move: they take their own (a plant's with its own spheres left out of
+//   what stops the rays).
 // [SECTION] Overlap (occluders must not darken twice)
 //   Caps are taken largest first; cap i keeps the weight w_i = f_i prod_{j<i} (1 - f_j O_ij /
 //   Omega_i), f its fade (see Radii), O_ij the solid angle it shares with an earlier cap j (the
