@@ -1145,7 +1145,7 @@ void NearField::buildObjects(std::size_t count, const Key* keys, const glm::dvec
     std::vector<char> lattice(missing.size(), 0);
     for (std::size_t m = 0; m < missing.size(); ++m)
         lattice[m] = settings_.ground && selfRadius_m > 0.0 && blendsLattice(points_m[missing[m]]);
-    if (std::count(lattice.begin(), lattice.end(), 1) > 0) {
+    if (std::find(lattice.begin(), lattice.end(), 1) != lattice.end()) {
         std::vector<Key> latticeKeys;
         std::vector<glm::dvec3> latticeAt;
         tsl::hopscotch_map<Key, char, KeyHash> seen;
@@ -1269,7 +1269,7 @@ std::uint32_t NearField::addNormalEntry(const Key& key, const NormalTransfer& tr
 
 void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::dvec3* points_m,
                                const glm::dvec3* normals, glm::vec3* out,
-                               const float* weights) const {
+                               const double* weights) const {
     if (count == 0) return;
     const auto t0 = std::chrono::steady_clock::now();
     static const NormalApply none;
@@ -1283,7 +1283,6 @@ void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::d
     // recently used.
     const auto sequenceOf = [&]() {
         Sequence* seq = &sequences_[0];
-        if (count == 0) return seq;
         const Key first = keyOf(0);
         for (Sequence& q : sequences_) {
             if (!q.keys.empty() && q.first == first) return &q;
@@ -1310,7 +1309,7 @@ void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::d
             const glm::dvec3& p = points_m[i];
             const glm::dvec3& n = normals[i];
             if (!settings_.enabled || !std::isfinite(p.x + p.y + p.z) ||
-                !std::isfinite(n.x + n.y + n.z) || (weights && !(weights[i] > 0.0f))) {
+                !std::isfinite(n.x + n.y + n.z) || (weights && !(weights[i] > 0.0))) {
                 keys.push_back(Key{});
                 continue;
             }
@@ -1399,8 +1398,9 @@ void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::d
             return;
         }
         out[i] = applyNormalTransfer(normalApplies_[at[i]], far[i], n, light_);
-        if (weights && weights[i] < 1.0f)
-            out[i] = glm::mix(applyNormalTransfer(none, far[i], n, light_), out[i], weights[i]);
+        if (weights && weights[i] < 1.0)
+            out[i] = glm::mix(applyNormalTransfer(none, far[i], n, light_), out[i],
+                              float(weights[i]));
     };
     constexpr std::size_t kGrain = 2048;
     if (count <= kGrain) {
@@ -1421,7 +1421,7 @@ void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::d
         if (at[i] != kNone) keys[kept++] = keys[i], indices.push_back(at[i]);
     keys.resize(kept);
     seq->keys.swap(keys), seq->index.swap(indices);
-    if (count > 0) seq->first = keyOf(0);
+    seq->first = keyOf(0);
     seq->used = uses_;  // this batch's reading of the use clock
     seq->lightEpoch = lightEpoch_;
     points_ += count;
@@ -1652,26 +1652,17 @@ void NearFieldMethod::cornerIrradianceAtPoints(std::size_t count, const glm::dve
     for (std::size_t i = 0; i < count; ++i) x[i] = points_m[i].x, z[i] = points_m[i].z;
     std::vector<ShRgb> far(count);
     far_->cornerShAt(count, x.data(), z.data(), far.data());
-    // Points out of range take the far field's irradiance here (what the far method alone
-    // would give); the near field is asked for the rest, in the batch's order.
-    const double range = near_->settings().cornerRange_m;
-    std::vector<std::size_t> index;
-    std::vector<ShRgb> nearFar;
-    std::vector<glm::dvec3> nearAt, nearNormal;
-    std::vector<float> w;
-    for (std::size_t i = 0; i < count; ++i) {
-        const double wi = weight(x[i], z[i], range);
-        if (wi <= 0.0) {
-            out[i] = glm::max(shIrradiance(far[i], glm::vec3(normals[i])), glm::vec3(0.0f));
-            continue;
-        }
-        index.push_back(i), nearFar.push_back(far[i]), nearAt.push_back(points_m[i]);
-        nearNormal.push_back(normals[i]), w.push_back(float(wi));
-    }
-    std::vector<glm::vec3> near(index.size());
-    near_->irradianceMany(index.size(), nearFar.data(), nearAt.data(), nearNormal.data(),
-                          near.data(), w.data());
-    for (std::size_t j = 0; j < index.size(); ++j) out[index[j]] = near[j];
+    // Every point's far-field irradiance (what the far method alone gives, not the near field's
+    // time); the near field's answers replace it within range.
+    for (std::size_t i = 0; i < count; ++i)
+        out[i] = glm::max(shIrradiance(far[i], glm::vec3(normals[i])), glm::vec3(0.0f));
+    gather(count, x.data(), z.data(), far.data(), near_->settings().cornerRange_m);
+    std::vector<glm::dvec3> points, pointNormals;
+    for (std::size_t i : nearIndex_) points.push_back(points_m[i]), pointNormals.push_back(normals[i]);
+    std::vector<glm::vec3> near(points.size());
+    near_->irradianceMany(points.size(), nearSh_.data(), points.data(), pointNormals.data(),
+                          near.data(), nearWeight_.data());
+    for (std::size_t j = 0; j < nearIndex_.size(); ++j) out[nearIndex_[j]] = near[j];
 }
 
 MethodStatistics NearFieldMethod::methodStatistics() const {

@@ -421,7 +421,7 @@ class NearField {
     // irradiance, and the point is not asked of the cache).
     void irradianceMany(std::size_t count, const ShRgb* far, const glm::dvec3* points_m,
                         const glm::dvec3* normals, glm::vec3* out,
-                        const float* weights = nullptr) const;
+                        const double* weights = nullptr) const;
     std::size_t cachedPoints() const;
     std::size_t cacheBytes() const;
     // Wall time spent in apply and the points it answered since the last resetCounters.

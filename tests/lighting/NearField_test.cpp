@@ -504,7 +504,7 @@ TEST(NearField, AWeightFadesACornersNearFieldAndZeroAsksNothing) {
     const ShRgb far = toFloat(constantSky(glm::dvec3(1.0, 0.9, 0.8)));
     const glm::dvec3 p(0.0, 2.0, 0.0), n = glm::normalize(glm::dvec3(0.1, 1.0, 0.0));
     glm::vec3 full, zero, half;
-    const float w0 = 0.0f, w1 = 1.0f, wh = 0.25f;
+    const double w0 = 0.0, w1 = 1.0, wh = 0.25;
     near.irradianceMany(1, &far, &p, &n, &zero, &w0);
     EXPECT_EQ(near.builds(), 0u);  // weight 0: not asked of the cache
     EXPECT_EQ(near.cachedPoints(), 0u);
