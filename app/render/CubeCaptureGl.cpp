@@ -197,7 +197,8 @@ ShadowBinding CubeCaptureGl::prepareShadows(const glm::dvec3& probe_m) {
         const glm::dvec3 centre(x, scene_->world().height(x, z), z);
         shadowMap_->fit(layer, centre, ss.captureRegion_m, epochLight_);
         const glm::dvec3 snapped = shadowMap_->centre(layer);
-        scene_->buildCaptureCasters(snapped, shadowMap_->casterViewProj(layer, snapped), casters_);
+        scene_->buildCaptureCasters(snapped, shadowMap_->casterViewProj(layer, snapped),
+                                    shadowMap_->texel_m(layer), casters_);
         shadowStats_.triangles = shadowMap_->render(layer, *drawer_, casters_, snapped);
         ++shadowStats_.renders;
         shadowStats_.render_ms +=

@@ -510,7 +510,8 @@ void RendererScene::buildVehicleCaster(const glm::dvec3& eye_m, DrawList& out) {
 }
 
 void RendererScene::buildCaptureCasters(const glm::dvec3& centre_m,
-                                        const glm::mat4& lightViewProj, DrawList& out) {
+                                        const glm::mat4& lightViewProj, double texel_m,
+                                        DrawList& out) {
     out.clear();
     if (horizontalDistance(centre_m, shadowTerrainCentre_) > 1e-3 ||
         shadowTerrain_.indexCount == 0) {
@@ -522,7 +523,7 @@ void RendererScene::buildCaptureCasters(const glm::dvec3& centre_m,
     d.mesh = &shadowTerrain_;
     d.origin = glm::vec3(shadowTerrainCentre_ - centre_m);
     out.terrain.push_back(d);
-    addPlantCasters(centre_m, lightViewProj, 0.0, true, out);
+    addPlantCasters(centre_m, lightViewProj, texel_m, true, out);
 }
 
 void RendererScene::addPlantCasters(const glm::dvec3& eye_m, const glm::mat4& lightViewProj,

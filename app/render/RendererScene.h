@@ -71,10 +71,12 @@ class RendererScene {
     void buildCasters(const glm::dvec3& eye_m, const glm::mat4& lightViewProj, double texel_m,
                       DrawList& out, bool withVehicle = true);
     // Shadow casters of the capture scene over a region: a terrain proxy centred on `centre_m`
-    // and the tree proxies (all of them: a tree in the near field still shades the ground the
-    // probe sees), culled to the map; positions relative to `centre_m`.
+    // and the trees (all of them: a tree in the near field still shades the ground the probe
+    // sees), culled to the map, at the LOD of their height in texels of `texel_m` as the main
+    // view's cascades choose it (on a map of about a metre a texel, nearly all the 8-triangle
+    // hull); positions relative to `centre_m`.
     void buildCaptureCasters(const glm::dvec3& centre_m, const glm::mat4& lightViewProj,
-                             DrawList& out);
+                             double texel_m, DrawList& out);
 
     const World& world() const { return world_; }
     const RendererSceneSettings& settings() const { return settings_; }
