@@ -1032,13 +1032,14 @@ void NearField::setTimeOfDay(double timeOfDay_h) {
 }
 
 void NearField::setViewer(const glm::dvec3& camera_m) {
-    if (!std::isfinite(camera_m.x + camera_m.z)) return;
+    if (!std::isfinite(camera_m.x + camera_m.y + camera_m.z)) return;
     std::lock_guard<std::mutex> lock(mutex_);
     viewer_ = camera_m, viewerKnown_ = true;
 }
 
 bool NearField::blendsLattice(const glm::dvec3& p) const {
-    return !viewerKnown_ || std::hypot(p.x - viewer_.x, p.z - viewer_.z) < settings_.latticeRange_m;
+    // In three dimensions: a flight's ground point, 60 m below the camera, is not the car.
+    return !viewerKnown_ || glm::length(p - viewer_) < settings_.latticeRange_m;
 }
 
 std::vector<SphereOccluder> NearField::occluders(const glm::dvec3& p) const {

@@ -157,8 +157,9 @@ struct NearFieldSettings {
     double groundRadius_m = 16.0;   // how far from the point's foot the ground is its own
     double groundCell_m = 6.0;      // the lattice whose ground terms objects blend (see Ground)
     // Objects first built this close to the camera (the car, which moves) blend the lattice's
-    // terms; those first built farther (plants entering objectRange_m, which stand still) take
-    // their own, as corners do (see Ground).
+    // terms; those first built farther (plants entering objectRange_m, which stand still, and
+    // a flight's ground point 60 m below it: the distance is in three dimensions) take their
+    // own, as corners do (see Ground).
     double latticeRange_m = 16.0;
     // Points the draw asks for (terrain corners, objects) are cached with their transfer; when a
     // cache holds this many, the half of it used least recently is dropped (the view's points,

@@ -226,16 +226,21 @@ TEST(NearGround, AnObjectFirstBuiltFarFromTheCameraTakesItsOwnGroundTerm) {
         return glm::dvec3(odd ? 0.4 : 0.1);
     };
     const NearFieldSettings settings;
-    NearField still(scene, settings), moving(scene, settings), point(scene, settings);
-    for (NearField* n : {&still, &moving, &point}) n->setTimeOfDay(12.0);
+    NearField still(scene, settings), moving(scene, settings), point(scene, settings),
+        below(scene, settings);
+    for (NearField* n : {&still, &moving, &point, &below}) n->setTimeOfDay(12.0);
     const double x = 4.3, z = 1.9;
     still.setViewer({x + 60.0, 0.0, z});  // beyond latticeRange_m
     moving.setViewer({x + 5.0, 0.0, z});
+    // A flight's camera 60 m straight above: the point below it is not the car.
+    below.setViewer({x, 62.0, z});
     const ShRgb far{};
     const ShRgb s = still.applyAbove(far, x, z, 2.0, NearFieldMethod::kSelfRadius_m);
     const ShRgb m = moving.applyAbove(far, x, z, 2.0, NearFieldMethod::kSelfRadius_m);
+    const ShRgb b = below.applyAbove(far, x, z, 2.0, NearFieldMethod::kSelfRadius_m);
     const ShRgb p = point.apply(far, glm::dvec3(x, 2.0, z));
     for (int k = 0; k < kShCoefficients; ++k) EXPECT_EQ(s.c[k], p.c[k]) << k;
+    for (int k = 0; k < kShCoefficients; ++k) EXPECT_EQ(b.c[k], p.c[k]) << k;
     const float own = shIrradiance(s, glm::vec3(0, -1, 0)).g;
     const float blended = shIrradiance(m, glm::vec3(0, -1, 0)).g;
     EXPECT_GT(own, 0.0f);
