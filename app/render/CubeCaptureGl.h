@@ -17,8 +17,8 @@
 // Shadows of the main light (ShadowSettings::captures; app/render/ShadowMap.h):
 //   coarse — maps over regions of captureRegion_m, of the capture scene's casters (terrain
 //            proxy, every tree at the LOD of its height in the map's texels, as the main view's
-//            cascades pick it: on these maps of about a metre a texel nearly every tree is the
-//            8-triangle hull), one per square cell of the ground, centred on it, so that
+//            cascades pick it: on these maps of about a metre a texel broadleaves and the smaller
+//            conifers are the 8-triangle hull), one per square cell of the ground, centred on it, so that
 //            every tree a probe in the cell captures is on it; the last captureMaps cells kept,
 //            each rendered for a light epoch (the time of day in steps in which the sun turns
 //            by at most captureRefresh_deg) and re-rendered when the epoch changes, so a map

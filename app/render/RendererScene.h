@@ -73,8 +73,8 @@ class RendererScene {
     // Shadow casters of the capture scene over a region: a terrain proxy centred on `centre_m`
     // and the trees (all of them: a tree in the near field still shades the ground the probe
     // sees), culled to the map, at the LOD of their height in texels of `texel_m` as the main
-    // view's cascades choose it (on a map of about a metre a texel, nearly all the 8-triangle
-    // hull); positions relative to `centre_m`.
+    // view's cascades choose it (on a map of about a metre a texel, broadleaves and the smaller
+    // conifers take the 8-triangle hull); positions relative to `centre_m`.
     void buildCaptureCasters(const glm::dvec3& centre_m, const glm::mat4& lightViewProj,
                              double texel_m, DrawList& out);
 
