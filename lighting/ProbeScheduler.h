@@ -56,7 +56,9 @@ struct ProbeSchedulerSettings {
     // Candidates and priority.
     double finestRingCells = 1.0;     // finest-level candidates within this x s_L of the path
     double coarseRingCells = 2.0;     // coarser-level candidates within this x s_L of the path
-    int maxWiden = 3;                 // doublings of the rings when everything near is fresh
+    // Doublings of the rings when every point in them is fresh; 0: idle instead (why this value:
+    // docs/TUNING.md "Scheduler").
+    int maxWiden = 0;
     double minReachSpeed_mps = 10.0;  // speed assumed for time-to-reach when slower
     double gapBonus_s = 0.5;
     double staleBias_s = 1.0;

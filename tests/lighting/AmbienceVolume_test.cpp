@@ -138,8 +138,11 @@ TEST(AmbienceVolume, NanInfAndNegativeCapturesNeverEnterTheStore) {
 
 TEST(AmbienceVolume, InsertionChangesNothingAtItsInstant) {
     // With dt = 0 nothing ages, blends or fades, yet probes keep completing and entering the
-    // store: what any point sees must not change at all.
-    Rig rig;
+    // store: what any point sees must not change at all. A camera standing still fills its
+    // rings in 28 probes and then idles; widened rings keep it capturing past that.
+    AmbienceVolumeSettings widening;
+    widening.scheduler.maxWiden = 3;
+    Rig rig(widening);
     const glm::dvec3 p(50.0, 1.7, 50.0);
     rig.run(120, p);
     std::vector<ShRgb> seen;

@@ -190,6 +190,42 @@ TEST(ProbeScheduler, ChoosesNearTheCameraFirstSkipsFreshAndReturnsToStale) {
     EXPECT_TRUE(again->refresh);
 }
 
+TEST(ProbeScheduler, IdlesOnceTheRingsAreFreshUnlessToldToWiden) {
+    // A camera standing still: by default the scheduler fills each level's ring around it
+    // (finestRingCells, coarseRingCells of the level's spacing) and then idles; with maxWiden 2
+    // it goes on to points up to four times as far out before it idles.
+    AnchorStoreSettings storeSettings;
+    storeSettings.blendTime_s = 0.0;
+    const glm::dvec3 cam(100.4, 0.0, 50.2);
+    EXPECT_EQ(ProbeSchedulerSettings{}.maxWiden, 0);
+    int counts[2] = {0, 0};
+    double farthest[2] = {0.0, 0.0};  // in ring radii of the point's level
+    for (int widen : {0, 2}) {
+        ProbeSchedulerSettings settings;
+        settings.maxWiden = widen;
+        AnchorStore store(storeSettings);
+        ProbeScheduler s(settings);
+        s.observe(cam, {0, 0, 0}, 0.0);
+        const int finest = s.finestLevel(store, 10.0);
+        const int slot = widen ? 1 : 0;
+        while (auto c = s.choose(store, 10.0)) {
+            const double ring = (c->key.level == finest ? settings.finestRingCells
+                                                        : settings.coarseRingCells) *
+                                store.spacing_m(c->key.level);
+            const double d = std::hypot(store.keyX_m(c->key) - cam.x, store.keyZ_m(c->key) - cam.z);
+            farthest[slot] = std::max(farthest[slot], d / ring);
+            store.insert(c->key, ShRgb{}, {store.keyX_m(c->key), 2.0, store.keyZ_m(c->key)}, 100.0);
+            if (++counts[slot] > 5000) break;
+        }
+    }
+    EXPECT_GT(counts[0], 0);
+    EXPECT_LE(farthest[0], 1.0 + 1e-9);  // never beyond the rings
+    EXPECT_LT(counts[1], 5000);           // widening is bounded too: then it idles
+    EXPECT_GT(counts[1], 4 * counts[0]);  // rings twice and four times as wide
+    EXPECT_GT(farthest[1], 2.0);
+    EXPECT_LE(farthest[1], 4.0 + 1e-9);
+}
+
 TEST(ProbeScheduler, AdaptiveDensityLeavesUniformCellsCoarse) {
     // Fill every level but the finest around the camera, then ask for the finest level's new
     // points: with uniform coarse anchors none is taken; where one coarse corner differs, the
