@@ -170,8 +170,9 @@ struct NearFieldSettings {
     // lookups (4 600 of 7 500 a frame on the highway).
     double objectRange_m = 64.0;
     // Terrain corners and road vertices farther than this take the far field alone (see
-    // Range): there a patch is hundreds of metres across and a road a few pixels wide.
-    double cornerRange_m = 1000.0;
+    // Range): there a patch is hundreds of metres across and a road a few pixels wide. (why
+    // this value: docs/TUNING.md "Near field")
+    double cornerRange_m = 500.0;
 };
 // The near field's weight at distance_m (horizontal) from the camera for a range: 1 out to
 // (1 - kNearFade) range, 0 from range on, smoothstep between (see Range).
