@@ -100,8 +100,12 @@ class AmbienceMethod {
     // The ambient irradiance (clamped at 0) at such points for their normals: what the draw
     // asks at terrain corners and road vertices. By default cornerShAtPoints evaluated there;
     // the near field answers it with its transfer seen through the normal (lighting/NearField.h).
+    // With `patch_m`, point i is a terrain corner whose value the draw blends across patches
+    // patch_m[i] across (0: a point, a road vertex); only the near field reads it.
     virtual void cornerIrradianceAtPoints(std::size_t count, const glm::dvec3* points_m,
-                                          const glm::dvec3* normals, glm::vec3* out) const {
+                                          const glm::dvec3* normals, glm::vec3* out,
+                                          const double* patch_m = nullptr) const {
+        (void)patch_m;
         std::vector<ShRgb> sh(count);
         cornerShAtPoints(count, points_m, sh.data());
         for (std::size_t i = 0; i < count; ++i)

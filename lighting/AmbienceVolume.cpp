@@ -123,7 +123,8 @@ bool sameNearField(const NearFieldSettings& a, const NearFieldSettings& b) {
            a.groundRadius_m == b.groundRadius_m && a.groundCell_m == b.groundCell_m &&
            a.latticeRange_m == b.latticeRange_m &&
            a.cacheEntries == b.cacheEntries &&
-           a.objectRange_m == b.objectRange_m && a.cornerRange_m == b.cornerRange_m;
+           a.objectRange_m == b.objectRange_m && a.cornerRange_m == b.cornerRange_m &&
+           a.patchMean == b.patchMean && a.patchSamples == b.patchSamples;
 }
 
 }  // namespace

@@ -36,6 +36,8 @@ void readNearFieldSettings(JsonFields& f, NearFieldSettings& s) {
     f.integer("cacheEntries", s.cacheEntries, 1, 1 << 24);
     f.number("objectRange_m", s.objectRange_m, 0.0, 1e6);
     f.number("cornerRange_m", s.cornerRange_m, 0.0, 1e6);
+    f.boolean("patchMean", s.patchMean);
+    f.integer("patchSamples", s.patchSamples, 1, 9);
 }
 
 double rangeWeight(double distance_m, double range_m) {
@@ -491,7 +493,48 @@ void updateLightTerm(NormalTransfer& t, const glm::dvec3& lightDirection, std::u
         const GroundLight g = groundLight(t.groundNormal, t.groundHideA, lightDirection);
         t.light += t.groundLit * float(g.cosine) - t.groundShow * float(g.delta);
     }
+    if (t.groundParts) {
+        for (const GroundLightPart& part : *t.groundParts) {
+            const GroundLight g = groundLight(part.normal, part.hideA, lightDirection);
+            t.light += part.lit * float(g.cosine) - part.show * float(g.delta);
+        }
+    }
     t.lightEpoch = epoch;
+}
+
+NormalTransfer meanNormalTransfer(const NormalTransfer* const* samples, const double* weights,
+                                  std::size_t count) {
+    NormalTransfer m;
+    auto parts = std::make_shared<std::vector<GroundLightPart>>();
+    std::array<double, kShCoefficients> hide{}, groundHide{};
+    std::array<double, 3 * kShCoefficients> show{};
+    glm::dvec3 light(0.0);
+    for (std::size_t i = 0; i < count; ++i) {
+        const NormalTransfer& t = *samples[i];
+        if (!t.any) continue;
+        const double w = weights[i];
+        for (int k = 0; k < kShCoefficients; ++k)
+            hide[k] += w * t.hide[k], groundHide[k] += w * t.groundHide[k];
+        for (std::size_t k = 0; k < show.size(); ++k) show[k] += w * t.show[k];
+        light += w * glm::dvec3(t.light);
+        if (t.ground)
+            parts->push_back(GroundLightPart{t.groundShow * float(w), t.groundLit * float(w),
+                                             t.groundNormal, t.groundHideA});
+        if (t.groundParts)
+            for (GroundLightPart p : *t.groundParts) {
+                p.show *= float(w), p.lit *= float(w);
+                parts->push_back(p);
+            }
+        m.lightEpoch = t.lightEpoch;
+        m.any = true;
+    }
+    if (!m.any) return m;
+    for (int k = 0; k < kShCoefficients; ++k)
+        m.hide[k] = float(hide[k]), m.groundHide[k] = float(groundHide[k]);
+    for (std::size_t k = 0; k < show.size(); ++k) m.show[k] = float(show[k]);
+    m.light = glm::vec3(light);
+    if (!parts->empty()) m.groundParts = std::move(parts);
+    return m;
 }
 
 NormalApply normalApply(const NormalTransfer& t, const glm::dvec3& normal) {
@@ -976,6 +1019,15 @@ constexpr std::size_t kGroundEntryBytes = sizeof(std::array<float, 4>) + sizeof(
 constexpr std::size_t kNormalEntryBytes = sizeof(std::array<float, 4>) + sizeof(std::uint32_t) +
                                           kMapSlot + sizeof(NormalTransfer) +
                                           sizeof(NormalApply) + sizeof(std::uint64_t);
+// A patch mean's entry holds its samples' ground light terms too.
+std::size_t normalEntryBytes(const NormalTransfer& t) {
+    return kNormalEntryBytes +
+           (t.groundParts ? sizeof(std::vector<GroundLightPart>) + 2 * sizeof(void*) +
+                                t.groundParts->size() * sizeof(GroundLightPart)
+                          : 0);
+}
+constexpr std::size_t kSampleEntryBytes =
+    sizeof(std::array<float, 4>) + sizeof(NormalTransfer) + kMapSlot;
 std::size_t objectEntryBytes(const NearFieldTransfer* t) {
     return sizeof(std::array<float, 4>) + sizeof(void*) + sizeof(std::uint64_t) + kMapSlot +
            (t ? sizeof(NearFieldTransfer) : 0);
@@ -1102,6 +1154,20 @@ GroundTerm NearField::latticeTerm(const glm::dvec3& at) const {
     // No plant stops the rays from a lattice point: one standing at it would take its ground out
     // of the blend for an object that does not see that plant.
     return groundTerm(q, scene_, {}, occluders(q), settings_.groundRadius_m, light_.direction);
+}
+
+NormalTransfer NearField::groundSample(double x_m, double z_m) const {
+    GroundPoint g;
+    if (!scene_.groundAt(x_m, z_m, g)) {
+        g.height_m = scene_.groundHeight(x_m, z_m);
+        g.normal = glm::dvec3(0.0, 1.0, 0.0);
+    }
+    if (!std::isfinite(g.height_m) || !std::isfinite(g.normal.x + g.normal.y + g.normal.z)) return {};
+    const std::unique_ptr<NearFieldTransfer> full =
+        build(glm::dvec3(x_m, g.height_m + kShadingHeight_m, z_m), 0.0);
+    NormalTransfer nt = normalTransfer(full.get(), g.normal);
+    if (full) updateLightTerm(nt, light_.direction, lightEpoch_);
+    return nt;
 }
 
 GroundTerm NearField::objectGround(const glm::dvec3& p) const {
@@ -1263,22 +1329,28 @@ std::uint32_t NearField::addNormalEntry(const Key& key, const NormalTransfer& tr
     normalTransfers_.push_back(transfer);
     normalApplies_.push_back(apply);
     normalUsed_.push_back(uses_);
-    normalBytes_ += kNormalEntryBytes;
+    normalBytes_ += normalEntryBytes(transfer);
     normalCache_.emplace(key, index);
     return index;
 }
 
 void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::dvec3* points_m,
-                               const glm::dvec3* normals, glm::vec3* out,
-                               const double* weights) const {
+                               const glm::dvec3* normals, glm::vec3* out, const double* weights,
+                               const double* patch_m) const {
     if (count == 0) return;
     const auto t0 = std::chrono::steady_clock::now();
     static const NormalApply none;
     std::lock_guard<std::mutex> lock(mutex_);
     ++uses_;
+    // A terrain corner's patch size when it takes the patch mean, else 0 (see Patch mean).
+    const auto patchOf = [&](std::size_t i) {
+        return settings_.patchMean && patch_m && patch_m[i] > 0.0 && patch_m[i] < 1e6
+                   ? patch_m[i]
+                   : 0.0;
+    };
     const auto keyOf = [&](std::size_t i) {
         const glm::dvec3& p = points_m[i];
-        return Key{float(p.x), float(p.y), float(p.z), -1.0f};
+        return Key{float(p.x), float(p.y), float(p.z), -1.0f - float(patchOf(i))};
     };
     // The sequence this batch follows: the one that began with the same point, else the least
     // recently used.
@@ -1364,12 +1436,53 @@ void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::d
             for (std::size_t i : missing)
                 if (first.emplace(keys[i], std::uint32_t(unique.size())).second) unique.push_back(i);
         }
+        // A patch mean's samples (see Patch mean): its offsets a side and their tent weights.
+        const int m = std::max(1, settings_.patchSamples);
+        std::vector<double> offset(static_cast<std::size_t>(m)), tent(static_cast<std::size_t>(m));
+        double tentSum = 0.0;
+        for (int j = 0; j < m; ++j) {
+            offset[std::size_t(j)] = -1.0 + 2.0 * (j + 1) / (m + 1);  // times the patch size
+            tentSum += tent[std::size_t(j)] = 1.0 - std::abs(offset[std::size_t(j)]);
+        }
+        for (double& w : tent) w /= tentSum;
+        const auto sampleAt = [&](std::size_t i, int j) {
+            const double p = patchOf(i);
+            return glm::dvec2(points_m[i].x + offset[std::size_t(j % m)] * p,
+                              points_m[i].z + offset[std::size_t(j / m)] * p);
+        };
+        const auto sampleKey = [](const glm::dvec2& q) {
+            return Key{float(q.x), float(q.y), 0.0f, 0.0f};
+        };
+        // The samples not cached yet, each once.
+        std::vector<glm::dvec2> toSample;
+        {
+            if (sampleCache_.size() > std::size_t(settings_.cacheEntries)) sampleCache_.clear();
+            tsl::hopscotch_map<Key, std::uint32_t, KeyHash> queued;
+            for (std::size_t i : unique) {
+                if (patchOf(i) <= 0.0) continue;
+                for (int j = 0; j < m * m; ++j) {
+                    const glm::dvec2 q = sampleAt(i, j);
+                    const Key k = sampleKey(q);
+                    if (sampleCache_.find(k) == sampleCache_.end() &&
+                        queued.emplace(k, std::uint32_t(toSample.size())).second)
+                        toSample.push_back(q);
+                }
+            }
+        }
         // The builds only read the scene and the light: on every thread (a corner's is ~0.2 ms,
-        // and a frame that refines patches asks hundreds).
-        std::vector<NormalTransfer> transfers(unique.size());
+        // and a frame that refines patches asks hundreds). A patch mean is put together after.
+        std::vector<NormalTransfer> transfers(unique.size()), samples(toSample.size());
         std::vector<NormalApply> applies(unique.size());
+        std::size_t pointBuilds = 0;
+        for (std::size_t i : unique) pointBuilds += patchOf(i) > 0.0 ? 0 : 1;
         const auto buildOne = [&](std::size_t u) {
+            if (u >= unique.size()) {
+                const glm::dvec2& q = toSample[u - unique.size()];
+                samples[u - unique.size()] = groundSample(q.x, q.y);
+                return;
+            }
             const std::size_t i = unique[u];
+            if (patchOf(i) > 0.0) return;
             // Nothing near: the entry has no transfer (any = false) and answers the far field.
             const std::unique_ptr<NearFieldTransfer> full = build(points_m[i], 0.0);
             NormalTransfer& nt = transfers[u];
@@ -1377,17 +1490,37 @@ void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::d
             if (full) updateLightTerm(nt, light_.direction, lightEpoch_);
             applies[u] = normalApply(nt, normals[i]);
         };
-        if (unique.size() == 1) {
+        const std::size_t tasks = unique.size() + toSample.size();
+        if (tasks == 1) {
             buildOne(0);
         } else {
             tbb::this_task_arena::isolate([&] {
-                tbb::parallel_for(std::size_t(0), unique.size(), buildOne);
+                tbb::parallel_for(std::size_t(0), tasks, buildOne);
             });
+        }
+        for (std::size_t k = 0; k < toSample.size(); ++k)
+            sampleCache_.emplace(sampleKey(toSample[k]), std::move(samples[k]));
+        std::vector<const NormalTransfer*> meanOf(std::size_t(m * m));
+        std::vector<double> meanWeight(std::size_t(m * m));
+        for (std::size_t u = 0; u < unique.size(); ++u) {
+            const std::size_t i = unique[u];
+            if (patchOf(i) <= 0.0) continue;
+            for (int j = 0; j < m * m; ++j) {
+                auto it = sampleCache_.find(sampleKey(sampleAt(i, j)));
+                NormalTransfer& sample = it.value();
+                if (sample.any && sample.lightEpoch != lightEpoch_)
+                    updateLightTerm(sample, light_.direction, lightEpoch_);
+                meanOf[std::size_t(j)] = &sample;
+                meanWeight[std::size_t(j)] = tent[std::size_t(j % m)] * tent[std::size_t(j / m)];
+            }
+            transfers[u] = meanNormalTransfer(meanOf.data(), meanWeight.data(), meanOf.size());
+            transfers[u].lightEpoch = lightEpoch_;
+            applies[u] = normalApply(transfers[u], normals[i]);
         }
         for (std::size_t u = 0; u < unique.size(); ++u)
             addNormalEntry(keys[unique[u]], transfers[u], applies[u]);
         for (std::size_t i : missing) at[i] = normalCache_.find(keys[i])->second;
-        builds_ += unique.size();
+        builds_ += pointBuilds + toSample.size();
         buildSeconds_ +=
             std::chrono::duration<double>(std::chrono::steady_clock::now() - b0).count();
     }
@@ -1500,19 +1633,20 @@ void NearField::evictNormals() const {
             ++it;
         }
     }
-    normalBytes_ = normalCache_.size() * kNormalEntryBytes;
+    normalBytes_ = 0;
+    for (const NormalTransfer& t : normalTransfers_) normalBytes_ += normalEntryBytes(t);
     // The sequences' indices are stale (see irradianceMany).
     for (Sequence& q : sequences_) q.keys.clear(), q.index.clear();
 }
 
 std::size_t NearField::cachedPoints() const {
     std::lock_guard<std::mutex> lock(mutex_);
-    return cache_.size() + normalCache_.size() + groundCache_.size();
+    return cache_.size() + normalCache_.size() + groundCache_.size() + sampleCache_.size();
 }
 
 std::size_t NearField::cacheBytes() const {
     std::lock_guard<std::mutex> lock(mutex_);
-    return bytes_ + normalBytes_ + groundBytes_;
+    return bytes_ + normalBytes_ + groundBytes_ + sampleCache_.size() * kSampleEntryBytes;
 }
 
 double NearField::seconds() const {
@@ -1648,7 +1782,8 @@ void NearFieldMethod::cornerShAtPoints(std::size_t count, const glm::dvec3* poin
 }
 
 void NearFieldMethod::cornerIrradianceAtPoints(std::size_t count, const glm::dvec3* points_m,
-                                               const glm::dvec3* normals, glm::vec3* out) const {
+                                               const glm::dvec3* normals, glm::vec3* out,
+                                               const double* patch_m) const {
     std::vector<double> x(count), z(count);
     for (std::size_t i = 0; i < count; ++i) x[i] = points_m[i].x, z[i] = points_m[i].z;
     std::vector<ShRgb> far(count);
@@ -1659,10 +1794,14 @@ void NearFieldMethod::cornerIrradianceAtPoints(std::size_t count, const glm::dve
         out[i] = glm::max(shIrradiance(far[i], glm::vec3(normals[i])), glm::vec3(0.0f));
     gather(count, x.data(), z.data(), far.data(), near_->settings().cornerRange_m);
     std::vector<glm::dvec3> points, pointNormals;
-    for (std::size_t i : nearIndex_) points.push_back(points_m[i]), pointNormals.push_back(normals[i]);
+    nearPatch_.clear();
+    for (std::size_t i : nearIndex_) {
+        points.push_back(points_m[i]), pointNormals.push_back(normals[i]);
+        nearPatch_.push_back(patch_m ? patch_m[i] : 0.0);
+    }
     std::vector<glm::vec3> near(points.size());
     near_->irradianceMany(points.size(), nearSh_.data(), points.data(), pointNormals.data(),
-                          near.data(), nearWeight_.data());
+                          near.data(), nearWeight_.data(), nearPatch_.data());
     for (std::size_t j = 0; j < nearIndex_.size(); ++j) out[nearIndex_[j]] = near[j];
 }
 

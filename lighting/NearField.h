@@ -25,6 +25,22 @@
 //   (rangeWeight), so a point the camera leaves behind loses it without a step. Most of a
 //   frame's road vertices lie kilometres away: on the highway the range takes the near field's
 //   builds from about 5 to 1 a frame.
+// [SECTION] Patch mean
+//   The draw evaluates the terrain's ambience at patch corners only and blends it bilinearly
+//   across the patch (world/TerrainPatch.h): a patch is 32 m across next to the camera and
+//   256 m half a kilometre away. A corner's value is therefore read over the tent
+//   (1 - |dx| / P)(1 - |dz| / P) of its patch size P, and the near field at the corner point
+//   alone (one tree's canopy, a rock beside it) would colour that whole area. So, given the
+//   corner's patch size, its near field is the mean over the tent: patchSamples^2 points on
+//   the ground at offsets spaced 2P / (patchSamples + 1), weighted by the tent, each the
+//   near field of its own point through its own normal, on the corner's far field:
+//       E = a(n) . L + sum_s w_s ((h_s + s_s) . L + light_s)
+//   (what the near field changes, averaged; a(n) the corner's own normal). With 3 a side the
+//   points lie on the lattice of P / 2, so neighbouring corners, of one patch size or of two,
+//   share most of them: a cache of the samples builds about 4 points a corner, not 9. The
+//   guard reads the mean hide (exact for each sample, close for the mean). The ground terms'
+//   light is not linear in the light's direction, so each sample's is kept with the mean
+//   (NormalTransfer::groundParts) to be remade when the light moves.
 // [SECTION] Caps
 //   An occluder is a sphere (world/Vegetation.h: crowns, trunks, rocks as spheres). Seen from a
 //   point p it is a cap of half-angle theta (sin theta = r / |c - p|) around d = (c - p) / |c - p|.
@@ -173,13 +189,19 @@ struct NearFieldSettings {
     // Range): there a patch is hundreds of metres across and a road a few pixels wide. (why
     // this value: docs/TUNING.md "Near field")
     double cornerRange_m = 500.0;
+    // A terrain corner's colour is blended across every patch that has it as a corner, so it
+    // stands for the tent of the patch's size about it, not for the corner alone (see Patch
+    // mean): the near field there is the tent-weighted mean of patchSamples x patchSamples points
+    // of the ground. Off, a corner takes the near field at its own point.
+    bool patchMean = true;
+    int patchSamples = 3;  // per axis
 };
 // The near field's weight at distance_m (horizontal) from the camera for a range: 1 out to
 // (1 - kNearFade) range, 0 from range on, smoothstep between (see Range).
 double rangeWeight(double distance_m, double range_m);
 // Reads {"enabled", "radius_m", "captureRadius_m", "smallRadius_m", "plants", "terrain",
 // "terrainRadius_m", "ground", "groundRadius_m", "groundCell_m", "latticeRange_m", "cacheEntries",
-// "objectRange_m", "cornerRange_m"}
+// "objectRange_m", "cornerRange_m", "patchMean", "patchSamples"}
 // (JsonFields, lighting/JsonFields.h).
 void readNearFieldSettings(JsonFields& fields, NearFieldSettings& settings);
 
@@ -280,6 +302,13 @@ struct NearFieldTransfer {
 NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps,
                                     const GroundTerm* ground = nullptr);
 
+// One sample's ground light term in a patch mean (see Patch mean), its weight folded in.
+struct GroundLightPart {
+    glm::vec3 show{0.0f}, lit{0.0f};  // w a(n) . g_c and w a(n) . lit_c
+    glm::vec3 normal{0.0f, 1.0f, 0.0f};
+    std::array<float, kShCoefficients> hideA{};
+};
+
 // The transfer seen through one normal (see Through one normal).
 struct NormalTransfer {
     std::array<float, kShCoefficients> hide{};      // h = hide^T a(n), the caps' hide only
@@ -292,9 +321,16 @@ struct NormalTransfer {
     std::array<float, kShCoefficients> groundHideA{};
     glm::vec3 groundNormal{0.0f, 1.0f, 0.0f};
     bool ground = false;
+    // A patch mean's samples' ground light terms, remade with the rest when the light moves
+    // (ground is then false; see Patch mean).
+    std::shared_ptr<const std::vector<GroundLightPart>> groundParts;
     std::uint32_t lightEpoch = 0;
     bool any = false;
 };
+// The weighted mean of samples' transfers (weights summing to 1), each made through its own
+// normal and brought to one light (see Patch mean); any if one of them is.
+NormalTransfer meanNormalTransfer(const NormalTransfer* const* samples, const double* weights,
+                                  std::size_t count);
 // `transfer` through `normal` (unit); with no transfer, nothing near.
 NormalTransfer normalTransfer(const NearFieldTransfer* transfer, const glm::dvec3& normal);
 void updateLightTerm(NormalTransfer& transfer, const glm::dvec3& lightDirection,
@@ -420,10 +456,12 @@ class NearField {
     // comes with the same normal), clamped at 0, from the far field there (see Through one
     // normal); cached by the point.
     // With `weights`, each point's near field is faded in by its weight (0: the far field's
-    // irradiance, and the point is not asked of the cache).
+    // irradiance, and the point is not asked of the cache). With `patch_m`, a point of
+    // patch_m[i] > 0 is a terrain corner of that patch size and takes the patch mean (see Patch
+    // mean) if the settings ask for it.
     void irradianceMany(std::size_t count, const ShRgb* far, const glm::dvec3* points_m,
                         const glm::dvec3* normals, glm::vec3* out,
-                        const double* weights = nullptr) const;
+                        const double* weights = nullptr, const double* patch_m = nullptr) const;
     std::size_t cachedPoints() const;
     std::size_t cacheBytes() const;
     // Wall time spent in apply and the points it answered since the last resetCounters.
@@ -456,6 +494,9 @@ class NearField {
     void latticeOf(const glm::dvec3& point_m, std::array<float, 4> keys[9], double weights[9],
                    glm::dvec3 points[9]) const;
     GroundTerm latticeTerm(const glm::dvec3& latticePoint) const;
+    // A ground sample of a patch mean at (x, z): the near field kShadingHeight_m above the
+    // ground there through the ground's normal, brought to the current light.
+    NormalTransfer groundSample(double x_m, double z_m) const;
 
     const NearFieldScene& scene_;
     NearFieldSettings settings_;
@@ -477,6 +518,8 @@ class NearField {
     };
     mutable tsl::hopscotch_map<Key, Cached, KeyHash> cache_;
     mutable tsl::hopscotch_map<Key, CachedGround, KeyHash> groundCache_;  // the objects' lattice
+    // The patch means' ground samples (see Patch mean), emptied when it holds cacheEntries.
+    mutable tsl::hopscotch_map<Key, NormalTransfer, KeyHash> sampleCache_;
     // Through one normal: the point's index in the vectors below. Small slots keep the map in
     // cache; the transfers follow in the order the draw first asked.
     mutable tsl::hopscotch_map<Key, std::uint32_t, KeyHash> normalCache_;
@@ -542,7 +585,8 @@ class NearFieldMethod final : public AmbienceMethod {
     ShRgb cornerShAtPoint(const glm::dvec3& point_m) const override;
     void cornerShAtPoints(std::size_t count, const glm::dvec3* points_m, ShRgb* out) const override;
     void cornerIrradianceAtPoints(std::size_t count, const glm::dvec3* points_m,
-                                  const glm::dvec3* normals, glm::vec3* out) const override;
+                                  const glm::dvec3* normals, glm::vec3* out,
+                                  const double* patch_m = nullptr) const override;
     void noteLookups(std::size_t count, const double* x_m, const double* z_m) override {
         far_->noteLookups(count, x_m, z_m);
     }
@@ -572,7 +616,7 @@ class NearFieldMethod final : public AmbienceMethod {
                 double range_m) const;
     void scatter(ShRgb* out) const;
     mutable std::vector<std::size_t> nearIndex_;
-    mutable std::vector<double> nearX_, nearZ_, nearWeight_;
+    mutable std::vector<double> nearX_, nearZ_, nearWeight_, nearPatch_;
     mutable std::vector<ShRgb> nearSh_;
 };
 

@@ -329,7 +329,7 @@ class Stitcher {
             c.t = float(double(onX ? vz - z0 : vx - x0) / double(n));
         }
         const auto index = static_cast<std::uint32_t>(corners.size());
-        if (onX && onZ) c.from = {index, index};
+        if (onX && onZ) c.from = {index, index}, c.patch_m = latticeToWorld(n);
         corners.push_back(c);
         cornerMemo_.emplace(key, index);
         return index;

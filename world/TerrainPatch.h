@@ -109,6 +109,9 @@ struct TerrainCorner {
     glm::dvec3 normal{0.0};               // unit, World::normal at the corner
     std::array<std::uint32_t, 2> from{};  // both its own index when evaluated
     float t = 0.0f;
+    // Evaluated: the size of the coarsest leaf it is a corner of, the patches its value is
+    // blended across [m] (the near field's patch mean, lighting/NearField.h).
+    double patch_m = 0.0;
     bool evaluated() const { return from[0] == from[1]; }
 };
 

@@ -221,6 +221,12 @@ const SettingInfo kRows[] = {
     {"nearField.cornerRange_m", Kind::Number, 0.0, 100000.0, false,
      "terrain corners and road vertices farther than this take the far field alone [m]",
      [](S& s) -> void* { return &s.capture.nearField.cornerRange_m; }, false},
+    {"nearField.patchMean", Kind::Boolean, 0, 1, false,
+     "a terrain corner takes the near field's mean over the patches it colours",
+     [](S& s) -> void* { return &s.capture.nearField.patchMean; }, false},
+    {"nearField.patchSamples", Kind::Integer, 1, 9, false,
+     "points a side of a corner's patch mean",
+     [](S& s) -> void* { return &s.capture.nearField.patchSamples; }, false},
 };
 
 std::vector<SettingInfo> makeTable() {

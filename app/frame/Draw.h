@@ -35,8 +35,12 @@ class AmbientSource {
     // The same at `count` points at once (a frame's terrain corners, its road vertices): out[i]
     // for position i and normal i. One by one by default; a source over an interpolated volume
     // answers the batch with one cache check and no per-call overhead.
+    // With `patch_m`, point i is a terrain corner blended across patches patch_m[i] across
+    // (world/TerrainPatch.h; the near field's patch mean), else a point (a road vertex).
     virtual void cornerIrradianceBatch(std::size_t count, const glm::dvec3* positions_m,
-                                       const glm::dvec3* normals, glm::vec3* out) const {
+                                       const glm::dvec3* normals, glm::vec3* out,
+                                       const double* patch_m = nullptr) const {
+        (void)patch_m;
         for (std::size_t i = 0; i < count; ++i)
             out[i] = cornerIrradiance(positions_m[i], normals[i]);
     }

@@ -65,12 +65,13 @@ glm::vec3 MethodAmbient::cornerIrradiance(const glm::dvec3& position_m,
 }
 
 void MethodAmbient::cornerIrradianceBatch(std::size_t count, const glm::dvec3* positions_m,
-                                          const glm::dvec3* normals, glm::vec3* out) const {
+                                          const glm::dvec3* normals, glm::vec3* out,
+                                          const double* patch_m) const {
     const auto t0 = Clock::now();
     batchAt_.resize(count);
     for (std::size_t i = 0; i < count; ++i)
         batchAt_[i] = positions_m[i] + glm::dvec3(0.0, kShadingHeight_m, 0.0);
-    method_.cornerIrradianceAtPoints(count, batchAt_.data(), normals, out);
+    method_.cornerIrradianceAtPoints(count, batchAt_.data(), normals, out, patch_m);
     for (std::size_t i = 0; i < count; ++i) note(positions_m[i]);
     lookups_ += count;
     lookup_ms_ += elapsed_ms(t0);

@@ -38,7 +38,8 @@ class MethodAmbient final : public AmbientSource {
                                const glm::dvec3& normal) const override;
     // The batch through the method's batch shAt (AnchorStore::interpolateMany for ours).
     void cornerIrradianceBatch(std::size_t count, const glm::dvec3* positions_m,
-                               const glm::dvec3* normals, glm::vec3* out) const override;
+                               const glm::dvec3* normals, glm::vec3* out,
+                               const double* patch_m = nullptr) const override;
     std::uint32_t objectSet(const glm::dvec3& position_m,
                             std::vector<AmbientSet>& sets) const override;
     // The batch through the method's batch shAt (one timing, one lock of the near field).

@@ -221,13 +221,15 @@ void RendererScene::buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj
     for (const auto& [distance, i] : visible) visiblePatches.push_back(i);
     const std::vector<std::uint32_t> evaluate = cornersToEvaluate(terrainMesh_, visiblePatches);
     std::vector<glm::dvec3> cornerAt, cornerNormal;
+    std::vector<double> cornerPatch;
     for (std::uint32_t c : evaluate) {
         cornerAt.push_back(terrainMesh_.corners[c].position_m);
         cornerNormal.push_back(terrainMesh_.corners[c].normal);
+        cornerPatch.push_back(terrainMesh_.corners[c].patch_m);
     }
     std::vector<glm::vec3> irradiance(cornerAt.size());
     ambient.cornerIrradianceBatch(cornerAt.size(), cornerAt.data(), cornerNormal.data(),
-                                  irradiance.data());
+                                  irradiance.data(), cornerPatch.data());
     std::vector<glm::vec3> cornerValue(terrainMesh_.corners.size(), glm::vec3(0.0f));
     for (std::size_t j = 0; j < evaluate.size(); ++j) cornerValue[evaluate[j]] = irradiance[j];
     stitchCornerValues(terrainMesh_.corners, cornerValue.data());

@@ -174,7 +174,7 @@ class CurvedAmbient final : public AmbientSource {
         return field(p, n);
     }
     void cornerIrradianceBatch(std::size_t count, const glm::dvec3* p, const glm::dvec3* n,
-                               glm::vec3* out) const override {
+                               glm::vec3* out, const double* = nullptr) const override {
         for (std::size_t i = 0; i < count; ++i) out[i] = field(p[i], n[i]);
     }
     std::uint32_t objectSet(const glm::dvec3&, std::vector<AmbientSet>& sets) const override {

@@ -1,7 +1,8 @@
 // NearGround_test.cpp — the near field's ground term (lighting/NearField.h "Ground"): a white
 // ground under a uniform far field changes nothing, a sunlit disc of ground matches the closed
-// form of a cap, a sphere's shadow on the ground darkens what the ground shows, and a cached
-// point follows the light as a fresh one does.
+// form of a cap, a sphere's shadow on the ground darkens what the ground shows, a cached
+// point follows the light as a fresh one does, and a terrain corner's patch mean is the tent's
+// mean of its ground's points.
 #include "lighting/NearField.h"
 
 #include <cmath>
@@ -245,6 +246,91 @@ TEST(NearGround, AnObjectFirstBuiltFarFromTheCameraTakesItsOwnGroundTerm) {
     const float blended = shIrradiance(m, glm::vec3(0, -1, 0)).g;
     EXPECT_GT(own, 0.0f);
     EXPECT_GT(std::abs(own - blended), 0.01f * own);
+}
+
+// A terrain corner of patch size P takes the tent-weighted mean of the near field at 3 x 3
+// ground points P / 2 apart (NearField.h "Patch mean"). On flat ground every sample's normal is
+// the corner's, so the mean irradiance is the mean of the points' own answers, each asked of a
+// fresh NearField as a point: 1D weights 1/4, 1/2, 1/4. A tree right over the corner changes
+// the corner's point by far more than its mean, where it is one sample of nine (weight 1/4).
+// After the light moves, a cached mean follows it as its points, cached, do (the samples'
+// ground light terms are kept). Four corners of one patch size share their samples: 25 builds, not 36.
+TEST(NearGround, ACornersPatchMeanIsTheTentMeanOfItsGroundsPoints) {
+    FlatGround scene;
+    scene.lightIrradiance = glm::dvec3(40.0, 38.0, 35.0);
+    scene.albedo = [](double x, double z) {
+        return glm::dvec3(0.1 + 0.05 * std::sin(0.2 * x), 0.2 + 0.1 * std::cos(0.1 * z), 0.15);
+    };
+    const double P = 32.0;
+    scene.plants = {{{0.5, 6.0, -0.5}, 4.0, glm::dvec3(0.1, 0.25, 0.08)},
+                    {{14.0, 5.0, 17.0}, 3.0, glm::dvec3(0.1, 0.25, 0.08)},
+                    {{-20.0, 7.0, 3.0}, 5.0, glm::dvec3(0.1, 0.25, 0.08)}};
+    NearFieldSettings settings;
+    const ShRgb far = toFloat(constantSky(glm::dvec3(0.9, 1.0, 1.1)));
+    const glm::dvec3 up(0.0, 1.0, 0.0);
+    const glm::dvec3 corner(0.0, kShadingHeight_m, 0.0);
+    // A point's answer at a time of day; with `builtAt`, from a point built then and kept in
+    // its cache since (a cached point keeps its ground's shadows from the light it was built
+    // in: NearField.h "Ground").
+    const auto pointAnswer = [&](double x, double z, double timeOfDay_h, double builtAt = -1.0) {
+        NearField fresh(scene, settings);
+        const glm::dvec3 p(x, kShadingHeight_m, z);
+        glm::vec3 e;
+        if (builtAt >= 0.0) {
+            fresh.setTimeOfDay(builtAt);
+            fresh.irradianceMany(1, &far, &p, &up, &e);
+        }
+        fresh.setTimeOfDay(timeOfDay_h);
+        fresh.irradianceMany(1, &far, &p, &up, &e);
+        return glm::dvec3(e);
+    };
+    const auto tentMean = [&](double timeOfDay_h, double builtAt = -1.0) {
+        const double w[3] = {0.25, 0.5, 0.25};
+        glm::dvec3 sum(0.0);
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b)
+                sum += w[a] * w[b] *
+                       pointAnswer((a - 1) * P / 2.0, (b - 1) * P / 2.0, timeOfDay_h, builtAt);
+        return sum;
+    };
+    NearField cached(scene, settings);
+    cached.setTimeOfDay(9.0);
+    glm::vec3 got;
+    cached.irradianceMany(1, &far, &corner, &up, &got, nullptr, &P);
+    const glm::dvec3 want = tentMean(9.0), point = pointAnswer(0.0, 0.0, 9.0);
+    const glm::dvec3 open = glm::dvec3(shIrradiance(far, glm::vec3(up)));
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(got[c], want[c], 1e-4 * want[c]) << c;
+        // The tree changes its point by more than twice what it changes the mean.
+        EXPECT_GT(std::abs(open[c] - point[c]), 2.0 * std::abs(open[c] - want[c])) << c;
+    }
+    // Switched off, or with no patch size, the corner takes its point's answer.
+    NearFieldSettings off = settings;
+    off.patchMean = false;
+    NearField pointwise(scene, off);
+    pointwise.setTimeOfDay(9.0);
+    glm::vec3 asPoint;
+    pointwise.irradianceMany(1, &far, &corner, &up, &asPoint, nullptr, &P);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(asPoint[c], point[c], 1e-6 * point[c]);
+    // The light moves: the cached mean follows it as its cached points do.
+    cached.setTimeOfDay(12.0);
+    cached.irradianceMany(1, &far, &corner, &up, &got, nullptr, &P);
+    const glm::dvec3 later = tentMean(12.0, 9.0);
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(got[c], later[c], 1e-4 * later[c]) << c;
+        EXPECT_GT(std::abs(later[c] - want[c]), 1e-3 * later[c]) << c;  // the light did move
+    }
+    // Four corners of one patch size: the 5 x 5 lattice of P / 2 they read, each point built once.
+    NearField shared(scene, settings);
+    shared.setTimeOfDay(10.0);
+    std::vector<glm::dvec3> corners, normals(4, up);
+    for (int i = 0; i < 4; ++i) corners.push_back({(i % 2) * P, kShadingHeight_m, (i / 2) * P});
+    std::vector<ShRgb> fars(4, far);
+    std::vector<double> patch(4, P);
+    std::vector<glm::vec3> four(4);
+    shared.irradianceMany(4, fars.data(), corners.data(), normals.data(), four.data(), nullptr,
+                          patch.data());
+    EXPECT_EQ(shared.builds(), 25u);
 }
 
 }  // namespace

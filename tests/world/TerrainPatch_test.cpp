@@ -421,6 +421,30 @@ TEST(TerrainPatch, StitchingKeepsALinearField) {
     EXPECT_LT(worst, 1e-5);
 }
 
+// An evaluated corner knows the size of the largest patch it is a corner of (what its value is
+// blended across: the near field's patch mean); a corner inside a coarser edge has none.
+TEST(TerrainPatch, AnEvaluatedCornerKnowsItsLargestPatch) {
+    TerrainPatchCache cache(defaultWorld(), smallLod());
+    const glm::dvec3 camera = cameraAbove(250.0, -730.0);
+    const TerrainMesh mesh = cache.build(camera, camera);
+    std::vector<double> largest(mesh.corners.size(), 0.0);
+    std::set<double> sizes;
+    for (const TerrainPatchDraw& d : mesh.patches) {
+        const double size = d.corners_m[1].x - d.corners_m[0].x;
+        sizes.insert(size);
+        for (int k = 0; k < 4; ++k)
+            if (mesh.corners[d.cornerIndex[k]].evaluated())
+                largest[d.cornerIndex[k]] = std::max(largest[d.cornerIndex[k]], size);
+    }
+    EXPECT_GE(sizes.size(), 3u);  // several levels of detail in view
+    for (std::size_t c = 0; c < mesh.corners.size(); ++c) {
+        if (mesh.corners[c].evaluated())
+            EXPECT_EQ(mesh.corners[c].patch_m, largest[c]) << c;
+        else
+            EXPECT_EQ(mesh.corners[c].patch_m, 0.0) << c;
+    }
+}
+
 // Drawing only some patches (the visible ones) evaluates their corners and the coarser edge ends
 // they read, each once, and gives them the same values as stitching everything.
 TEST(TerrainPatch, CornersToEvaluateReachTheCoarserEdges) {
