@@ -46,9 +46,11 @@ inline int lineCount(const std::string& s) {
 
 inline int CommandResult::errLines() const { return lineCount(err); }
 
-// A fresh, empty scratch folder for one test.
+// A fresh, empty scratch folder for one test. ctest runs each test in its own process, two at
+// a time, and tests of one fixture share a name: the process id keeps them apart.
 inline std::filesystem::path scratchDir(const std::string& name) {
-    const auto dir = std::filesystem::temp_directory_path() / ("ambience-test-" + name);
+    const auto dir = std::filesystem::temp_directory_path() /
+                     ("ambience-test-" + name + "-" + std::to_string(::getpid()));
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
     return dir;
