@@ -367,32 +367,27 @@ NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps, const 
         }
     }
     if (ground && ground->any) {
-        // The ground's sky is the far field with the caps applied, at the ground's normal:
-        // a'_c = (I + T_c)^T a(n) with the caps' T_c; and its direct light, which the explicit
-        // term replaces, what the caps leave of it: b = (I + hide)^T a(n).
+        // The ground's ambient at its normal as the caps leave it: (I + T_c)^T a(n) with the
+        // caps' T_c, of which only the ambient's two coefficients are read (see GroundAmbient).
         const auto a = irradianceFunctional(ground->normal);
-        std::array<std::array<double, K>, 3> ac{};
-        for (int k = 0; k < K; ++k) {
-            double hk = a[k];
-            for (int j = 0; j < K; ++j) hk += a[j] * t.hide[j * K + k];
-            t.groundHideA[k] = float(hk);
+        for (int k = 0; k < 2; ++k) {
+            double hk = a[std::size_t(k)];
+            for (int j = 0; j < K; ++j) hk += a[std::size_t(j)] * t.hide[std::size_t(j * K + k)];
             for (int ch = 0; ch < 3; ++ch) {
                 double v = hk;
-                for (int j = 0; j < K; ++j) v += a[j] * show[ch][j * K + k];
-                ac[ch][k] = v;
+                for (int j = 0; j < K; ++j)
+                    v += a[std::size_t(j)] * show[std::size_t(ch)][std::size_t(j * K + k)];
+                t.groundAmbient[std::size_t(ch)][std::size_t(k)] = float(v);
             }
         }
+        // What the probes saw below is hidden (part of T); what the ground shows, lit by the
+        // ambient and the light, is remade with the light term (see Ground).
         for (int j = 0; j < K * K; ++j) {
             t.hide[std::size_t(j)] += ground->hide[std::size_t(j)];
             t.groundHide[std::size_t(j)] = ground->hide[std::size_t(j)];
         }
-        for (int ch = 0; ch < 3; ++ch)
-            for (int j = 0; j < K; ++j) {
-                const float g = ground->show[ch][j];
-                t.groundShow[ch][j] = g;
-                t.groundLit[ch][j] = ground->lit[ch][j];
-                for (int k = 0; k < K; ++k) show[ch][j * K + k] += g * float(ac[ch][k]);
-            }
+        t.groundShow = ground->show;
+        t.groundLit = ground->lit;
         t.groundNormal = glm::vec3(ground->normal);
         t.ground = true;
     }
@@ -408,24 +403,25 @@ NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps, const 
 
 namespace {
 
-// The ground's light term per unit of the light (see Ground): lit_c max(0, n . l) - g_c (b .
-// Y(l)), the second taking out the direct light the delta trick gives the ground's sky part.
-struct GroundLight {
-    double cosine = 0.0, delta = 0.0;
-};
-GroundLight groundLight(const glm::vec3& groundNormal,
-                        const std::array<float, kShCoefficients>& hideA,
-                        const glm::dvec3& lightDirection) {
-    const auto y = shBasis(lightDirection);
-    GroundLight g;
-    g.cosine = std::max(0.0, glm::dot(glm::dvec3(groundNormal), lightDirection));
-    for (int k = 0; k < kShCoefficients; ++k) g.delta += hideA[k] * y[k];
-    return g;
+// The light on the ground per unit of the light's irradiance (see Ground): max(0, n . l).
+double groundCosine(const glm::vec3& groundNormal, const glm::dvec3& lightDirection) {
+    return std::max(0.0, glm::dot(glm::dvec3(groundNormal), lightDirection));
+}
+
+// The ground's ambient irradiance per channel (see GroundAmbient): the hemisphere ambient's SH
+// has L_0 = Y00 2 pi (s + g) and L_1 (vertical) = Y1 pi (s - g).
+glm::dvec3 groundAmbientIrradiance(const GroundAmbient& w, const HemisphereAmbient& ambient) {
+    glm::dvec3 e;
+    for (int ch = 0; ch < 3; ++ch)
+        e[ch] = w[std::size_t(ch)][0] * kShY00 * 2.0 * kPi * (ambient.sky[ch] + ambient.ground[ch]) +
+                w[std::size_t(ch)][1] * kShY1 * kPi * (ambient.sky[ch] - ambient.ground[ch]);
+    return e;
 }
 
 }  // namespace
 
-void updateLightTerm(NearFieldTransfer& t, const glm::dvec3& lightDirection) {
+void updateLightTerm(NearFieldTransfer& t, const glm::dvec3& lightDirection,
+                     const HemisphereAmbient& ambient) {
     // The light is a delta in the far field: what the caps show of it is show_c Y(l), show_c =
     // T_c - hide (see "What a cap does").
     constexpr int K = kShCoefficients;
@@ -439,10 +435,13 @@ void updateLightTerm(NearFieldTransfer& t, const glm::dvec3& lightDirection) {
             t.s[ch][j] = float(v);
         }
     if (t.ground) {
-        const GroundLight g = groundLight(t.groundNormal, t.groundHideA, lightDirection);
+        const double cosine = groundCosine(t.groundNormal, lightDirection);
+        const glm::dvec3 sky = groundAmbientIrradiance(t.groundAmbient, ambient);
         for (int ch = 0; ch < 3; ++ch)
-            for (int j = 0; j < K; ++j)
-                t.s[ch][j] += float(t.groundLit[ch][j] * g.cosine - t.groundShow[ch][j] * g.delta);
+            for (int j = 0; j < K; ++j) {
+                t.s[ch][j] += float(t.groundLit[ch][j] * cosine);
+                t.groundSky[ch][j] = float(t.groundShow[ch][j] * sky[ch]);
+            }
     }
 }
 
@@ -474,14 +473,15 @@ NormalTransfer normalTransfer(const NearFieldTransfer* t, const glm::dvec3& norm
             n.groundShow[ch] = float(show), n.groundLit[ch] = float(lit);
         }
         n.groundNormal = t->groundNormal;
-        n.groundHideA = t->groundHideA;
+        n.groundAmbient = t->groundAmbient;
         n.ground = true;
     }
     n.any = true;
     return n;
 }
 
-void updateLightTerm(NormalTransfer& t, const glm::dvec3& lightDirection, std::uint32_t epoch) {
+void updateLightTerm(NormalTransfer& t, const glm::dvec3& lightDirection,
+                     const HemisphereAmbient& ambient, std::uint32_t epoch) {
     const auto y = shBasis(lightDirection);
     for (int ch = 0; ch < 3; ++ch) {
         double v = 0.0;
@@ -489,14 +489,15 @@ void updateLightTerm(NormalTransfer& t, const glm::dvec3& lightDirection, std::u
             v += (t.show[std::size_t(ch * kShCoefficients + k)] - t.groundHide[std::size_t(k)]) * y[k];
         t.light[ch] = float(v);
     }
+    t.sky = glm::vec3(0.0f);
     if (t.ground) {
-        const GroundLight g = groundLight(t.groundNormal, t.groundHideA, lightDirection);
-        t.light += t.groundLit * float(g.cosine) - t.groundShow * float(g.delta);
+        t.light += t.groundLit * float(groundCosine(t.groundNormal, lightDirection));
+        t.sky += t.groundShow * glm::vec3(groundAmbientIrradiance(t.groundAmbient, ambient));
     }
     if (t.groundParts) {
         for (const GroundLightPart& part : *t.groundParts) {
-            const GroundLight g = groundLight(part.normal, part.hideA, lightDirection);
-            t.light += part.lit * float(g.cosine) - part.show * float(g.delta);
+            t.light += part.lit * float(groundCosine(part.normal, lightDirection));
+            t.sky += part.show * glm::vec3(groundAmbientIrradiance(part.ambient, ambient));
         }
     }
     t.lightEpoch = epoch;
@@ -508,7 +509,7 @@ NormalTransfer meanNormalTransfer(const NormalTransfer* const* samples, const do
     auto parts = std::make_shared<std::vector<GroundLightPart>>();
     std::array<double, kShCoefficients> hide{}, groundHide{};
     std::array<double, 3 * kShCoefficients> show{};
-    glm::dvec3 light(0.0);
+    glm::dvec3 light(0.0), sky(0.0);
     for (std::size_t i = 0; i < count; ++i) {
         const NormalTransfer& t = *samples[i];
         if (!t.any) continue;
@@ -517,9 +518,10 @@ NormalTransfer meanNormalTransfer(const NormalTransfer* const* samples, const do
             hide[k] += w * t.hide[k], groundHide[k] += w * t.groundHide[k];
         for (std::size_t k = 0; k < show.size(); ++k) show[k] += w * t.show[k];
         light += w * glm::dvec3(t.light);
+        sky += w * glm::dvec3(t.sky);
         if (t.ground)
             parts->push_back(GroundLightPart{t.groundShow * float(w), t.groundLit * float(w),
-                                             t.groundNormal, t.groundHideA});
+                                             t.groundNormal, t.groundAmbient});
         if (t.groundParts)
             for (GroundLightPart p : *t.groundParts) {
                 p.show *= float(w), p.lit *= float(w);
@@ -533,6 +535,7 @@ NormalTransfer meanNormalTransfer(const NormalTransfer* const* samples, const do
         m.hide[k] = float(hide[k]), m.groundHide[k] = float(groundHide[k]);
     for (std::size_t k = 0; k < show.size(); ++k) m.show[k] = float(show[k]);
     m.light = glm::vec3(light);
+    m.sky = glm::vec3(sky);
     if (!parts->empty()) m.groundParts = std::move(parts);
     return m;
 }
@@ -549,6 +552,7 @@ NormalApply normalApply(const NormalTransfer& t, const glm::dvec3& normal) {
                 float(a[k] + t.hide[k] + t.show[std::size_t(ch * K + k)]);
     }
     out.light = t.light;
+    out.sky = t.sky;
     out.lightEpoch = t.lightEpoch;
     out.any = true;
     return out;
@@ -580,7 +584,8 @@ namespace {
         float g = 1.0f;
         if (farE[ch] + hidden[ch] < floor && hidden[ch] < 0.0f)
             g = std::clamp((floor - farE[ch]) / hidden[ch], 0.0f, 1.0f);
-        e[ch] = whole[ch] - (1.0f - g) * hidden[ch] + t.light[ch] * float(light.irradiance[ch]);
+        e[ch] = whole[ch] - (1.0f - g) * hidden[ch] + t.light[ch] * float(light.irradiance[ch]) +
+                t.sky[ch];
     }
     if (!std::isfinite(e.x + e.y + e.z)) e = farE;
     return glm::max(e, glm::vec3(0.0f));
@@ -602,9 +607,9 @@ glm::vec3 applyNormalTransfer(const NormalApply& t, const ShRgb& far, const glm:
         kept += t.aHide[std::size_t(k)] * l;
     }
     // The unguarded sum where (a + h) . L_c >= 0 in every channel: then the guard cannot act.
-    const glm::vec3 out(e[0] + t.light.x * float(light.irradiance.x),
-                        e[1] + t.light.y * float(light.irradiance.y),
-                        e[2] + t.light.z * float(light.irradiance.z));
+    const glm::vec3 out(e[0] + t.light.x * float(light.irradiance.x) + t.sky.x,
+                        e[1] + t.light.y * float(light.irradiance.y) + t.sky.y,
+                        e[2] + t.light.z * float(light.irradiance.z) + t.sky.z);
     if (kept[0] >= 0.0f && kept[1] >= 0.0f && kept[2] >= 0.0f && std::isfinite(out.x + out.y + out.z))
         return glm::max(out, glm::vec3(0.0f));
     return guardedNormalApply(t, far, normal, light);
@@ -720,13 +725,14 @@ ShRgb applyTransfer(const NearFieldTransfer& t, const ShRgb& far, const Directio
         t.guardFar = far;
         t.guardValid = true;
     }
-    // out[j] = far[j] + S[j] E + sum_k T[j][k] far[k], the three channels in four lanes: 81
-    // four-lane multiply-adds.
+    // out[j] = far[j] + S[j] E + ground's sky[j] + sum_k T[j][k] far[k], the three channels in
+    // four lanes: 81 four-lane multiply-adds.
     const Lanes e = lanesOf(glm::vec3(light.irradiance));
     Lanes out[K], f[K];
     for (int j = 0; j < K; ++j) {
         f[j] = lanesOf(far.c[j]);
-        out[j] = f[j] + lanesOf(glm::vec3(t.s[0][j], t.s[1][j], t.s[2][j])) * e;
+        out[j] = f[j] + lanesOf(glm::vec3(t.s[0][j], t.s[1][j], t.s[2][j])) * e +
+                 lanesOf(glm::vec3(t.groundSky[0][j], t.groundSky[1][j], t.groundSky[2][j]));
     }
     for (int k = 0; k < K; ++k)
         for (int j = 0; j < K; ++j) {
@@ -749,9 +755,10 @@ ShRgb applyTransfer(const NearFieldTransfer& t, const ShRgb& far, const Directio
 
 ShRgbD applyNearField(const ShRgbD& far, const glm::dvec3& point_m,
                       const std::vector<SphereOccluder>& occluders, const DirectionalLight& light,
-                      const std::vector<HorizonWedge>& horizon, const GroundTerm* ground) {
+                      const std::vector<HorizonWedge>& horizon, const GroundTerm* ground,
+                      const HemisphereAmbient& ambient) {
     NearFieldTransfer t = nearFieldTransfer(nearOccluders(point_m, occluders, horizon), ground);
-    updateLightTerm(t, light.direction);
+    updateLightTerm(t, light.direction, ambient);
     return toDouble(applyTransfer(t, toFloat(far), light));
 }
 
@@ -826,6 +833,10 @@ void WorldNearFieldScene::terrainNear(const glm::dvec3& p, double radius_m,
 
 DirectionalLight WorldNearFieldScene::mainLight(double timeOfDay_h) const {
     return world_.sky().mainLight(timeOfDay_h);
+}
+
+HemisphereAmbient WorldNearFieldScene::ambient(double timeOfDay_h) const {
+    return hemisphereAmbient(world_.sky(), timeOfDay_h);
 }
 
 double WorldNearFieldScene::groundHeight(double x_m, double z_m) const {
@@ -1079,7 +1090,13 @@ void NearField::setTimeOfDay(double timeOfDay_h) {
     if (std::isfinite(l.direction.x + l.direction.y + l.direction.z) &&
         std::isfinite(l.irradiance.x + l.irradiance.y + l.irradiance.z)) {
         light_ = l;
-        if (glm::dot(epochLight_, l.direction) < kLightMoved) ++lightEpoch_, epochLight_ = l.direction;
+        if (glm::dot(epochLight_, l.direction) < kLightMoved) {
+            // The ambient follows the light's epochs: cached terms are remade with both.
+            const HemisphereAmbient a = scene_.ambient(timeOfDay_h);
+            const glm::dvec3 sum = a.sky + a.ground;
+            if (std::isfinite(sum.x + sum.y + sum.z)) ambient_ = a;
+            ++lightEpoch_, epochLight_ = l.direction;
+        }
     }
 }
 
@@ -1124,7 +1141,7 @@ std::unique_ptr<NearFieldTransfer> NearField::build(const glm::dvec3& p, double 
     std::vector<OccluderCap> caps = nearOccluders(p, caps0, horizon);
     if (caps.empty() && !ground.any) return nullptr;
     auto t = std::make_unique<NearFieldTransfer>(nearFieldTransfer(caps, &ground));
-    updateLightTerm(*t, light_.direction);
+    updateLightTerm(*t, light_.direction, ambient_);
     return t;
 }
 
@@ -1166,7 +1183,7 @@ NormalTransfer NearField::groundSample(double x_m, double z_m) const {
     const std::unique_ptr<NearFieldTransfer> full =
         build(glm::dvec3(x_m, g.height_m + kShadingHeight_m, z_m), 0.0);
     NormalTransfer nt = normalTransfer(full.get(), g.normal);
-    if (full) updateLightTerm(nt, light_.direction, lightEpoch_);
+    if (full) updateLightTerm(nt, light_.direction, ambient_, lightEpoch_);
     return nt;
 }
 
@@ -1414,8 +1431,8 @@ void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::d
             NormalApply& na = normalApplies_[at[i]];
             if (na.any && na.lightEpoch != lightEpoch_) {
                 NormalTransfer& nt = normalTransfers_[at[i]];
-                updateLightTerm(nt, light_.direction, lightEpoch_);
-                na.light = nt.light, na.lightEpoch = nt.lightEpoch;
+                updateLightTerm(nt, light_.direction, ambient_, lightEpoch_);
+                na.light = nt.light, na.sky = nt.sky, na.lightEpoch = nt.lightEpoch;
             }
         }
     };
@@ -1487,7 +1504,7 @@ void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::d
             const std::unique_ptr<NearFieldTransfer> full = build(points_m[i], 0.0);
             NormalTransfer& nt = transfers[u];
             nt = normalTransfer(full.get(), normals[i]);
-            if (full) updateLightTerm(nt, light_.direction, lightEpoch_);
+            if (full) updateLightTerm(nt, light_.direction, ambient_, lightEpoch_);
             applies[u] = normalApply(nt, normals[i]);
         };
         const std::size_t tasks = unique.size() + toSample.size();
@@ -1509,7 +1526,7 @@ void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::d
                 auto it = sampleCache_.find(sampleKey(sampleAt(i, j)));
                 NormalTransfer& sample = it.value();
                 if (sample.any && sample.lightEpoch != lightEpoch_)
-                    updateLightTerm(sample, light_.direction, lightEpoch_);
+                    updateLightTerm(sample, light_.direction, ambient_, lightEpoch_);
                 meanOf[std::size_t(j)] = &sample;
                 meanWeight[std::size_t(j)] = tent[std::size_t(j % m)] * tent[std::size_t(j / m)];
             }
@@ -1583,7 +1600,7 @@ ShRgb NearField::applyLocked(const ShRgb& far, const Key& key,
         it.value().used = now;
         t = it->second.transfer.get();
         if (t && glm::dot(t->lightDirection, light_.direction) < kLightMoved)
-            updateLightTerm(*it.value().transfer, light_.direction);
+            updateLightTerm(*it.value().transfer, light_.direction, ambient_);
     }
     if (!t) return far;
     const ShRgb near = applyTransfer(*t, far, light_);

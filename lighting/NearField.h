@@ -87,16 +87,21 @@
 //   meets the ground at x_k, of albedo rho_k (the terrain's as the patches draw it) and lit
 //   with visibility V_k (the sun blocked by the point's plants or by terrain):
 //     L' = L - sum_k w Y(d_k) (Y(d_k) . L)                     what the probes saw there
-//            + g_c (a'_c . L) + lit_c E_light max(0, n . l) - g_c (b . Y(l)) E_light
+//            + g_c E_amb,c(n) + lit_c E_light max(0, n . l)
 //     g_c = sum_k w rho_k,c / pi Y(d_k),  lit_c = sum_k w rho_k,c / pi V_k Y(d_k),
-//   the ground's radiance rho / pi (E_sky + E_light V cos). Its sky is the far field with the
-//   point's caps applied, at the ground's normal n: a'_c = (I + T_c)^T a(n), T_c the caps' (a
-//   canopy over the ground darkens its sky and shows it its lit leaves). Through the delta trick
-//   that part also gives the light as the caps leave it, b . Y(l) with b = (I + hide)^T a(n):
-//   the last term takes that out, as the explicit V replaces it. The first two terms are part of
-//   T (the hide is the same for every channel); the light term is remade from lit, g and b when
-//   the light moves, with the visibility of the light the point was built in. A white ground
-//   under a uniform far field changes nothing.
+//   the ground's radiance rho / pi (E_amb + E_light V cos). It is lit as the captures and the
+//   reference light every surface they draw, by the main light and by the sky's hemisphere
+//   ambient A (world/SkyGround.h HemisphereAmbient; the first bounce), here as the point's caps
+//   leave it at the ground's normal n: E_amb,c = ((I + T_c)^T a(n)) . A_c, T_c the caps' (a
+//   canopy over the ground darkens its sky and shows it its leaves). Only A's two coefficients
+//   (band 0 and the vertical band 1) are non-zero, so a ground keeps two weights a channel
+//   (GroundAmbient). Against the reference this measured better than lighting the ground by the
+//   far field through the caps (what the probes' own sky held, about 10 % too bright on the
+//   drives, and in a dense forest far too dark) and than the ambient without the caps
+//   (docs/TUNING.md "Near field"). The first term is part of T (the hide is the same for every
+//   channel); the other two are remade when the light moves (the ambient with it), with the
+//   visibility of the light the point was built in. With no caps, a white ground under a far
+//   field of the ambient's sky radiance all round changes nothing.
 //   The car moves: 32 directions swept over a tree's shadow or the albedo's noise would make
 //   the term jitter by a few per cent a frame. So an object first built within latticeRange_m
 //   of the camera takes the quadratic B-spline blend (C1 in the position) of the terms at the
@@ -149,6 +154,7 @@
 #include "lighting/AmbienceMethod.h"
 #include "lighting/SH.h"
 #include "world/DirectionalLight.h"
+#include "world/SkyGround.h"
 #include "world/TerrainPatch.h"
 
 namespace amb {
@@ -237,6 +243,11 @@ struct GroundPoint {
     glm::dvec3 albedo{0.0};
 };
 
+// The ground's ambient as its point's caps leave it (see Ground): per channel, the weights of
+// the hemisphere ambient's two SH coefficients (band 0 and the vertical band 1) in the
+// irradiance at the ground's normal with the caps applied; E_amb,c = w0 A_0 + w1 A_1.
+using GroundAmbient = std::array<std::array<float, 2>, 3>;
+
 // What the ground near a point puts in place of the far field's (see Ground).
 struct GroundTerm {
     std::array<float, kShCoefficients * kShCoefficients> hide{};  // -sum w Y Y^T, row-major
@@ -285,9 +296,10 @@ struct NearFieldTransfer {
     alignas(16) std::array<float, 4 * kShCoefficients * kShCoefficients> columns{};
     std::array<std::array<float, kShCoefficients>, 3> s{};  // S_c for lightDirection
     glm::dvec3 lightDirection{0.0};
-    // The ground's light term (see Ground): g_c, lit_c, b and the ground's normal.
-    std::array<std::array<float, kShCoefficients>, 3> groundShow{}, groundLit{};
-    std::array<float, kShCoefficients> groundHideA{};
+    // The ground's light terms (see Ground): g_c, lit_c and the ground's normal, and g_c
+    // E_amb,c(n) for the ambient of lightDirection's time [radiance].
+    std::array<std::array<float, kShCoefficients>, 3> groundShow{}, groundLit{}, groundSky{};
+    GroundAmbient groundAmbient{};
     // The ground's part of hide: the guard leaves it out (see Guard).
     std::array<float, kShCoefficients * kShCoefficients> groundHide{};
     glm::vec3 groundNormal{0.0f, 1.0f, 0.0f};
@@ -306,7 +318,7 @@ NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps,
 struct GroundLightPart {
     glm::vec3 show{0.0f}, lit{0.0f};  // w a(n) . g_c and w a(n) . lit_c
     glm::vec3 normal{0.0f, 1.0f, 0.0f};
-    std::array<float, kShCoefficients> hideA{};
+    GroundAmbient ambient{};
 };
 
 // The transfer seen through one normal (see Through one normal).
@@ -316,10 +328,11 @@ struct NormalTransfer {
                                                     // (the ground's hide included)
     std::array<float, kShCoefficients> groundHide{};  // the ground's hide^T a(n)
     glm::vec3 light{0.0f};                          // s_c . Y(l), for lightEpoch's light
-    // The ground's part through this normal: a(n) . g_c and a(n) . lit_c, and b (see Ground).
+    glm::vec3 sky{0.0f};  // the ground's a(n) . g_c E_amb,c(n_ground), for its ambient [W m^-2]
+    // The ground's part through this normal: a(n) . g_c and a(n) . lit_c (see Ground).
     glm::vec3 groundShow{0.0f}, groundLit{0.0f};
-    std::array<float, kShCoefficients> groundHideA{};
     glm::vec3 groundNormal{0.0f, 1.0f, 0.0f};
+    GroundAmbient groundAmbient{};
     bool ground = false;
     // A patch mean's samples' ground light terms, remade with the rest when the light moves
     // (ground is then false; see Patch mean).
@@ -334,15 +347,16 @@ NormalTransfer meanNormalTransfer(const NormalTransfer* const* samples, const do
 // `transfer` through `normal` (unit); with no transfer, nothing near.
 NormalTransfer normalTransfer(const NearFieldTransfer* transfer, const glm::dvec3& normal);
 void updateLightTerm(NormalTransfer& transfer, const glm::dvec3& lightDirection,
-                     std::uint32_t epoch);
+                     const HemisphereAmbient& ambient, std::uint32_t epoch);
 // What the draw reads of a NormalTransfer every frame, in the order ShRgb holds the far field:
-// E_c = w_c . L_c + light_c E_light,c, w_c = a + h + s_c, wherever (a + h) . L_c >= 0 (then the
-// guard cannot act); elsewhere the guarded sum, from a (the normal's) and h = (a + h) - a.
+// E_c = w_c . L_c + light_c E_light,c + sky_c, w_c = a + h + s_c, wherever (a + h) . L_c >= 0
+// (then the guard cannot act); elsewhere the guarded sum, from a (the normal's) and
+// h = (a + h) - a.
 struct NormalApply {
     // w_c[k] at [k * 4 + c], [k * 4 + 3] = 0: four lanes a coefficient, so the sum vectorises.
     alignas(16) std::array<float, 4 * kShCoefficients> whole{};
     std::array<float, kShCoefficients> aHide{};      // a + h
-    glm::vec3 light{0.0f};                           // the NormalTransfer's
+    glm::vec3 light{0.0f}, sky{0.0f};                // the NormalTransfer's
     std::uint32_t lightEpoch = 0;  // its too, kept here so the check reads only this entry
     bool any = false;
 };
@@ -351,17 +365,18 @@ NormalApply normalApply(const NormalTransfer& transfer, const glm::dvec3& normal
 // field applied, guarded for that normal, clamped at 0 (as the draw clamps).
 glm::vec3 applyNormalTransfer(const NormalApply& transfer, const ShRgb& far,
                               const glm::vec3& normal, const DirectionalLight& light);
-// Remakes S for the light direction.
-void updateLightTerm(NearFieldTransfer& transfer, const glm::dvec3& lightDirection);
+// Remakes S for the light direction, and the ground's sky term for the ambient.
+void updateLightTerm(NearFieldTransfer& transfer, const glm::dvec3& lightDirection,
+                     const HemisphereAmbient& ambient);
 // The far field with the near field applied, guarded (see above).
 ShRgb applyTransfer(const NearFieldTransfer& transfer, const ShRgb& far,
                     const DirectionalLight& light);
 // Everything at once, uncached: the caps of `occluders`, the bands of `horizon` and the
-// ground (if given) at `point` applied to `far`.
+// ground (if given, lit by `light` and `ambient`) at `point` applied to `far`.
 ShRgbD applyNearField(const ShRgbD& far, const glm::dvec3& point_m,
                       const std::vector<SphereOccluder>& occluders, const DirectionalLight& light,
                       const std::vector<HorizonWedge>& horizon = {},
-                      const GroundTerm* ground = nullptr);
+                      const GroundTerm* ground = nullptr, const HemisphereAmbient& ambient = {});
 
 // ---- The scene's occluders ---------------------------------------------------------------------
 class NearFieldScene {
@@ -373,6 +388,8 @@ class NearFieldScene {
                                std::vector<SphereOccluder>& out) const = 0;
     // The light drawn apart from the ambience at a time of day (the sun, the moon at night).
     virtual DirectionalLight mainLight(double timeOfDay_h) const = 0;
+    // The ambient the captures light their surfaces with at a time of day (see Ground).
+    virtual HemisphereAmbient ambient(double timeOfDay_h) const = 0;
     // The terrain's height at (x, z) [m] (where a ground point's shading point sits).
     virtual double groundHeight(double x_m, double z_m) const = 0;
     // The wedges of the horizon where terrain within radius_m rises above what the far field
@@ -414,6 +431,7 @@ class WorldNearFieldScene final : public NearFieldScene {
     void occludersNear(const glm::dvec3& point_m, double radius_m, double smallRadius_m,
                        std::vector<SphereOccluder>& out) const override;
     DirectionalLight mainLight(double timeOfDay_h) const override;
+    HemisphereAmbient ambient(double timeOfDay_h) const override;
     double groundHeight(double x_m, double z_m) const override;
     void terrainNear(const glm::dvec3& point_m, double radius_m,
                      std::vector<HorizonWedge>& out) const override;
@@ -501,6 +519,7 @@ class NearField {
     const NearFieldScene& scene_;
     NearFieldSettings settings_;
     DirectionalLight light_;
+    HemisphereAmbient ambient_;  // the scene's, for the light of lightEpoch_
     using Key = std::array<float, 4>;  // point, self radius
     struct KeyHash {
         std::size_t operator()(const Key& k) const;

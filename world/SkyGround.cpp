@@ -2,6 +2,7 @@
 #include "world/SkyGround.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 
 #include "world/Conventions.h"
@@ -52,6 +53,36 @@ SkyGround evaluateSkyGround(const Sky& sky, double timeOfDay_h, const std::vecto
         rgb[3 * t + 2] = float(s.ground.z);
     }
     return s;
+}
+
+const SkyGrid& skyGrid() {
+    static const SkyGrid grid = [] {
+        const int w = SkyGrid::kWidth, h = SkyGrid::kHeight;
+        const double dTheta = kPi / h, dPhi = 2.0 * kPi / w;
+        SkyGrid g;
+        for (int r = 0; r < h; ++r) {
+            const double theta = (r + 0.5) * dTheta;
+            for (int c = 0; c < w; ++c) {
+                const double phi = ((c + 0.5) / w - 0.5) * 2.0 * kPi;
+                g.directions.emplace_back(std::sin(theta) * std::sin(phi), std::cos(theta),
+                                          -std::sin(theta) * std::cos(phi));
+                g.solidAngles_sr.push_back(std::sin(theta) * dTheta * dPhi);
+            }
+        }
+        return g;
+    }();
+    return grid;
+}
+
+glm::dvec3 HemisphereAmbient::irradiance(const glm::dvec3& normal) const {
+    return 0.5 * kPi * ((sky + ground) + (sky - ground) * normal.y);
+}
+
+HemisphereAmbient hemisphereAmbient(const Sky& sky, double timeOfDay_h) {
+    const SkyGrid& grid = skyGrid();
+    std::vector<float> rgb;
+    const SkyGround s = evaluateSkyGround(sky, timeOfDay_h, grid.directions, grid.solidAngles_sr, rgb);
+    return {s.skyMean, s.ground};
 }
 
 }  // namespace amb

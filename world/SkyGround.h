@@ -33,4 +33,23 @@ SkyGround evaluateSkyGround(const Sky& sky, double timeOfDay_h, const std::vecto
 // The ground's light and radiance for a given E_sky(up) (the second half of the above).
 SkyGround groundUnder(const Sky& sky, double timeOfDay_h, const glm::dvec3& skyIrradianceUp);
 
+// The equirect grid of the renderer's sky texture: kWidth x kHeight texels, row 0 at the zenith,
+// column 0 at azimuth -pi; each texel's centre direction and solid angle (sin theta dtheta dphi).
+struct SkyGrid {
+    static constexpr int kWidth = 64, kHeight = 32;
+    std::vector<glm::dvec3> directions;
+    std::vector<double> solidAngles_sr;
+};
+const SkyGrid& skyGrid();
+
+// The ambient the captures and the reference light their surfaces with (the first bounce, before
+// any ambience; app/frame/SkyLighting.h "hemisphere"): the sky's mean radiance s over the upper
+// hemisphere and the distant ground's g over the lower one, on the sky grid. Its SH has bands 0
+// and 1 only, and its irradiance is E(n) = pi / 2 ((s + g) + (s - g) n.y).
+struct HemisphereAmbient {
+    glm::dvec3 sky{0.0}, ground{0.0};  // mean radiances [W m^-2 sr^-1]
+    glm::dvec3 irradiance(const glm::dvec3& normal) const;
+};
+HemisphereAmbient hemisphereAmbient(const Sky& sky, double timeOfDay_h);
+
 }  // namespace amb

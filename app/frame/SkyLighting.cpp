@@ -32,29 +32,11 @@ SkyLighting evaluateSky(const Sky& sky, double timeOfDay_h) {
     s.horizonToward = sky.radiance(glm::dvec3(az.x * across, up, az.z * across), state);
     s.horizonAway = sky.radiance(glm::dvec3(-az.x * across, up, -az.z * across), state);
 
-    // The texture's texels as directions with their solid angles (sin(theta) dtheta dphi), made
-    // once: the sky model above the horizon, the flat ground of kGroundAlbedo below it
-    // (world/SkyGround.h, the scene the probes' fallback shows too).
-    struct Texels {
-        std::vector<glm::dvec3> dirs;
-        std::vector<double> omegas;
-    };
-    static const Texels texels = [] {
-        const int w = SkyLighting::kWidth, h = SkyLighting::kHeight;
-        const double dTheta = kPi / h, dPhi = 2.0 * kPi / w;
-        Texels t;
-        for (int r = 0; r < h; ++r) {
-            const double theta = (r + 0.5) * dTheta;
-            for (int c = 0; c < w; ++c) {
-                const double phi = ((c + 0.5) / w - 0.5) * 2.0 * kPi;
-                t.dirs.emplace_back(std::sin(theta) * std::sin(phi), std::cos(theta),
-                                    -std::sin(theta) * std::cos(phi));
-                t.omegas.push_back(std::sin(theta) * dTheta * dPhi);
-            }
-        }
-        return t;
-    }();
-    const SkyGround ground = evaluateSkyGround(sky, timeOfDay_h, texels.dirs, texels.omegas, s.texture);
+    // The texture's texels as directions with their solid angles: the sky model above the
+    // horizon, the flat ground of kGroundAlbedo below it (world/SkyGround.h, the scene the
+    // probes' fallback shows too).
+    const SkyGrid& grid = skyGrid();
+    const SkyGround ground = evaluateSkyGround(sky, timeOfDay_h, grid.directions, grid.solidAngles_sr, s.texture);
     s.skyMean = glm::vec3(ground.skyMean);
     s.skyIrradianceUp = glm::vec3(ground.skyIrradianceUp);
     s.groundMean = glm::vec3(ground.ground);

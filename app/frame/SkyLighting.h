@@ -11,6 +11,7 @@
 
 #include "app/frame/Draw.h"
 #include "lighting/SH.h"
+#include "world/SkyGround.h"
 
 namespace amb {
 
@@ -32,7 +33,7 @@ struct SkyLighting {
     glm::vec3 sunAzimuth{0, 0, 1};    // unit horizontal direction of the sun's azimuth
     glm::vec3 horizonToward{0.0f}, horizonAway{0.0f};  // sky 2 degrees up, towards / away
     std::vector<float> texture;                        // kWidth x kHeight RGB, row 0 = zenith
-    static constexpr int kWidth = 64, kHeight = 32;
+    static constexpr int kWidth = SkyGrid::kWidth, kHeight = SkyGrid::kHeight;
 };
 SkyLighting evaluateSky(const Sky& sky, double timeOfDay_h);
 

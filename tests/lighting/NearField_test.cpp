@@ -224,11 +224,31 @@ TEST(NearField, OverlappingCapsNeverGiveNegativeIrradiance) {
     ::testing::Test::RecordProperty("guarded", guardedCases);
 }
 
+// Flat ground 2 m below the origin under one light and a hemisphere ambient, no plants of its
+// own (the through-normal test's ground).
+struct GroundBelow final : NearFieldScene {
+    void occludersNear(const glm::dvec3&, double, double, std::vector<SphereOccluder>&) const override {}
+    DirectionalLight mainLight(double) const override { return {}; }
+    HemisphereAmbient ambient(double) const override {
+        return {glm::dvec3(1.0, 1.1, 1.3), glm::dvec3(0.3, 0.3, 0.2)};
+    }
+    double groundHeight(double, double) const override { return -2.0; }
+    bool groundAt(double x, double, GroundPoint& out, const GroundPoint*) const override {
+        out.height_m = -2.0;
+        out.normal = {0.0, 1.0, 0.0};
+        out.albedo = glm::dvec3(0.2 + 0.1 * std::sin(x), 0.3, 0.1);
+        return true;
+    }
+};
+
 TEST(NearField, ThroughOneNormalEqualsTheShPathAndStaysNonNegative) {
     // The draw's path (the transfer seen through the point's normal) against the SH path
     // evaluated at that normal: equal (float rounding, 1e-4 of the far irradiance) wherever the
     // SH path's guard left the hidden part whole; where the caps would take the irradiance at
     // the normal below zero, >= 0 and never above what the caps alone would give unhidden.
+    // Every other trial has a ground 2 m below, lit by the light and the ambient.
+    const GroundBelow scene;
+    const HemisphereAmbient ambient = scene.ambient(12.0);
     std::mt19937 rng(11);
     std::uniform_real_distribution<double> u(0.0, 1.0);
     ShRgbD skyGround;
@@ -248,10 +268,12 @@ TEST(NearField, ThroughOneNormalEqualsTheShPathAndStaysNonNegative) {
         sun.direction = unit(u(rng) * 0.5 * kPi, u(rng) * 2 * kPi);
         sun.irradiance = glm::dvec3(4.0 * u(rng));
         const glm::dvec3 n = unit(u(rng) * 0.6 * kPi, u(rng) * 2 * kPi);
-        NearFieldTransfer t = nearFieldTransfer(occluderCaps(glm::dvec3(0.0), occ));
-        updateLightTerm(t, sun.direction);
+        const GroundTerm ground =
+            trial % 2 ? groundTerm(glm::dvec3(0.0), scene, occ, occ, 16.0, sun.direction) : GroundTerm{};
+        NearFieldTransfer t = nearFieldTransfer(occluderCaps(glm::dvec3(0.0), occ), &ground);
+        updateLightTerm(t, sun.direction, ambient);
         NormalTransfer nt = normalTransfer(&t, n);
-        updateLightTerm(nt, sun.direction, 1);
+        updateLightTerm(nt, sun.direction, ambient, 1);
         const ShRgb far = toFloat(skyGround);
         const glm::vec3 got = applyNormalTransfer(normalApply(nt, n), far, glm::vec3(n), sun);
         EXPECT_GE(std::min({got.x, got.y, got.z}), 0.0f) << "trial " << trial;
@@ -278,6 +300,9 @@ struct FixedLightScene : NearFieldScene {
         l.direction = glm::normalize(glm::dvec3(0.3, 0.8, 0.2));
         l.irradiance = glm::dvec3(3.0);
         return l;
+    }
+    HemisphereAmbient ambient(double) const override {
+        return {glm::dvec3(0.8, 0.9, 1.0), glm::dvec3(0.25)};
     }
     double groundHeight(double, double) const override { return 0.0; }
 };

@@ -35,6 +35,10 @@ struct FlatGround final : NearFieldScene {
         l.irradiance = lightIrradiance;
         return l;
     }
+    // The ambient brightens through the day, so cached terms must follow it too.
+    HemisphereAmbient ambient(double timeOfDay_h) const override {
+        return {glm::dvec3(0.5, 0.6, 0.8) * (1.0 + 0.05 * (timeOfDay_h - 12.0)), glm::dvec3(0.2)};
+    }
     double groundHeight(double, double) const override { return 0.0; }
     bool groundAt(double x, double z, GroundPoint& out, const GroundPoint* = nullptr) const override {
         out.height_m = 0.0;
@@ -62,8 +66,10 @@ double irradianceG(const ShRgbD& sh, const glm::dvec3& n) {
     return double(shIrradiance(toFloat(sh), glm::vec3(n)).g);
 }
 
-// The far field is what a white ground would send back: removing it and putting the ground's
-// own in its place is the identity (to float rounding).
+// A white ground lit by a hemisphere ambient of sky radiance s sends s back (E_amb(up) = pi s,
+// whatever the distant ground's radiance): under a far field of s all round, removing what the
+// probes saw below and putting the ground's own in its place is the identity (to float
+// rounding).
 TEST(NearGround, AWhiteGroundUnderAUniformFarFieldChangesNothing) {
     FlatGround scene;
     scene.albedo = [](double, double) { return glm::dvec3(1.0); };
@@ -71,42 +77,47 @@ TEST(NearGround, AWhiteGroundUnderAUniformFarFieldChangesNothing) {
     const GroundTerm ground = groundTerm(p, scene, {}, {}, 16.0, {0.0, 1.0, 0.0});
     ASSERT_TRUE(ground.any);
     EXPECT_EQ(ground.samples, 32);
-    const ShRgbD far = constantSky(glm::dvec3(1.0, 0.8, 0.6));
-    const ShRgbD got = applyNearField(far, p, {}, zenithSun(0.0), {}, &ground);
+    const glm::dvec3 s(1.0, 0.8, 0.6);
+    const ShRgbD far = constantSky(s);
+    const HemisphereAmbient ambient{s, glm::dvec3(0.1, 0.3, 0.2)};
+    const ShRgbD got = applyNearField(far, p, {}, zenithSun(0.0), {}, &ground, ambient);
     for (int k = 0; k < kShCoefficients; ++k)
         for (int c = 0; c < 3; ++c) EXPECT_NEAR(got.c[k][c], far.c[k][c], 1e-5) << k << " " << c;
 }
 
-// A dark far field and the sun at the zenith: the ground within R of the foot, of albedo rho,
-// sends rho E / pi up; its SH is that radiance times the closed-form SH of the cap about -Y of
-// half-angle atan(R / h). The 32 directions give it within 2 % of the constant coefficient, and
-// a downward surface's irradiance within 2 %. Each channel takes its own albedo.
+// A dark far field, the sun at the zenith and a hemisphere ambient of sky radiance s: the
+// ground within R of the foot, of albedo rho, sends rho (E + pi s) / pi up; its SH is that
+// radiance times the closed-form SH of the cap about -Y of half-angle atan(R / h). The 32
+// directions give it within 2 % of the constant coefficient, and a downward surface's
+// irradiance within 2 %. Each channel takes its own albedo and its own ambient.
 TEST(NearGround, ASunlitDiscOfGroundMatchesTheCapsClosedForm) {
     FlatGround scene;
     const glm::dvec3 rho(0.1, 0.3, 0.2);
     scene.albedo = [&](double, double) { return rho; };
     const double h = 2.0, R = 16.0, E = 500.0;
+    const HemisphereAmbient ambient{glm::dvec3(20.0, 30.0, 45.0), glm::dvec3(5.0)};
     const glm::dvec3 p(0.0, h, 0.0);
     const GroundTerm ground = groundTerm(p, scene, {}, {}, R, {0.0, 1.0, 0.0});
-    const ShRgbD got = applyNearField(ShRgbD{}, p, {}, zenithSun(E), {}, &ground);
+    const ShRgbD got = applyNearField(ShRgbD{}, p, {}, zenithSun(E), {}, &ground, ambient);
     const auto cap = capSh({0.0, -1.0, 0.0}, h / std::hypot(h, R));
+    const glm::dvec3 lit = rho * (E + kPi * ambient.sky) / kPi;  // the ground's radiance
     for (int c = 0; c < 3; ++c) {
-        const double L = rho[c] * E / kPi;
         for (int k = 0; k < kShCoefficients; ++k)
-            EXPECT_NEAR(got.c[k][c], L * cap[k], 0.02 * L * cap[0]) << "k " << k << " channel " << c;
+            EXPECT_NEAR(got.c[k][c], lit[c] * cap[k], 0.02 * lit[c] * cap[0])
+                << "k " << k << " channel " << c;
     }
     ShRgbD want;
-    for (int k = 0; k < kShCoefficients; ++k) want.c[k] = glm::dvec3(rho.g * E / kPi * cap[k]);
+    for (int k = 0; k < kShCoefficients; ++k) want.c[k] = glm::dvec3(lit.g * cap[k]);
     const double down = irradianceG(got, {0.0, -1.0, 0.0});
     EXPECT_NEAR(down, irradianceG(want, {0.0, -1.0, 0.0}), 0.02 * down);
-    EXPECT_GT(down, 0.9 * rho.g * E);  // nearly the whole lower hemisphere at rho E
+    EXPECT_GT(down, 0.9 * kPi * lit.g);  // nearly the whole lower hemisphere at that radiance
 }
 
 // A crown of radius 3 m, 8 m above the foot, with the sun at the zenith: its shadow is the disc
 // of radius 3 m under it, which holds 9 / 13 of a downward normal's irradiance from the ground
 // (r^2 / (r^2 + h^2) at h = 2 m), so that irradiance drops to about 0.3 of the open ground's
-// (0.2-0.42 for 32 directions). The crown also hides the sky above; the ground's sky, from a
-// uniform far field, is dimmed with it.
+// (0.2-0.42 for 32 directions). The crown also hides the sky above: the ground's ambient, as
+// the point's caps leave it, is dimmed with it.
 TEST(NearGround, AShadowOnTheGroundDarkensWhatTheGroundShows) {
     FlatGround scene;
     const glm::dvec3 p(0.0, 2.0, 0.0);
@@ -119,20 +130,21 @@ TEST(NearGround, AShadowOnTheGroundDarkensWhatTheGroundShows) {
     const double b = irradianceG(applyNearField(ShRgbD{}, p, {}, sun, {}, &shaded), {0, -1, 0});
     EXPECT_GT(b, 0.2 * a);
     EXPECT_LT(b, 0.42 * a);
-    // The sky part: a uniform far field, no light; the crown's cap dims the ground's sky.
-    const ShRgbD sky = constantSky(glm::dvec3(1.0));
+    // The ambient part: a dark far field, no light; the crown's cap dims the ground's ambient.
+    const HemisphereAmbient ambient{glm::dvec3(1.0), glm::dvec3(0.3)};
     const double skyOpen =
-        irradianceG(applyNearField(sky, p, {}, zenithSun(0.0), {}, &open), {0, -1, 0});
-    const double skyShaded =
-        irradianceG(applyNearField(sky, p, {crown}, zenithSun(0.0), {}, &shaded), {0, -1, 0});
+        irradianceG(applyNearField(ShRgbD{}, p, {}, zenithSun(0.0), {}, &open, ambient), {0, -1, 0});
+    const double skyShaded = irradianceG(
+        applyNearField(ShRgbD{}, p, {crown}, zenithSun(0.0), {}, &shaded, ambient), {0, -1, 0});
+    EXPECT_GT(skyOpen, 0.9 * 0.3 * kPi * ambient.sky.g);  // nearly all the ground at rho s
     EXPECT_LT(skyShaded, skyOpen);
     EXPECT_GT(skyShaded, 0.5 * skyOpen);
 }
 
 // Points cached at 10 h and asked again at 13 h (the light has moved; no plant, so nothing
 // depends on the light the point was built in) answer what a NearField built at 13 h answers,
-// through the SH path and through normals facing up and down (the light on the ground reaches
-// the downward ones), and the ground changes the answer.
+// through the SH path and through normals facing up and down (the light and the ambient on the
+// ground reach the downward ones), and the ground changes the answer.
 TEST(NearGround, ACachedPointFollowsTheLightAsAFreshOne) {
     FlatGround scene;
     scene.lightIrradiance = glm::dvec3(400.0, 380.0, 350.0);
