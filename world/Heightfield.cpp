@@ -8,6 +8,7 @@
 #include "world/Heightfield.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include <glm/geometric.hpp>
@@ -61,10 +62,62 @@ inline double reduce(double u) {
     return u - kPeriod * std::floor(u * (1.0 / kPeriod));
 }
 
+// glm::perlin(dvec2) (Gustavson's classic noise, glm/gtc/noise.inl) reads its lattice through
+// permute(permute(x) + y), permute(x) = mod289((34 x + 1) x), and turns the hash i into the
+// gradient g = (gx, |gx| - 1/2) * (1.79284291400159 - 0.85373472095314 |g|^2), gx from
+// 2 fract(i / 41) - 1 less floor(gx + 1/2). On one period those are functions of integers below
+// 600: tables, each entry made with the same operations GLM makes. (mod289 multiplies by a
+// rounded 1/289, so a multiple of 289 may come out as 289, not 0: the tables keep that.)
+struct PerlinTables {
+    static constexpr int kLattice = 289;
+    std::array<int, kLattice> first{};            // permute(x), x in [0, 288]
+    std::array<int, 2 * kLattice> second{};       // permute(x), x in [0, 577]
+    std::array<glm::dvec2, kLattice + 1> gradient{};  // g for the hash i in [0, 289]
+    PerlinTables() {
+        const auto permute = [](double x) { return glm::detail::permute(x); };
+        for (int x = 0; x < kLattice; ++x) first[std::size_t(x)] = int(permute(double(x)));
+        for (int x = 0; x < 2 * kLattice; ++x) second[std::size_t(x)] = int(permute(double(x)));
+        for (int i = 0; i <= kLattice; ++i) {
+            double gx = 2.0 * glm::fract(double(i) / 41.0) - 1.0;
+            const double gy = std::abs(gx) - 0.5;
+            gx = gx - std::floor(gx + 0.5);
+            const glm::dvec2 g(gx, gy);
+            gradient[std::size_t(i)] = g * glm::detail::taylorInvSqrt(glm::dot(g, g));
+        }
+    }
+};
+
+}  // namespace
+
+double Heightfield::classicNoise(double u, double v) {
+    static const PerlinTables t;
+    const double iu = std::floor(u), iv = std::floor(v);
+    // The lattice corners mod 289, as glm::mod(floor + (0, 0, 1, 1), 289) gives them (exact for
+    // integers: the quotient's rounding never crosses an integer).
+    const auto wrap = [](double i) {
+        const int m = int(i) % PerlinTables::kLattice;
+        return m < 0 ? m + PerlinTables::kLattice : m;
+    };
+    const int x0 = wrap(iu), y0 = wrap(iv), x1 = wrap(iu + 1.0), y1 = wrap(iv + 1.0);
+    const double fu = u - iu, fv = v - iv;  // glm::fract
+    const double fu1 = fu - 1.0, fv1 = fv - 1.0;
+    const auto corner = [&t](int x, int y, double dx, double dy) {
+        const glm::dvec2& g = t.gradient[std::size_t(t.second[std::size_t(t.first[std::size_t(x)] + y)])];
+        return glm::dot(g, glm::dvec2(dx, dy));
+    };
+    const double n00 = corner(x0, y0, fu, fv), n10 = corner(x1, y0, fu1, fv);
+    const double n01 = corner(x0, y1, fu, fv1), n11 = corner(x1, y1, fu1, fv1);
+    const glm::dvec2 fade = glm::detail::fade(glm::dvec2(fu, fv));
+    const glm::dvec2 nx = glm::mix(glm::dvec2(n00, n01), glm::dvec2(n10, n11), fade.x);
+    return 2.3 * glm::mix(nx.x, nx.y, fade.y);
+}
+
+namespace {
+
 inline double perlinAt(const Heightfield::Octave& o, double x_m, double z_m) {
     const double u = (o.cosA * x_m - o.sinA * z_m) * o.frequency_per_m + o.offsetU;
     const double v = (o.sinA * x_m + o.cosA * z_m) * o.frequency_per_m + o.offsetV;
-    return glm::perlin(glm::dvec2(reduce(u), reduce(v)));
+    return Heightfield::classicNoise(reduce(u), reduce(v));
 }
 
 template <std::size_t N>

@@ -1,5 +1,5 @@
-// Heightfield_test.cpp — determinism, normals against difference quotients, smoothness and
-// statistics far from the origin, moisture range.
+// Heightfield_test.cpp — the noise equals GLM's bit for bit, determinism, normals against
+// difference quotients, smoothness and statistics far from the origin, moisture range.
 #include "world/Heightfield.h"
 
 #include <cmath>
@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
+#include <glm/gtc/noise.hpp>
 
 namespace amb {
 namespace {
@@ -21,6 +22,35 @@ WorldSettings seeded(std::uint64_t seed) {
 
 bool bitEqual(double a, double b) {
     return std::memcmp(&a, &b, sizeof a) == 0;
+}
+
+// The table-driven noise is GLM's classic Perlin noise bit for bit over the period [0, 289]:
+// a million random points, every lattice line and the cells' edges from both sides, and the
+// period's end (289 wraps to 0).
+TEST(Heightfield, ClassicNoiseIsGlmsBitForBit) {
+    std::mt19937_64 rng(3);
+    std::uniform_real_distribution<double> u(0.0, 289.0);
+    std::vector<double> coords;
+    for (int i = 0; i <= 289; ++i)
+        for (double d : {0.0, 1e-12, 0.5, 1.0 - 1e-12})
+            if (i + d <= 289.0) coords.push_back(i + d);
+    coords.push_back(std::nextafter(289.0, 0.0));
+    int mismatches = 0, count = 0;
+    const auto check = [&](double a, double b) {
+        ++count;
+        const double want = glm::perlin(glm::dvec2(a, b));
+        if (!bitEqual(Heightfield::classicNoise(a, b), want) && ++mismatches <= 5)
+            ADD_FAILURE() << "at (" << a << ", " << b << "): " << Heightfield::classicNoise(a, b)
+                          << " against " << want;
+    };
+    for (int n = 0; n < 1000000; ++n) check(u(rng), u(rng));
+    for (double a : coords) {
+        check(a, u(rng));
+        check(u(rng), a);
+    }
+    for (std::size_t i = 0; i < coords.size(); i += 7)
+        for (std::size_t j = 0; j < coords.size(); j += 5) check(coords[i], coords[j]);
+    EXPECT_EQ(mismatches, 0) << "of " << count;
 }
 
 TEST(Heightfield, SameSeedGivesBitIdenticalHeights) {

@@ -1,0 +1,55 @@
+// Heightfield_bench.cpp — cost of the world's noise, which most of the near field's builds
+// spend their time in: GLM's classic Perlin noise against the table-driven one that equals it
+// bit for bit (Heightfield::classicNoise), and one terrain height (7 to 11 octaves).
+//   build/bin/ambience_bench --benchmark_filter='Noise|Height'
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+#include <glm/gtc/noise.hpp>
+
+#include "world/Heightfield.h"
+#include "world/WorldSettings.h"
+
+namespace amb {
+namespace {
+
+// 4096 points spread over the noise's period, reused so the loop measures the noise alone.
+const std::vector<glm::dvec2>& periodPoints() {
+    static const std::vector<glm::dvec2> points = [] {
+        std::vector<glm::dvec2> p;
+        for (int i = 0; i < 4096; ++i) p.emplace_back(std::fmod(i * 0.7548776662, 1.0) * 289.0,
+                                                      std::fmod(i * 0.5698402910, 1.0) * 289.0);
+        return p;
+    }();
+    return points;
+}
+
+void BM_NoiseGlm(benchmark::State& state) {
+    const auto& points = periodPoints();
+    for (auto _ : state)
+        for (const glm::dvec2& p : points) benchmark::DoNotOptimize(glm::perlin(p));
+    state.SetItemsProcessed(state.iterations() * std::int64_t(points.size()));
+}
+BENCHMARK(BM_NoiseGlm)->Unit(benchmark::kMicrosecond);
+
+void BM_NoiseTables(benchmark::State& state) {
+    const auto& points = periodPoints();
+    for (auto _ : state)
+        for (const glm::dvec2& p : points) benchmark::DoNotOptimize(Heightfield::classicNoise(p.x, p.y));
+    state.SetItemsProcessed(state.iterations() * std::int64_t(points.size()));
+}
+BENCHMARK(BM_NoiseTables)->Unit(benchmark::kMicrosecond);
+
+void BM_HeightfieldHeight(benchmark::State& state) {
+    const Heightfield field{WorldSettings{}};
+    const auto& points = periodPoints();
+    for (auto _ : state)
+        for (const glm::dvec2& p : points) benchmark::DoNotOptimize(field.height(p.x * 40.0, p.y * 40.0));
+    state.SetItemsProcessed(state.iterations() * std::int64_t(points.size()));
+}
+BENCHMARK(BM_HeightfieldHeight)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+}  // namespace amb
