@@ -786,10 +786,16 @@ void WorldNearFieldScene::occludersNear(const glm::dvec3& point_m, double radius
 
 void WorldNearFieldScene::terrainNear(const glm::dvec3& p, double radius_m,
                                       std::vector<HorizonWedge>& out) const {
+    // With no road near the disc, its heights are the heightfield's (one road query, not one a
+    // sample: World::roadWithin).
+    const bool roads = world_.roadWithin(p.x, p.z, radius_m);
+    const auto heightAt = [&](double x, double z, double* road) {
+        return roads ? world_.heightAndRoad(x, z, road) : world_.heightfield().height(x, z);
+    };
     // The broad slope: the plane through the heights radius_m away.
-    const double gx = (world_.height(p.x + radius_m, p.z) - world_.height(p.x - radius_m, p.z)) /
+    const double gx = (heightAt(p.x + radius_m, p.z, nullptr) - heightAt(p.x - radius_m, p.z, nullptr)) /
                       (2.0 * radius_m);
-    const double gz = (world_.height(p.x, p.z + radius_m) - world_.height(p.x, p.z - radius_m)) /
+    const double gz = (heightAt(p.x, p.z + radius_m, nullptr) - heightAt(p.x, p.z - radius_m, nullptr)) /
                       (2.0 * radius_m);
     // Samples along each wedge's middle, denser near the point.
     constexpr int kSteps = 7;
@@ -807,7 +813,7 @@ void WorldNearFieldScene::terrainNear(const glm::dvec3& p, double radius_m,
             if (d < 1.0) continue;
             const double x = p.x + d * dir.x, z = p.z + d * dir.y;
             double road = 0.0;
-            const double height = world_.heightAndRoad(x, z, &road);
+            const double height = heightAt(x, z, &road);
             const double e = std::atan2(height - p.y, d);
             if (e > best) {
                 best = e, bestX = x, bestZ = z, bestH = height, bestRoad = road;
@@ -895,10 +901,18 @@ GroundTerm groundTerm(const glm::dvec3& p, const NearFieldScene& scene,
     const bool lightAbove = glm::dot(lightDirection, n) > 0.0 && lightDirection.y > 0.0;
     const double terrainLit =
         lightAbove ? scene.terrainLightVisibility(p - n * (h - 0.5), lightDirection) : 0.0;
-    // Only spheres that reach below the point can stand between it and the ground.
+    // Only spheres that reach below the point can stand between it and the ground, and only
+    // those that reach into the ball about the foot that holds every ray to the region (of
+    // radius max(h, R): the rays run from the point to the region's disc).
+    const glm::dvec3 base = p - n * h;  // the foot on the tangent plane
+    const double ball = std::max(h, radius_m);
     std::vector<SphereOccluder> below;
-    for (const SphereOccluder& o : seen)
-        if (o.centre_m.y - (1.0 + kRim) * o.radius_m < p.y) below.push_back(o);
+    for (const SphereOccluder& o : seen) {
+        const double outer = (1.0 + kRim) * o.radius_m;
+        const glm::dvec3 q = o.centre_m - base;
+        if (o.centre_m.y - outer < p.y && glm::dot(q, q) < (ball + outer) * (ball + outer))
+            below.push_back(o);
+    }
     // The directions that meet the ground, and where.
     struct Sample {
         glm::dvec3 direction, at;
@@ -907,7 +921,7 @@ GroundTerm groundTerm(const glm::dvec3& p, const NearFieldScene& scene,
     };
     std::vector<Sample> samples;
     samples.reserve(kGroundRings * kGroundAzimuths);
-    const glm::dvec3 base = p - n * h;  // the foot on the tangent plane
+    const bool roads = scene.roadNear(base.x, base.z, radius_m);  // the samples lie within it
     double spread = 0.0;  // the samples' farthest from the foot
     for (int ring = 0; ring < kGroundRings; ++ring) {
         const double c = cosMax + (1.0 - cosMax) * (ring + 0.5) / kGroundRings;  // cos from -n
@@ -922,7 +936,7 @@ GroundTerm groundTerm(const glm::dvec3& p, const NearFieldScene& scene,
             const glm::dvec3 x = p + d * reach;
             Sample sample{d, x, ws, {}};
             GroundPoint plane;
-            plane.height_m = x.y, plane.normal = n;
+            plane.height_m = x.y, plane.normal = n, plane.roadNear = roads;
             if (!scene.groundAt(x.x, x.z, sample.ground, &plane)) continue;
             spread = std::max(spread, glm::length(sample.at - base));
             samples.push_back(sample);
@@ -988,7 +1002,7 @@ bool WorldNearFieldScene::groundAt(double x_m, double z_m, GroundPoint& out,
     double road = 0.0;
     if (plane) {
         out.height_m = plane->height_m, out.normal = plane->normal;
-        road = world_.roadWeight(x_m, z_m);
+        road = plane->roadNear ? world_.roadWeight(x_m, z_m) : 0.0;
     } else {
         out.height_m = world_.heightAndRoad(x_m, z_m, &road);
         out.normal = world_.normal(x_m, z_m);
@@ -996,6 +1010,10 @@ bool WorldNearFieldScene::groundAt(double x_m, double z_m, GroundPoint& out,
     out.albedo = glm::dvec3(
         albedo_.at(x_m, z_m, out.height_m, road, out.normal, TerrainPatch::kFinestSpacing_m));
     return std::isfinite(out.height_m);
+}
+
+bool WorldNearFieldScene::roadNear(double x_m, double z_m, double radius_m) const {
+    return world_.roadWithin(x_m, z_m, radius_m);
 }
 
 double WorldNearFieldScene::terrainLightVisibility(const glm::dvec3& from,

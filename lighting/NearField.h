@@ -241,6 +241,9 @@ struct GroundPoint {
     double height_m = 0.0;
     glm::dvec3 normal{0.0, 1.0, 0.0};
     glm::dvec3 albedo{0.0};
+    // In a plane given to groundAt: false when the caller knows no road reaches the point (the
+    // scene may skip its road lookup; NearFieldScene::roadNear).
+    bool roadNear = true;
 };
 
 // The ground's ambient as its point's caps leave it (see Ground): per channel, the weights of
@@ -406,6 +409,12 @@ class NearFieldScene {
         (void)x_m, (void)z_m, (void)out, (void)plane;
         return false;
     }
+    // Whether a road may reach within radius_m of (x, z) (heights and albedos there depend on
+    // it); true unless the scene knows there is none.
+    virtual bool roadNear(double x_m, double z_m, double radius_m) const {
+        (void)x_m, (void)z_m, (void)radius_m;
+        return true;
+    }
     // Whether terrain leaves the light (unit direction towards it) visible from `from`, in [0, 1].
     virtual double terrainLightVisibility(const glm::dvec3& from_m, const glm::dvec3& toLight) const {
         (void)from_m, (void)toLight;
@@ -438,6 +447,7 @@ class WorldNearFieldScene final : public NearFieldScene {
     // The terrain's height, normal and albedo as the patches draw them near the camera.
     bool groundAt(double x_m, double z_m, GroundPoint& out,
                   const GroundPoint* plane = nullptr) const override;
+    bool roadNear(double x_m, double z_m, double radius_m) const override;
     // Marched along the light out to kShadowReach_m, as far as the main view's shadows reach.
     double terrainLightVisibility(const glm::dvec3& from_m,
                                   const glm::dvec3& toLight) const override;

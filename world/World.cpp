@@ -88,6 +88,10 @@ double World::roadWeight(double x_m, double z_m) const {
     return q ? roadBlend(*q) : 0.0;
 }
 
+bool World::roadWithin(double x_m, double z_m, double radius_m) const {
+    return roads_->nearest(x_m, z_m, radius_m + kMaxRoadHalfWidth_m + kShoulder_m).has_value();
+}
+
 double World::height(double x_m, double z_m) const {
     return heightAndRoad(x_m, z_m, nullptr);
 }

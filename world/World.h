@@ -49,6 +49,10 @@ class World {
     double heightAndRoad(double x_m, double z_m, double* roadWeight) const;
     // The road weight alone (no terrain height: cheap).
     double roadWeight(double x_m, double z_m) const;
+    // Whether a road's surface or shoulder reaches within radius_m of (x, z). Where none does,
+    // every point of that disc has the heightfield's height and road weight 0, so a caller
+    // sampling the disc may ask the heightfield alone (one road query, not one a sample).
+    bool roadWithin(double x_m, double z_m, double radius_m) const;
     // Material, moisture and albedo of a point whose height, road weight and normal are known
     // (lets grid samplers derive normals from their own height grid).
     GroundSample classify(double x_m, double z_m, double height_m, double roadWeight,
