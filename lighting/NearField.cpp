@@ -885,11 +885,14 @@ double sphereBlock(const glm::dvec3& origin, const glm::dvec3& dir, double lengt
 GroundTerm groundTerm(const glm::dvec3& p, const NearFieldScene& scene,
                       const std::vector<SphereOccluder>& seen,
                       const std::vector<SphereOccluder>& shading, double radius_m,
-                      const glm::dvec3& lightDirection) {
+                      const glm::dvec3& lightDirection, const glm::dvec3* drawnNormal) {
     GroundTerm out;
     GroundPoint foot;
     if (!scene.groundAt(p.x, p.z, foot)) return out;
     const glm::dvec3 n = foot.normal;
+    // Seen only through (nearly) the ground's own normal: the region lies below its horizon.
+    static const double kOwnGroundCos = std::cos(kOwnGroundDeg * kPi / 180.0);
+    if (drawnNormal && glm::dot(*drawnNormal, n) > kOwnGroundCos) return out;
     const double h = glm::dot(p - glm::dvec3(p.x, foot.height_m, p.z), n);
     if (!(h > 1e-3) || !(radius_m > 0.0) || !std::isfinite(h + n.x + n.y + n.z)) return out;
     const double cosMax = h / std::sqrt(h * h + radius_m * radius_m);
@@ -1137,7 +1140,8 @@ std::vector<SphereOccluder> NearField::occluders(const glm::dvec3& p) const {
 }
 
 std::unique_ptr<NearFieldTransfer> NearField::build(const glm::dvec3& p, double selfRadius_m,
-                                                    const GroundTerm* objectGroundTerm) const {
+                                                    const GroundTerm* objectGroundTerm,
+                                                    const glm::dvec3* drawnNormal) const {
     std::vector<HorizonWedge> horizon;
     if (settings_.terrain && selfRadius_m <= 0.0)
         scene_.terrainNear(p, settings_.terrainRadius_m, horizon);
@@ -1155,7 +1159,8 @@ std::unique_ptr<NearFieldTransfer> NearField::build(const glm::dvec3& p, double 
         ground = objectGroundTerm ? *objectGroundTerm
                  : selfRadius_m > 0.0 && blendsLattice(p)
                      ? objectGround(p)
-                     : groundTerm(p, scene_, caps0, all, settings_.groundRadius_m, light_.direction);
+                     : groundTerm(p, scene_, caps0, all, settings_.groundRadius_m, light_.direction,
+                                  drawnNormal);
     std::vector<OccluderCap> caps = nearOccluders(p, caps0, horizon);
     if (caps.empty() && !ground.any) return nullptr;
     auto t = std::make_unique<NearFieldTransfer>(nearFieldTransfer(caps, &ground));
@@ -1199,7 +1204,7 @@ NormalTransfer NearField::groundSample(double x_m, double z_m) const {
     }
     if (!std::isfinite(g.height_m) || !std::isfinite(g.normal.x + g.normal.y + g.normal.z)) return {};
     const std::unique_ptr<NearFieldTransfer> full =
-        build(glm::dvec3(x_m, g.height_m + kShadingHeight_m, z_m), 0.0);
+        build(glm::dvec3(x_m, g.height_m + kShadingHeight_m, z_m), 0.0, nullptr, &g.normal);
     NormalTransfer nt = normalTransfer(full.get(), g.normal);
     if (full) updateLightTerm(nt, light_.direction, ambient_, lightEpoch_);
     return nt;
@@ -1519,7 +1524,8 @@ void NearField::irradianceMany(std::size_t count, const ShRgb* far, const glm::d
             const std::size_t i = unique[u];
             if (patchOf(i) > 0.0) return;
             // Nothing near: the entry has no transfer (any = false) and answers the far field.
-            const std::unique_ptr<NearFieldTransfer> full = build(points_m[i], 0.0);
+            const std::unique_ptr<NearFieldTransfer> full =
+                build(points_m[i], 0.0, nullptr, &normals[i]);
             NormalTransfer& nt = transfers[u];
             nt = normalTransfer(full.get(), normals[i]);
             if (full) updateLightTerm(nt, light_.direction, ambient_, lightEpoch_);

@@ -187,6 +187,35 @@ TEST(NearGround, ACachedPointFollowsTheLightAsAFreshOne) {
     }
 }
 
+// A point asked through the ground's own normal (a terrain corner, a road vertex) takes no
+// ground term: its region lies below that normal's horizon (NearField.h "Through one normal").
+// Through a normal tilted 40 degrees, which sees part of it, the ground changes the answer.
+TEST(NearGround, APointSeenThroughTheGroundsNormalTakesNoGroundTerm) {
+    FlatGround scene;
+    scene.lightIrradiance = glm::dvec3(400.0, 380.0, 350.0);
+    scene.plants = {{{3.0, 6.0, 1.0}, 3.0, glm::dvec3(0.1, 0.25, 0.08)}};
+    NearFieldSettings settings, noGround;
+    settings.patchMean = noGround.patchMean = false;
+    noGround.ground = false;
+    const ShRgb far = toFloat(constantSky(glm::dvec3(0.9, 1.0, 1.1)));
+    const glm::dvec3 p(0.0, kShadingHeight_m, 0.0);
+    const glm::dvec3 up(0.0, 1.0, 0.0), slightly = glm::normalize(glm::dvec3(0.1, 1.0, 0.05));
+    const glm::dvec3 tilted = glm::normalize(glm::dvec3(std::sin(0.7), std::cos(0.7), 0.0));
+    const auto answer = [&](const NearFieldSettings& s, const glm::dvec3& n) {
+        NearField near(scene, s);
+        near.setTimeOfDay(10.0);
+        glm::vec3 e;
+        near.irradianceMany(1, &far, &p, &n, &e);
+        return e;
+    };
+    for (const glm::dvec3& n : {up, slightly}) {
+        const glm::vec3 with = answer(settings, n), without = answer(noGround, n);
+        for (int c = 0; c < 3; ++c) EXPECT_EQ(with[c], without[c]) << c;
+    }
+    const glm::vec3 with = answer(settings, tilted), without = answer(noGround, tilted);
+    EXPECT_GT(std::abs(with.g - without.g), 0.01f * without.g);
+}
+
 // An object (the car) walks 30 m across a checkerboard of 3 m squares, albedo 0.1 and 0.4, in
 // 0.1 m steps under a dark far field and the sun. Its downward irradiance's second difference
 // (what the pop along a moving object measures) stays below 0.5 % of its value: the objects'
