@@ -12,6 +12,8 @@
 #include <limits>
 #include <sstream>
 
+#include <unistd.h>
+
 #include <glm/geometric.hpp>
 #include <nlohmann/json.hpp>
 
@@ -470,9 +472,11 @@ std::vector<double> ErrorMeter::ringErrors(int ring) const {
 
 namespace {
 
-// Writes `j` to `path` through a temporary beside it, so a reader never sees half a file.
+// Writes `j` to `path` through a temporary beside it, so a reader never sees half a file. The
+// temporary is the process's own: a bench's runs of one replay may save its caches at once
+// (each a whole cache; the last rename wins).
 void writeJsonFile(const std::string& path, const nlohmann::json& j, const std::string& what) {
-    const std::string tmp = path + ".part";
+    const std::string tmp = path + "." + std::to_string(::getpid()) + ".part";
     {
         std::ofstream out(tmp);
         if (!out) throw InputError(path, "cannot write the " + what);
