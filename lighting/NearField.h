@@ -133,7 +133,7 @@
 //   The draw needs the SH at terrain corners and road vertices only through their own normal n
 //   (it interpolates the irradiance, not the SH). There E(n) = a(n) . L' with a_k = Ahat_l
 //   Y_k(n), so the 9 x 9 maps collapse to vectors: E_c = a . L_c + g_c (h . L_c) + s_c . L_c +
-//   (s_c . Y(l)) E_light,c, h = hide^T a, s_c = (T_c - hide)^T a: 57 floats a point with the
+//   (s_c . Y(l)) E_light,c, h = hide^T a, s_c = (T_c - hide)^T a: 66 floats a point with the
 //   ground's light term (NormalTransfer), not 500, and no matrix product per frame. The guard is
 //   then exact for that normal: what is hidden never takes E(n) below min(0, a . L), g_c < 1
 //   only where it would. The draw reads 48 of them a frame (NormalApply: w_c = a + h + s_c in
@@ -143,7 +143,7 @@
 //   exact irradiance sees none of it and order-2 SH only rings (through the normal it moved
 //   the drives' corners by 1.1-1.5 % on average, 5 % at most). So a point asked through a
 //   normal within kOwnGroundDeg of the ground's at its foot is built without it, which
-//   takes a third off the build.
+//   takes a fifth off the build.
 #pragma once
 
 #include <array>
