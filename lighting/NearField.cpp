@@ -408,13 +408,12 @@ double groundCosine(const glm::vec3& groundNormal, const glm::dvec3& lightDirect
     return std::max(0.0, glm::dot(glm::dvec3(groundNormal), lightDirection));
 }
 
-// The ground's ambient irradiance per channel (see GroundAmbient): the hemisphere ambient's SH
-// has L_0 = Y00 2 pi (s + g) and L_1 (vertical) = Y1 pi (s - g).
+// The ground's ambient irradiance per channel (see GroundAmbient).
 glm::dvec3 groundAmbientIrradiance(const GroundAmbient& w, const HemisphereAmbient& ambient) {
+    const glm::dvec3 a0 = ambient.shBand0(), a1 = ambient.shVertical();
     glm::dvec3 e;
     for (int ch = 0; ch < 3; ++ch)
-        e[ch] = w[std::size_t(ch)][0] * kShY00 * 2.0 * kPi * (ambient.sky[ch] + ambient.ground[ch]) +
-                w[std::size_t(ch)][1] * kShY1 * kPi * (ambient.sky[ch] - ambient.ground[ch]);
+        e[ch] = w[std::size_t(ch)][0] * a0[ch] + w[std::size_t(ch)][1] * a1[ch];
     return e;
 }
 
@@ -436,12 +435,9 @@ void updateLightTerm(NearFieldTransfer& t, const glm::dvec3& lightDirection,
         }
     if (t.ground) {
         const double cosine = groundCosine(t.groundNormal, lightDirection);
-        const glm::dvec3 sky = groundAmbientIrradiance(t.groundAmbient, ambient);
         for (int ch = 0; ch < 3; ++ch)
-            for (int j = 0; j < K; ++j) {
-                t.s[ch][j] += float(t.groundLit[ch][j] * cosine);
-                t.groundSky[ch][j] = float(t.groundShow[ch][j] * sky[ch]);
-            }
+            for (int j = 0; j < K; ++j) t.s[ch][j] += float(t.groundLit[ch][j] * cosine);
+        t.groundAmbientE = glm::vec3(groundAmbientIrradiance(t.groundAmbient, ambient));
     }
 }
 
@@ -725,14 +721,15 @@ ShRgb applyTransfer(const NearFieldTransfer& t, const ShRgb& far, const Directio
         t.guardFar = far;
         t.guardValid = true;
     }
-    // out[j] = far[j] + S[j] E + ground's sky[j] + sum_k T[j][k] far[k], the three channels in
-    // four lanes: 81 four-lane multiply-adds.
-    const Lanes e = lanesOf(glm::vec3(light.irradiance));
+    // out[j] = far[j] + S[j] E + g[j] E_amb + sum_k T[j][k] far[k], the three channels in four
+    // lanes: 81 four-lane multiply-adds.
+    const Lanes e = lanesOf(glm::vec3(light.irradiance)), ambientE = lanesOf(t.groundAmbientE);
     Lanes out[K], f[K];
     for (int j = 0; j < K; ++j) {
         f[j] = lanesOf(far.c[j]);
         out[j] = f[j] + lanesOf(glm::vec3(t.s[0][j], t.s[1][j], t.s[2][j])) * e +
-                 lanesOf(glm::vec3(t.groundSky[0][j], t.groundSky[1][j], t.groundSky[2][j]));
+                 lanesOf(glm::vec3(t.groundShow[0][j], t.groundShow[1][j], t.groundShow[2][j])) *
+                     ambientE;
     }
     for (int k = 0; k < K; ++k)
         for (int j = 0; j < K; ++j) {

@@ -141,7 +141,7 @@
 //   Those points lie on the ground with its normal (a terrain corner, a road vertex, a patch
 //   mean's sample): the ground term's region lies below their own tangent plane, where the
 //   exact irradiance sees none of it and order-2 SH only rings (through the normal it moved
-//   the drives' corners by 1.1-1.5 % on average, 5 % at most). So a point asked through a
+//   the drives' corners by 1.1-1.5 % on average, 5.4 % at most). So a point asked through a
 //   normal within kOwnGroundDeg of the ground's at its foot is built without it, which
 //   takes a fifth off the build.
 #pragma once
@@ -305,10 +305,11 @@ struct NearFieldTransfer {
     alignas(16) std::array<float, 4 * kShCoefficients * kShCoefficients> columns{};
     std::array<std::array<float, kShCoefficients>, 3> s{};  // S_c for lightDirection
     glm::dvec3 lightDirection{0.0};
-    // The ground's light terms (see Ground): g_c, lit_c and the ground's normal, and g_c
-    // E_amb,c(n) for the ambient of lightDirection's time [radiance].
-    std::array<std::array<float, kShCoefficients>, 3> groundShow{}, groundLit{}, groundSky{};
+    // The ground's light terms (see Ground): g_c, lit_c, the ground's normal and ambient, and
+    // E_amb,c at lightDirection's time (what g_c is lit by) [W m^-2].
+    std::array<std::array<float, kShCoefficients>, 3> groundShow{}, groundLit{};
     GroundAmbient groundAmbient{};
+    glm::vec3 groundAmbientE{0.0f};
     // The ground's part of hide: the guard leaves it out (see Guard).
     std::array<float, kShCoefficients * kShCoefficients> groundHide{};
     glm::vec3 groundNormal{0.0f, 1.0f, 0.0f};

@@ -74,8 +74,12 @@ const SkyGrid& skyGrid() {
     return grid;
 }
 
-glm::dvec3 HemisphereAmbient::irradiance(const glm::dvec3& normal) const {
-    return 0.5 * kPi * ((sky + ground) + (sky - ground) * normal.y);
+glm::dvec3 HemisphereAmbient::shBand0() const {
+    return kShY00 * 2.0 * kPi * (sky + ground);
+}
+
+glm::dvec3 HemisphereAmbient::shVertical() const {
+    return kShY1 * kPi * (sky - ground);
 }
 
 HemisphereAmbient hemisphereAmbient(const Sky& sky, double timeOfDay_h) {

@@ -44,11 +44,15 @@ const SkyGrid& skyGrid();
 
 // The ambient the captures and the reference light their surfaces with (the first bounce, before
 // any ambience; app/frame/SkyLighting.h "hemisphere"): the sky's mean radiance s over the upper
-// hemisphere and the distant ground's g over the lower one, on the sky grid. Its SH has bands 0
-// and 1 only, and its irradiance is E(n) = pi / 2 ((s + g) + (s - g) n.y).
+// hemisphere and the distant ground's g over the lower one, on the sky grid. Its SH has two
+// coefficients only (world/Conventions.h basis), so its irradiance is E(n) = pi / 2 ((s + g) +
+// (s - g) n.y).
 struct HemisphereAmbient {
     glm::dvec3 sky{0.0}, ground{0.0};  // mean radiances [W m^-2 sr^-1]
-    glm::dvec3 irradiance(const glm::dvec3& normal) const;
+    // L_0 = Y00 4 pi (s + g) / 2 and the vertical band-1 coefficient L_1 = Y1 (s - g) / 2 x
+    // 2 integral over y > 0 of y dw = Y1 pi (s - g).
+    glm::dvec3 shBand0() const;
+    glm::dvec3 shVertical() const;
 };
 HemisphereAmbient hemisphereAmbient(const Sky& sky, double timeOfDay_h);
 

@@ -66,13 +66,13 @@ const char* toString(AmbientMode mode) {
 
 namespace {
 
-// SH of a radiance that is `sky` over the upper hemisphere (y > 0) and `ground` below. The step
-// has bands 0 and 1 only: L00 = Y00 4 pi (s + g) / 2, L1-1 = Y1 (s - g)/2 * 2 integral_{y>0} y dw
-// = Y1 pi (s - g).
+// SH of a radiance that is `sky` over the upper hemisphere (y > 0) and `ground` below
+// (world/SkyGround.h HemisphereAmbient).
 ShRgb hemisphereSh(const glm::vec3& sky, const glm::vec3& ground) {
+    const HemisphereAmbient h{glm::dvec3(sky), glm::dvec3(ground)};
     ShRgb sh;
-    sh.c[0] = glm::vec3(float(kShY00 * 2.0 * kPi)) * (sky + ground);
-    sh.c[1] = glm::vec3(float(kShY1 * kPi)) * (sky - ground);
+    sh.c[0] = glm::vec3(h.shBand0());
+    sh.c[1] = glm::vec3(h.shVertical());
     return sh;
 }
 
