@@ -879,6 +879,18 @@ double sphereBlock(const glm::dvec3& origin, const glm::dvec3& dir, double lengt
 
 }  // namespace
 
+void belowTangentPlaneOut(const glm::dvec3& n, std::vector<HorizonWedge>& horizon) {
+    std::size_t kept = 0;
+    for (HorizonWedge& h : horizon) {
+        const double phi = 0.5 * (h.azimuth0 + h.azimuth1);
+        // The tangent plane's rise along (cos phi, sin phi) in (x, z).
+        const double rise = -(n.x * std::cos(phi) + n.z * std::sin(phi)) / n.y;
+        h.lower = std::max(h.lower, std::atan(rise));
+        if (h.upper > h.lower) horizon[kept++] = h;
+    }
+    horizon.resize(kept);
+}
+
 GroundTerm groundTerm(const glm::dvec3& p, const NearFieldScene& scene,
                       const std::vector<SphereOccluder>& seen,
                       const std::vector<SphereOccluder>& shading, double radius_m,
@@ -1142,6 +1154,7 @@ std::unique_ptr<NearFieldTransfer> NearField::build(const glm::dvec3& p, double 
     std::vector<HorizonWedge> horizon;
     if (settings_.terrain && selfRadius_m <= 0.0)
         scene_.terrainNear(p, settings_.terrainRadius_m, horizon);
+    if (drawnNormal && drawnNormal->y > 0.0) belowTangentPlaneOut(*drawnNormal, horizon);
     // The ground is shaded by every plant near it, the object's own included.
     std::vector<SphereOccluder> all = occluders(p);
     std::vector<SphereOccluder> others;

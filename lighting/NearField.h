@@ -439,6 +439,10 @@ GroundTerm groundTerm(const glm::dvec3& point_m, const NearFieldScene& scene,
                       const std::vector<SphereOccluder>& shading, double radius_m,
                       const glm::dvec3& lightDirection, const glm::dvec3* drawnNormal = nullptr);
 inline constexpr double kOwnGroundDeg = 10.0;
+// For a point seen only through `drawnNormal` (upward): each band keeps only what rises above
+// the point's own tangent plane in its wedge's middle azimuth (what lies below it is outside
+// the normal's hemisphere, where order-2 SH would only ring: the uphill side of a gully's wall).
+void belowTangentPlaneOut(const glm::dvec3& drawnNormal, std::vector<HorizonWedge>& horizon);
 // sum_i w_i terms_i (the normal renormalised); any if one of them is.
 GroundTerm blendGroundTerms(const GroundTerm* const* terms, const double* weights, int count);
 

@@ -154,6 +154,10 @@ Heightfield::Heightfield(const WorldSettings& settings) : waterLevel_m_(settings
     seedOctaves(ridged_, rng, 2200.0, 2.07);
     seedOctaves(hills_, rng, 620.0, 2.31);
     seedOctaves(moisture_, rng, 3100.0, 2.17);
+    // Their own streams (makeOctave), so the layers above are the same with or without them.
+    ravine_ = makeOctave(settings.seed, 0x6B42u, 2700.0);
+    gully_[0] = makeOctave(settings.seed, 0x6A12u, kGullyWavelength_m);
+    gully_[1] = makeOctave(settings.seed, 0x6A13u, 400.0);
 }
 
 double Heightfield::octaveNoise(const Octave& octave, double x_m, double z_m) {
@@ -208,8 +212,33 @@ double Heightfield::warpedHeight(double x_m, double z_m) const {
            kHills_m * hills * (1.0 - 0.5 * mountainMask);
 }
 
-double Heightfield::height(double x_m, double z_m) const {
+// Gully shape constants.
+constexpr double kRavineFrom = 0.35, kRavineTo = 0.6;  // mask noise where ravine country begins, is full
+constexpr double kGullyHalfWidth = 0.09;  // in noise units either side of the course's zero line
+
+double Heightfield::ravineMask(double x_m, double z_m) const {
+    return smoothstep(kRavineFrom, kRavineTo, perlinAt(ravine_, x_m, z_m));
+}
+
+double Heightfield::gullyDepth(double x_m, double z_m) const {
+    const double mask = ravineMask(x_m, z_m);
+    if (mask <= 0.0) return 0.0;
+    // A gully follows a zero line of the course's noise n: its cross-section (1 - (n / w)^2)^2 is
+    // smooth everywhere (even in n, flat where it meets the land at |n| = w), about ten metres
+    // wide where the noise's slope is typical. Its depth wanders along it.
+    const double s = perlinAt(gully_[0], x_m, z_m) / kGullyHalfWidth;
+    if (s * s >= 1.0) return 0.0;
+    const double profile = (1.0 - s * s) * (1.0 - s * s);
+    const double along = std::clamp(0.65 + 0.5 * perlinAt(gully_[1], x_m, z_m), 0.2, 1.0);
+    return kGullyDepth_m * mask * along * profile;
+}
+
+double Heightfield::broadHeight(double x_m, double z_m) const {
     return warpedHeight(x_m, z_m);
+}
+
+double Heightfield::height(double x_m, double z_m) const {
+    return warpedHeight(x_m, z_m) - gullyDepth(x_m, z_m);
 }
 
 // ---- [SECTION] Normal and moisture -----------------------------------------------------------

@@ -1,5 +1,8 @@
 // Heightfield.h — the endless natural terrain h(x, z) before roads: fBm plus ridged noise with
-// domain warping, evaluated at any double-precision (x, z); normals; moisture.
+// domain warping, evaluated at any double-precision (x, z); normals; moisture. In ravine
+// country (a slow mask over about a sixth of the land) erosion gullies a few metres deep and
+// about ten metres wide cut into it; roads are routed and graded over the broad terrain
+// without them, as a road builder bridges or fills a gully.
 //
 // Precision: every noise octave is GLM's classic Perlin noise (glm/gtc/noise.hpp), which is
 // periodic with a period of exactly 289 lattice units. Each octave maps (x, z) to its lattice
@@ -24,6 +27,14 @@ class Heightfield {
     explicit Heightfield(const WorldSettings& settings);
 
     double height(double x_m, double z_m) const;      // metres above the datum
+    // The terrain without its gullies (what roads are routed and graded over).
+    double broadHeight(double x_m, double z_m) const;
+    // How far the gullies cut below the broad terrain at (x, z), >= 0; 0 outside ravine country.
+    double gullyDepth(double x_m, double z_m) const;
+    // Ravine country's weight at (x, z) in [0, 1]: the gullies' depth is this times their own.
+    double ravineMask(double x_m, double z_m) const;
+    static constexpr double kGullyDepth_m = 8.0;      // deepest cut, mid ravine country
+    static constexpr double kGullyWavelength_m = 110.0;  // of the noise whose zero lines they follow
     glm::dvec3 normal(double x_m, double z_m) const;  // unit, +Y up
     double moisture(double x_m, double z_m) const;    // [0, 1]
 
@@ -31,8 +42,9 @@ class Heightfield {
     double moistureAt(double x_m, double z_m, double height_m) const;
     // Horizontal step of the central differences behind normal().
     static constexpr double kNormalStep_m = 0.5;
-    // Perlin evaluations behind one height() call: 7 in lowlands, 11 where mountains rise.
-    static constexpr int kMaxOctavesPerHeight = 11;
+    // Perlin evaluations behind one height() call: 8 in lowlands, 12 where mountains rise, 2
+    // more in ravine country.
+    static constexpr int kMaxOctavesPerHeight = 14;
 
     // One octave's mapping from world (x, z) to noise lattice coordinates: rotation by the
     // octave's angle, scaling by its frequency, a seed-dependent offset.
@@ -61,6 +73,8 @@ class Heightfield {
     std::array<Octave, 4> ridged_;         // ridged multifractal mountains
     std::array<Octave, 3> hills_;          // fBm hills and detail
     std::array<Octave, 2> moisture_;       // moisture field
+    Octave ravine_;                        // ravine country's mask
+    std::array<Octave, 2> gully_;          // the gullies' course, and their depth along it
 };
 
 }  // namespace amb

@@ -152,7 +152,7 @@ RouteGrid makeRouteGrid(const Heightfield& heightfield, double cell_m, double x0
     tbb::parallel_for(0, grid.nz, [&](int j) {
         for (int i = 0; i < grid.nx; ++i) {
             const glm::dvec2 p = grid.position(grid.index(i, j));
-            grid.height_m[std::size_t(grid.index(i, j))] = heightfield.height(p.x, p.y);
+            grid.height_m[std::size_t(grid.index(i, j))] = heightfield.broadHeight(p.x, p.y);
         }
     });
     return grid;
@@ -442,7 +442,7 @@ Road buildRoad(const RoadRecipe& recipe, const RouteGrid& grid, const Heightfiel
     // Terrain along the line; never below the water surface (a causeway where it must cross).
     std::vector<double> h(xz.size());
     for (std::size_t i = 0; i < xz.size(); ++i)
-        h[i] = std::max(heightfield.height(xz[i].x, xz[i].y), waterLevel_m + 0.5);
+        h[i] = std::max(heightfield.broadHeight(xz[i].x, xz[i].y), waterLevel_m + 0.5);
     // Pre-smooth the terrain (drop bumps shorter than the road cares about), bound the grade with
     // a 10 % margin for the chord/arc difference in curves, then average again.
     const int pre = std::max(1, int(std::lround(recipe.preSmooth_m / step)));
