@@ -119,6 +119,9 @@ class AmbienceMethod {
     }
     // True when noteLookups is used (the draw then records where it looks; otherwise it need not).
     virtual bool wantsLookups() const { return false; }
+    // True when the draw should scale the terrain's ambient by the per-vertex sky detail of its
+    // finest patches (world/TerrainPatch.h; the near field's vertexDetail).
+    virtual bool terrainSkyDetail() const { return false; }
 
     virtual MethodStatistics methodStatistics() const = 0;
     // Where the interpolation at (x, z) reads its probes now (see IdealSupport); none by default.

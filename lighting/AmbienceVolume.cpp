@@ -124,7 +124,8 @@ bool sameNearField(const NearFieldSettings& a, const NearFieldSettings& b) {
            a.latticeRange_m == b.latticeRange_m &&
            a.cacheEntries == b.cacheEntries &&
            a.objectRange_m == b.objectRange_m && a.cornerRange_m == b.cornerRange_m &&
-           a.patchMean == b.patchMean && a.patchSamples == b.patchSamples;
+           a.patchMean == b.patchMean && a.patchSamples == b.patchSamples &&
+           a.vertexDetail == b.vertexDetail;
 }
 
 }  // namespace

@@ -38,6 +38,7 @@ void readNearFieldSettings(JsonFields& f, NearFieldSettings& s) {
     f.number("cornerRange_m", s.cornerRange_m, 0.0, 1e6);
     f.boolean("patchMean", s.patchMean);
     f.integer("patchSamples", s.patchSamples, 1, 9);
+    f.boolean("vertexDetail", s.vertexDetail);
 }
 
 double rangeWeight(double distance_m, double range_m) {
@@ -1733,7 +1734,8 @@ NearFieldMethod::NearFieldMethod(std::unique_ptr<AmbienceMethod> far,
                                  const NearFieldSettings& settings)
     : far_(std::move(far)),
       scene_(std::move(scene)),
-      near_(std::make_unique<NearField>(*scene_, settings)) {
+      near_(std::make_unique<NearField>(*scene_, settings)),
+      skyDetail_(settings.terrain && settings.vertexDetail) {
     AMB_CHECK(far_ && scene_);
 }
 

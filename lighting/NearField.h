@@ -207,13 +207,17 @@ struct NearFieldSettings {
     // of the ground. Off, a corner takes the near field at its own point.
     bool patchMean = true;
     int patchSamples = 3;  // per axis
+    // The draw scales the terrain's ambient at each vertex of its finest patches by the
+    // terrain's own sky visibility there against the patch's corners (world/TerrainPatch.h
+    // skyDetail): the gullies that fall between corners. Needs `terrain`.
+    bool vertexDetail = true;
 };
 // The near field's weight at distance_m (horizontal) from the camera for a range: 1 out to
 // (1 - kNearFade) range, 0 from range on, smoothstep between (see Range).
 double rangeWeight(double distance_m, double range_m);
 // Reads {"enabled", "radius_m", "captureRadius_m", "smallRadius_m", "plants", "terrain",
 // "terrainRadius_m", "ground", "groundRadius_m", "groundCell_m", "latticeRange_m", "cacheEntries",
-// "objectRange_m", "cornerRange_m", "patchMean", "patchSamples"}
+// "objectRange_m", "cornerRange_m", "patchMean", "patchSamples", "vertexDetail"}
 // (JsonFields, lighting/JsonFields.h).
 void readNearFieldSettings(JsonFields& fields, NearFieldSettings& settings);
 
@@ -635,6 +639,7 @@ class NearFieldMethod final : public AmbienceMethod {
         far_->noteLookups(count, x_m, z_m);
     }
     bool wantsLookups() const override { return far_->wantsLookups(); }
+    bool terrainSkyDetail() const override { return skyDetail_; }
     MethodStatistics methodStatistics() const override;
     // None: the error budget's ideal volume (fresh full captures at the lattice points) is not
     // what this method interpolates (far captures and the near field at the point), so its
@@ -652,6 +657,7 @@ class NearFieldMethod final : public AmbienceMethod {
     std::unique_ptr<NearFieldScene> scene_;
     std::unique_ptr<NearField> near_;
     glm::dvec3 camera_m_{0.0};  // of the latest predictStage
+    bool skyDetail_ = false;    // settings: terrain and vertexDetail
     // The near field's weight at (x, z) for a range (objectRange_m, cornerRange_m; see Range).
     double weight(double x_m, double z_m, double range_m) const;
     // The batches' points of weight > 0 with their far SH, into the scratch below; then the

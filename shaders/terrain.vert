@@ -8,6 +8,7 @@ layout(location = 0) in vec3 aPosition;  // metres, relative to the patch origin
 layout(location = 1) in vec3 aNormal;
 layout(location = 2) in vec3 aAlbedo;
 layout(location = 5) in vec3 aIrradiance;  // road pieces only (uVertexIrradiance)
+layout(location = 6) in vec2 aSkyDetail;  // terrain patches only (uSkyDetail): V, Vc
 
 uniform vec3 uOrigin;     // patch origin, camera-relative [m]
 uniform vec4 uPatchRect;  // xy: corner (x0, z0) relative to the origin [m]; zw: 1 / size [1/m]
@@ -16,6 +17,7 @@ out vec3 vNormal;
 out vec3 vAlbedo;
 out vec2 vPatchUv;  // bilinear weights of the four patch corners
 out vec3 vIrradiance;
+out vec2 vSkyDetail;
 out vec4 vFog;
 out vec3 vRelPos;  // camera-relative position [m], for the shadow lookup
 
@@ -24,6 +26,7 @@ void main() {
     vNormal = aNormal;
     vAlbedo = aAlbedo;
     vIrradiance = aIrradiance;
+    vSkyDetail = aSkyDetail;
     vPatchUv = clamp((aPosition.xz - uPatchRect.xy) * uPatchRect.zw, 0.0, 1.0);
     vFog = fogAt(relPos);
     vRelPos = relPos;

@@ -20,6 +20,7 @@
 #include <tbb/parallel_for.h>
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
+#include <glm/vec2.hpp>
 
 #include "world/Conventions.h"
 #include "world/Error.h"
@@ -133,28 +134,62 @@ glm::vec3 TerrainAlbedo::at(double x_m, double z_m, double height_m, double road
 
 // ---- [SECTION] Patch sampling ----------------------------------------------------------------
 
+namespace {
+
+// TerrainPatch::skyDetail's V at grid point c of a height grid `h` (kB a row, spacing s) with
+// normal n: the 8 directions along the grid's axes and diagonals, `reach` steps each.
+double skyVisibility(const std::vector<double>& h, int kB, int c, int reach, double s,
+                     const glm::dvec3& n) {
+    static constexpr int kDx[8] = {1, 1, 0, -1, -1, -1, 0, 1};
+    static constexpr int kDz[8] = {0, 1, 1, 1, 0, -1, -1, -1};
+    double hidden = 0.0;
+    for (int d = 0; d < 8; ++d) {
+        const double step = (kDx[d] != 0 && kDz[d] != 0) ? s * std::sqrt(2.0) : s;
+        const glm::dvec2 dir = glm::normalize(glm::dvec2(kDx[d], kDz[d]));
+        // The tangent plane's rise along the direction; the horizon above it.
+        const double plane = -(n.x * dir.x + n.z * dir.y) / n.y;
+        double best = 0.0;  // tan of the elevation above the plane's
+        for (int k = 1; k <= reach; ++k) {
+            const double dist = k * step;
+            if (dist > TerrainPatch::kSkyDetailRadius_m + 1e-9) break;
+            const double rise = (h[std::size_t(c + k * (kDz[d] * kB + kDx[d]))] - h[std::size_t(c)]) / dist;
+            best = std::max(best, rise - plane);
+        }
+        // sin^2 of the elevation above the plane: the share of a cosine-weighted wedge below it
+        // (the plane's tilt is small next to the walls a gully shows).
+        hidden += best * best / (1.0 + best * best);
+    }
+    return 1.0 - hidden / 8.0;
+}
+
+}  // namespace
+
 TerrainPatch TerrainPatch::generate(const World& world, const PatchKey& key) {
     TerrainPatch p;
     p.key = key;
     const double s = spacing_m(key.level);
-    // Heights on the patch grid plus a one-vertex border, for the normals.
-    constexpr int kB = kV + 2;
-    std::vector<double> h(kB * kB), road(kB * kB);
-    for (int b = -1; b <= kQ + 1; ++b) {
-        for (int a = -1; a <= kQ + 1; ++a) {
+    // Heights on the patch grid plus a border: one vertex for the normals, or the sky detail's
+    // reach where the patch is fine enough to carry it.
+    const bool detail = s <= kSkyDetailMaxSpacing_m;
+    const int border = detail ? int(std::ceil(kSkyDetailRadius_m / s - 1e-9)) : 1;
+    const int kB = kV + 2 * border;
+    std::vector<double> h(std::size_t(kB * kB)), road(std::size_t(kB * kB));
+    for (int b = -border; b <= kQ + border; ++b) {
+        for (int a = -border; a <= kQ + border; ++a) {
             const double x = latticeToWorld(vertexLattice(key.i, key.level, a));
             const double z = latticeToWorld(vertexLattice(key.k, key.level, b));
-            const int idx = (b + 1) * kB + (a + 1);
-            h[idx] = world.heightAndRoad(x, z, &road[idx]);
+            const int idx = (b + border) * kB + (a + border);
+            h[std::size_t(idx)] = world.heightAndRoad(x, z, &road[std::size_t(idx)]);
         }
     }
     p.heights_m.resize(kV * kV);
     p.normals.resize(3 * kV * kV);
     p.albedo.resize(3 * kV * kV);
+    std::vector<double> visibility(detail ? kV * kV : 0);
     const TerrainAlbedo material(world);
     for (int b = 0; b <= kQ; ++b) {
         for (int a = 0; a <= kQ; ++a) {
-            const int c = (b + 1) * kB + (a + 1);
+            const int c = (b + border) * kB + (a + border);
             const double dhdx = (h[c + 1] - h[c - 1]) / (2.0 * s);
             const double dhdz = (h[c + kB] - h[c - kB]) / (2.0 * s);
             const glm::dvec3 n = glm::normalize(glm::dvec3(-dhdx, 1.0, -dhdz));
@@ -166,6 +201,22 @@ TerrainPatch TerrainPatch::generate(const World& world, const PatchKey& key) {
             for (int j = 0; j < 3; ++j) {
                 p.normals[3 * v + j] = static_cast<float>(n[j]);
                 p.albedo[3 * v + j] = albedo[j];
+            }
+            if (detail) visibility[std::size_t(v)] = skyVisibility(h, kB, c, border, s, n);
+        }
+    }
+    if (detail) {
+        const double c00 = visibility[0], c10 = visibility[kQ];
+        const double c01 = visibility[std::size_t(kQ * kV)], c11 = visibility[std::size_t(kQ * kV + kQ)];
+        p.skyDetail.resize(2 * kV * kV);
+        for (int b = 0; b <= kQ; ++b) {
+            const double v = double(b) / kQ;
+            for (int a = 0; a <= kQ; ++a) {
+                const double u = double(a) / kQ;
+                const double corners = (1 - v) * ((1 - u) * c00 + u * c10) + v * ((1 - u) * c01 + u * c11);
+                const std::size_t i = std::size_t(b * kV + a);
+                p.skyDetail[2 * i] = float(visibility[i]);
+                p.skyDetail[2 * i + 1] = float(corners);
             }
         }
     }
@@ -240,7 +291,13 @@ struct VertexValue {
     double height_m;
     glm::vec3 normal;
     glm::vec3 albedo;
+    glm::vec2 skyDetail{1.0f};  // (V, Vc): TerrainPatch::skyDetail; (1, 1) where it has none
 };
+
+glm::vec2 skyDetailOf(const TerrainPatch& p, int idx) {
+    return p.skyDetail.empty() ? glm::vec2(1.0f)
+                               : glm::vec2(p.skyDetail[2 * std::size_t(idx)], p.skyDetail[2 * std::size_t(idx) + 1]);
+}
 
 struct LatticeHash {
     std::size_t operator()(const std::pair<std::int64_t, std::int64_t>& v) const {
@@ -276,6 +333,7 @@ class Stitcher {
                 glm::vec3(d->normals[3 * idx], d->normals[3 * idx + 1], d->normals[3 * idx + 2]);
             v.albedo =
                 glm::vec3(d->albedo[3 * idx], d->albedo[3 * idx + 1], d->albedo[3 * idx + 2]);
+            v.skyDetail = skyDetailOf(*d, idx);
         } else {
             AMB_CHECK(onX || onZ);  // a vertex of a finer patch lies on D's boundary
             VertexValue a, b;
@@ -294,6 +352,7 @@ class Stitcher {
             v.height_m = a.height_m + t * (b.height_m - a.height_m);
             v.normal = glm::normalize(a.normal + float(t) * (b.normal - a.normal));
             v.albedo = a.albedo + float(t) * (b.albedo - a.albedo);
+            v.skyDetail = a.skyDetail + float(t) * (b.skyDetail - a.skyDetail);
         }
         memo_.emplace(key, v);
         return v;
@@ -450,12 +509,14 @@ TerrainMesh TerrainPatchCache::build(const std::vector<PatchKey>& leaves,
                                          p.normals[3 * idx + 2]);
                     v.albedo =
                         glm::vec3(p.albedo[3 * idx], p.albedo[3 * idx + 1], p.albedo[3 * idx + 2]);
+                    v.skyDetail = skyDetailOf(p, idx);
                 }
                 const glm::dvec3 world(latticeToWorld(vx), v.height_m, latticeToWorld(vz));
                 const glm::dvec3 rel = world - origin_m;
                 m.positions.insert(m.positions.end(), {float(rel.x), float(rel.y), float(rel.z)});
                 m.normals.insert(m.normals.end(), {v.normal.x, v.normal.y, v.normal.z});
                 m.albedo.insert(m.albedo.end(), {v.albedo.x, v.albedo.y, v.albedo.z});
+                m.skyDetail.insert(m.skyDetail.end(), {v.skyDetail.x, v.skyDetail.y});
                 if ((a == 0 || a == kQ) && (b == 0 || b == kQ)) {
                     const int c = (a == kQ ? 1 : 0) + (b == kQ ? 2 : 0);
                     draw.corners_m[c] = world;

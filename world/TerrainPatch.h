@@ -78,6 +78,19 @@ struct TerrainPatch {
     std::vector<float> normals;               // xyz per vertex, from the height grid at this level
     std::vector<float> albedo;                // rgb per vertex
     std::array<glm::dvec3, 4> cornerNormals;  // World::normal at the corners (exact, shared)
+    // Per vertex, two floats: the terrain's own sky visibility V there and Vc, the bilinear
+    // blend of V at the patch's corners. The draw blends the ambient from the patch's corners,
+    // 32 m apart beside the camera, so a gully 15 m wide falls between them. Each vertex of a
+    // patch whose vertices lie at most kSkyDetailMaxSpacing_m apart takes V = 1 - mean over 8
+    // directions of sin^2(horizon above its tangent plane), the horizon searched in the patch's
+    // own height grid out to kSkyDetailRadius_m. The draw (shaders/terrain.frag) scales the
+    // corners' ambient A by (V + (1 - V) b) / (Vc + (1 - Vc) b): what the walls hide comes back
+    // as their light, b = rho (A + D) / A, the vertex's albedo rho and the main light's D on
+    // open ground. V = Vc at the corners (whose value the near field gives) and where the
+    // terrain is smooth; V < Vc on a gully's floor. Empty for coarser patches.
+    std::vector<float> skyDetail;
+    static constexpr double kSkyDetailRadius_m = 16.0;
+    static constexpr double kSkyDetailMaxSpacing_m = 4.0;
 
     static double spacing_m(int level);  // vertex spacing
     static double size_m(int level);     // edge length

@@ -12,6 +12,9 @@ struct WorldMesh {
     std::vector<float> positions;        // xyz per vertex [m], relative to the mesh's origin
     std::vector<float> normals;          // xyz per vertex, unit
     std::vector<float> albedo;           // rgb per vertex, linear [0, 1]
+    // Terrain only, else empty: the terrain's own sky visibility at a vertex and at its patch's
+    // corners, two a vertex (TerrainPatch::skyDetail).
+    std::vector<float> skyDetail;
     std::vector<std::uint32_t> indices;  // three per triangle, counter-clockwise seen from outside
 
     std::size_t vertexCount() const { return positions.size() / 3; }

@@ -227,6 +227,9 @@ const SettingInfo kRows[] = {
     {"nearField.patchSamples", Kind::Integer, 1, 9, false,
      "points a side of a corner's patch mean",
      [](S& s) -> void* { return &s.capture.nearField.patchSamples; }, false},
+    {"nearField.vertexDetail", Kind::Boolean, 0, 1, false,
+     "the terrain's ambient scaled by its own sky visibility at each vertex of fine patches",
+     [](S& s) -> void* { return &s.capture.nearField.vertexDetail; }, false},
 };
 
 std::vector<SettingInfo> makeTable() {

@@ -47,6 +47,9 @@ class AmbientSource {
     // Appends the set for an object at `position_m` to `sets` if needed; returns its index.
     virtual std::uint32_t objectSet(const glm::dvec3& position_m,
                                     std::vector<AmbientSet>& sets) const = 0;
+    // Whether the terrain's fine patches scale this ambient by their per-vertex sky detail
+    // (world/TerrainPatch.h): a method with the near field's terrain; never a capture's.
+    virtual bool terrainSkyDetail() const { return false; }
     // The same for `count` objects at once (a frame's plants): index[i] for position i. One by
     // one by default.
     virtual void objectSets(std::size_t count, const glm::dvec3* positions_m,

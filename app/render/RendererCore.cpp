@@ -51,6 +51,14 @@ GlMesh uploadMesh(const WorldMesh& mesh) {
     // Irradiance per vertex (road pieces; SceneDrawer::draw binds and enables it per draw).
     glVertexArrayAttribFormat(vao, 5, 3, GL_FLOAT, GL_FALSE, 0);
     glVertexArrayAttribBinding(vao, 5, 5);
+    // Sky detail per vertex (terrain; world/TerrainPatch.h).
+    if (!mesh.skyDetail.empty()) {
+        m.skyDetail = makeBuffer(mesh.skyDetail.data(), mesh.skyDetail.size() * sizeof(float));
+        glVertexArrayVertexBuffer(vao, 6, m.skyDetail.id(), 0, 2 * sizeof(float));
+        glEnableVertexArrayAttrib(vao, 6);
+        glVertexArrayAttribFormat(vao, 6, 2, GL_FLOAT, GL_FALSE, 0);
+        glVertexArrayAttribBinding(vao, 6, 6);
+    }
     glVertexArrayElementBuffer(vao, m.indices.id());
     return m;
 }
@@ -95,6 +103,7 @@ SceneDrawer::SceneDrawer()
     terrainRect_ = terrain_.uniform("uPatchRect");
     terrainCorners_ = terrain_.uniform("uCornerIrradiance");
     terrainPerVertex_ = terrain_.uniform("uVertexIrradiance");
+    terrainSkyDetail_ = terrain_.uniform("uSkyDetail");
     objectSimplified_ = object_.uniform("uSimplified");
     casterOrigin_ = caster_.uniform("uOrigin");
     casterInstanced_ = caster_.uniform("uInstanced");
@@ -210,6 +219,7 @@ std::size_t SceneDrawer::draw(const DrawList& list, const FrameConstants& consta
         const GLuint vao = d.mesh->vao.id();
         const bool perVertex = d.firstVertexIrradiance >= 0;
         glUniform1i(terrainPerVertex_, perVertex ? 1 : 0);
+        glUniform1i(terrainSkyDetail_, d.skyDetail && d.mesh->skyDetail.id() != 0 ? 1 : 0);
         if (perVertex) {
             glVertexArrayVertexBuffer(vao, 5, vertexIrradiance_.id(),
                                       GLintptr(d.firstVertexIrradiance * sizeof(glm::vec3)),

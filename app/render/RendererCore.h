@@ -70,6 +70,7 @@ glm::mat4 reversedInfinitePerspective(float fovY_rad, float aspect, float near_m
 struct GlMesh {
     GlVertexArray vao;
     GlBuffer positions, normals, albedo, indices;
+    GlBuffer skyDetail;  // terrain only: two floats a vertex (attribute 6), else none
     GLsizei indexCount = 0;
     float boundRadius_m = 0.0f;  // farthest vertex from the mesh origin (culling)
     std::size_t triangles() const { return std::size_t(indexCount) / 3; }
@@ -88,6 +89,8 @@ struct TerrainDraw {
     // Road pieces: the irradiance of mesh vertex v is DrawList::vertexIrradiance[this + v]
     // (the corners and rect are then unused); -1: the corners, bilinear across the rect.
     std::int64_t firstVertexIrradiance = -1;
+    // Terrain patches: scale the ambient by the mesh's per-vertex sky detail (attribute 6).
+    bool skyDetail = false;
 };
 
 struct ObjectInstance {
@@ -153,6 +156,7 @@ class SceneDrawer {
     GlTexture skyTexture_;
     GlVertexArray emptyVao_;
     GLint terrainOrigin_ = -1, terrainRect_ = -1, terrainCorners_ = -1, terrainPerVertex_ = -1;
+    GLint terrainSkyDetail_ = -1;
     GLint objectSimplified_ = -1;
     GLint casterOrigin_ = -1, casterInstanced_ = -1;
 };

@@ -238,6 +238,7 @@ void RendererScene::buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj
         glm::vec3 corners[4];
         for (int k = 0; k < 4; ++k) corners[k] = cornerValue[p.cornerIndex[k]];
         out.terrain.push_back(patchDraw(terrainGl_, p, terrainMesh_.origin_m, eye_m, corners));
+        out.terrain.back().skyDetail = ambient.terrainSkyDetail();
     }
     const std::size_t drawnPatches = visible.size();
     addRoads(eye_m, &viewProj, settings_.terrain.viewRadius_m, ambient, out);

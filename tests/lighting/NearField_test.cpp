@@ -604,5 +604,28 @@ TEST(NearField, AGullyDarkensAndTakesTheGroundsColour) {
     EXPECT_GE(std::min({m.x, m.y, m.z}), 0.0);
 }
 
+// A point seen through its own normal keeps of each band only what rises above its tangent
+// plane: with the ground rising 30 degrees towards +x, a band up to 20 degrees that way goes, one
+// up to 40 degrees keeps 30..40, and the band the other way (the plane falls) is untouched.
+TEST(NearField, ABandBelowTheTangentPlaneIsLeftOut) {
+    const double t = 30.0 * kPi / 180.0;
+    const glm::dvec3 n(-std::sin(t), std::cos(t), 0.0);  // the ground rises towards +x
+    const double deg = kPi / 180.0;
+    const auto wedge = [](double phi0, double phi1, double lower, double upper) {
+        HorizonWedge w;
+        w.azimuth0 = phi0, w.azimuth1 = phi1, w.lower = lower, w.upper = upper;
+        return w;
+    };
+    std::vector<HorizonWedge> h = {wedge(-0.1, 0.1, 0.0, 20.0 * deg),
+                                   wedge(-0.1, 0.1, 0.0, 40.0 * deg),
+                                   wedge(kPi - 0.1, kPi + 0.1, 0.0, 10.0 * deg)};
+    belowTangentPlaneOut(n, h);
+    ASSERT_EQ(h.size(), 2u);
+    EXPECT_NEAR(h[0].lower, 30.0 * deg, 1e-12);
+    EXPECT_NEAR(h[0].upper, 40.0 * deg, 1e-12);
+    EXPECT_NEAR(h[1].lower, 0.0, 1e-12);
+    EXPECT_NEAR(h[1].upper, 10.0 * deg, 1e-12);
+}
+
 }  // namespace
 }  // namespace amb

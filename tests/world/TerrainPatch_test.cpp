@@ -18,6 +18,7 @@
 #include <glm/geometric.hpp>
 
 #include "world/Conventions.h"
+#include "world/Heightfield.h"
 #include "world/Vegetation.h"
 #include "world/World.h"
 
@@ -471,6 +472,45 @@ TEST(TerrainPatch, CornersToEvaluateReachTheCoarserEdges) {
     EXPECT_EQ(places.size(), mesh.corners.size());
     EXPECT_LT(everything.size(), 4 * mesh.patches.size());
     EXPECT_LT(cornersToEvaluate(mesh, fine).size(), everything.size());
+}
+
+// The sky detail (TerrainPatch::skyDetail): on a gully's floor the terrain's own visibility V
+// falls well below the corners' blend Vc; at the corners V = Vc exactly (their value is the
+// near field's); on a plane (a road's flat carriageway is not needed: a patch far from any
+// relief within 16 m) V = 1; coarser patches carry none.
+TEST(TerrainPatch, SkyDetailDarkensAGullysFloorOnly) {
+    const World& world = defaultWorld();
+    const Heightfield& hf = world.heightfield();
+    // The deepest point of a ravine-country square (world seed 1).
+    double best = 0.0, gx = 0.0, gz = 0.0;
+    for (double x = -5200.0; x <= -5120.0; x += 1.0)
+        for (double z = -1900.0; z <= -1820.0; z += 1.0)
+            if (const double d = hf.gullyDepth(x, z); d > best) best = d, gx = x, gz = z;
+    ASSERT_GT(best, 5.0);
+    const double size = TerrainPatch::size_m(0);
+    const PatchKey key{0, std::int64_t(std::floor(gx / size)), std::int64_t(std::floor(gz / size))};
+    const TerrainPatch p = TerrainPatch::generate(world, key);
+    ASSERT_EQ(p.skyDetail.size(), std::size_t(2 * kV * kV));
+    double floorV = 1.0, floorVc = 1.0, nearest = 1e9;
+    for (int v = 0; v < kV * kV; ++v) {
+        const double V = p.skyDetail[2 * v], Vc = p.skyDetail[2 * v + 1];
+        ASSERT_GE(V, 0.0);
+        ASSERT_LE(V, 1.0);
+        const double d = std::hypot(vertexX(key, v % kV) - gx, vertexZ(key, v / kV) - gz);
+        if (d < nearest) nearest = d, floorV = V, floorVc = Vc;
+    }
+    for (int a : {0, kQ})
+        for (int b : {0, kQ})
+            EXPECT_EQ(p.skyDetail[2 * (b * kV + a)], p.skyDetail[2 * (b * kV + a) + 1]);
+    // Walls of 5 m or more about 5 m away on two sides hide over a tenth of the sky.
+    EXPECT_LT(floorV, 0.9) << "at " << gx << ", " << gz;
+    EXPECT_LT(floorV, floorVc - 0.05);
+    // A lowland patch far from ravine country and roads: gentle hills, nearly all sky.
+    const PatchKey plain{0, 40, 40};
+    ASSERT_EQ(hf.ravineMask(TerrainPatch::originX_m(plain), TerrainPatch::originZ_m(plain)), 0.0);
+    const TerrainPatch q = TerrainPatch::generate(world, plain);
+    for (std::size_t i = 0; i < q.skyDetail.size(); ++i) EXPECT_GT(q.skyDetail[i], 0.97) << i;
+    EXPECT_TRUE(TerrainPatch::generate(world, PatchKey{2, 3, -5}).skyDetail.empty());
 }
 
 }  // namespace
