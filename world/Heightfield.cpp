@@ -155,7 +155,7 @@ Heightfield::Heightfield(const WorldSettings& settings) : waterLevel_m_(settings
     seedOctaves(hills_, rng, 620.0, 2.31);
     seedOctaves(moisture_, rng, 3100.0, 2.17);
     // Their own streams (makeOctave), so the layers above are the same with or without them.
-    ravine_ = makeOctave(settings.seed, 0x6B42u, 2700.0);
+    ravine_ = makeOctave(settings.seed, 0x6D21u, 2700.0);
     gully_[0] = makeOctave(settings.seed, 0x6A12u, kGullyWavelength_m);
     gully_[1] = makeOctave(settings.seed, 0x6A13u, 400.0);
 }
@@ -213,7 +213,7 @@ double Heightfield::warpedHeight(double x_m, double z_m) const {
 }
 
 // Gully shape constants.
-constexpr double kRavineFrom = 0.35, kRavineTo = 0.6;  // mask noise where ravine country begins, is full
+constexpr double kRavineFrom = 0.45, kRavineTo = 0.7;  // mask noise where ravine country begins, is full
 constexpr double kGullyHalfWidth = 0.09;  // in noise units either side of the course's zero line
 
 double Heightfield::ravineMask(double x_m, double z_m) const {

@@ -92,7 +92,7 @@ TEST(TuningPanel, EveryKeyOfTheSettingsFileIsInTheTable) {
         "nearField.terrain", "nearField.terrainRadius_m", "nearField.ground",
         "nearField.groundRadius_m", "nearField.groundCell_m", "nearField.latticeRange_m", "nearField.cacheEntries",
         "nearField.objectRange_m", "nearField.cornerRange_m",
-        "nearField.patchMean", "nearField.patchSamples"};
+        "nearField.patchMean", "nearField.patchSamples", "nearField.vertexDetail"};
     EXPECT_EQ(tunableSettings().size(), std::size(keys));
     for (const char* key : keys) EXPECT_NE(findSetting(key), nullptr) << key;
     // The saved file nests them as the reader expects.

@@ -142,7 +142,7 @@ TEST(Heightfield, GulliesCutOnlyRavineCountryAndStaySmooth) {
             }
         }
     }
-    // About a sixth of the land is ravine country.
+    // About a tenth of the land is ravine country.
     const double share = double(inside) / double(inside + outside);
     EXPECT_GT(share, 0.05);
     EXPECT_LT(share, 0.3);
