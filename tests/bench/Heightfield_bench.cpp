@@ -1,7 +1,9 @@
 // Heightfield_bench.cpp — cost of the world's noise, which most of the near field's builds
 // spend their time in: GLM's classic Perlin noise against the table-driven one that equals it
-// bit for bit (Heightfield::classicNoise), and one terrain height (7 to 11 octaves).
-//   build/bin/ambience_bench --benchmark_filter='Noise|Height'
+// bit for bit (Heightfield::classicNoise), and one terrain height (8 to 14 octaves); one
+// terrain patch at each level (the two finest carry the per-vertex sky detail, from a height
+// grid with a 16 m border: 33 x 33 and 25 x 25 heights, against 19 x 19 for the others).
+//   build/bin/ambience_bench --benchmark_filter='Noise|Height|Patch'
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -10,6 +12,8 @@
 #include <glm/gtc/noise.hpp>
 
 #include "world/Heightfield.h"
+#include "world/TerrainPatch.h"
+#include "world/World.h"
 #include "world/WorldSettings.h"
 
 namespace amb {
@@ -50,6 +54,21 @@ void BM_HeightfieldHeight(benchmark::State& state) {
     state.SetItemsProcessed(state.iterations() * std::int64_t(points.size()));
 }
 BENCHMARK(BM_HeightfieldHeight)->Unit(benchmark::kMicrosecond);
+
+// One patch of level state.range(0) beside the highway's start (no ravine country there).
+void BM_TerrainPatchGenerate(benchmark::State& state) {
+    static const World world{WorldSettings{}};
+    const int level = int(state.range(0));
+    const double size = TerrainPatch::size_m(level);
+    std::int64_t n = 0;
+    for (auto _ : state) {
+        const PatchKey key{level, std::int64_t(std::floor(-5664.0 / size)) + n % 4,
+                           std::int64_t(std::floor(-4661.0 / size)) + n / 4 % 4};
+        benchmark::DoNotOptimize(TerrainPatch::generate(world, key));
+        ++n;
+    }
+}
+BENCHMARK(BM_TerrainPatchGenerate)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace amb
