@@ -224,8 +224,8 @@ double Heightfield::gullyDepth(double x_m, double z_m) const {
     const double mask = ravineMask(x_m, z_m);
     if (mask <= 0.0) return 0.0;
     // A gully follows a zero line of the course's noise n: its cross-section (1 - (n / w)^2)^2 is
-    // smooth everywhere (even in n, flat where it meets the land at |n| = w), about ten metres
-    // wide where the noise's slope is typical. Its depth wanders along it.
+    // smooth everywhere (even in n, flat where it meets the land at |n| = w), about 15 m wide
+    // where the noise's slope is typical. Its depth wanders along it.
     const double s = perlinAt(gully_[0], x_m, z_m) / kGullyHalfWidth;
     if (s * s >= 1.0) return 0.0;
     const double profile = (1.0 - s * s) * (1.0 - s * s);

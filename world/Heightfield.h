@@ -1,7 +1,7 @@
 // Heightfield.h — the endless natural terrain h(x, z) before roads: fBm plus ridged noise with
 // domain warping, evaluated at any double-precision (x, z); normals; moisture. In ravine
-// country (a slow mask over about a tenth of the land) erosion gullies a few metres deep and
-// about ten metres wide cut into it; roads are routed and graded over the broad terrain
+// country (a slow mask over about a tenth of the land) erosion gullies up to 8 m deep and
+// about 15 m wide cut into it; roads are routed and graded over the broad terrain
 // without them, as a road builder bridges or fills a gully.
 //
 // Precision: every noise octave is GLM's classic Perlin noise (glm/gtc/noise.hpp), which is

@@ -233,12 +233,13 @@ void RendererScene::buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj
     std::vector<glm::vec3> cornerValue(terrainMesh_.corners.size(), glm::vec3(0.0f));
     for (std::size_t j = 0; j < evaluate.size(); ++j) cornerValue[evaluate[j]] = irradiance[j];
     stitchCornerValues(terrainMesh_.corners, cornerValue.data());
+    const bool skyDetail = ambient.terrainSkyDetail();
     for (std::size_t i : visiblePatches) {
         const TerrainPatchDraw& p = terrainMesh_.patches[i];
         glm::vec3 corners[4];
         for (int k = 0; k < 4; ++k) corners[k] = cornerValue[p.cornerIndex[k]];
         out.terrain.push_back(patchDraw(terrainGl_, p, terrainMesh_.origin_m, eye_m, corners));
-        out.terrain.back().skyDetail = ambient.terrainSkyDetail();
+        out.terrain.back().skyDetail = skyDetail;
     }
     const std::size_t drawnPatches = visible.size();
     addRoads(eye_m, &viewProj, settings_.terrain.viewRadius_m, ambient, out);
