@@ -101,7 +101,7 @@ double Heightfield::classicNoise(double u, double v) {
     const int x0 = wrap(iu), y0 = wrap(iv), x1 = wrap(iu + 1.0), y1 = wrap(iv + 1.0);
     const double fu = u - iu, fv = v - iv;  // glm::fract
     const double fu1 = fu - 1.0, fv1 = fv - 1.0;
-    const auto corner = [&t](int x, int y, double dx, double dy) {
+    const auto corner = [](int x, int y, double dx, double dy) {
         const glm::dvec2& g = t.gradient[std::size_t(t.second[std::size_t(t.first[std::size_t(x)] + y)])];
         return glm::dot(g, glm::dvec2(dx, dy));
     };
@@ -218,6 +218,11 @@ constexpr double kGullyHalfWidth = 0.09;  // in noise units either side of the c
 
 double Heightfield::ravineMask(double x_m, double z_m) const {
     return smoothstep(kRavineFrom, kRavineTo, perlinAt(ravine_, x_m, z_m));
+}
+
+bool Heightfield::mayHaveGullies(double x_m, double z_m, double radius_m) const {
+    const double reach = kNoiseSlopeBound * ravine_.frequency_per_m * std::max(radius_m, 0.0);
+    return perlinAt(ravine_, x_m, z_m) + reach > kRavineFrom;
 }
 
 double Heightfield::gullyDepth(double x_m, double z_m) const {

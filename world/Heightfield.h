@@ -33,6 +33,12 @@ class Heightfield {
     double gullyDepth(double x_m, double z_m) const;
     // Ravine country's weight at (x, z) in [0, 1]: the gullies' depth is this times their own.
     double ravineMask(double x_m, double z_m) const;
+    // False only where no gully cuts within radius_m of (x, z): ravine country's noise there, by
+    // the noise's slope bound (kNoiseSlopeBound), stays below where the country begins. One
+    // noise evaluation, conservative; true does not promise a gully.
+    bool mayHaveGullies(double x_m, double z_m, double radius_m) const;
+    // Bound on the slope of classicNoise in lattice units: sampled maxima come to about 3.2.
+    static constexpr double kNoiseSlopeBound = 4.0;
     static constexpr double kGullyDepth_m = 8.0;      // deepest cut, mid ravine country
     static constexpr double kGullyWavelength_m = 110.0;  // of the noise whose zero lines they follow
     glm::dvec3 normal(double x_m, double z_m) const;  // unit, +Y up

@@ -162,15 +162,30 @@ double skyVisibility(const std::vector<double>& h, int kB, int c, int reach, dou
     return 1.0 - hidden / 8.0;
 }
 
+// Whether a patch carries the sky detail: fine enough, and by default only where a gully may
+// cut within its reach (its border's half-diagonal from its centre).
+bool carriesSkyDetail(const World& world, const PatchKey& key, TerrainPatch::SkyDetail mode) {
+    if (TerrainPatch::spacing_m(key.level) > TerrainPatch::kSkyDetailMaxSpacing_m) return false;
+    switch (mode) {
+        case TerrainPatch::SkyDetail::Never: return false;
+        case TerrainPatch::SkyDetail::Everywhere: return true;
+        case TerrainPatch::SkyDetail::WhereGullies: break;
+    }
+    const double half = 0.5 * TerrainPatch::size_m(key.level);
+    const double reach = std::sqrt(2.0) * (half + TerrainPatch::kSkyDetailRadius_m);
+    return world.heightfield().mayHaveGullies(TerrainPatch::originX_m(key) + half,
+                                              TerrainPatch::originZ_m(key) + half, reach);
+}
+
 }  // namespace
 
-TerrainPatch TerrainPatch::generate(const World& world, const PatchKey& key) {
+TerrainPatch TerrainPatch::generate(const World& world, const PatchKey& key, SkyDetail mode) {
     TerrainPatch p;
     p.key = key;
     const double s = spacing_m(key.level);
     // Heights on the patch grid plus a border: one vertex for the normals, or the sky detail's
-    // reach where the patch is fine enough to carry it.
-    const bool detail = s <= kSkyDetailMaxSpacing_m;
+    // reach where the patch carries it.
+    const bool detail = carriesSkyDetail(world, key, mode);
     const int border = detail ? int(std::ceil(kSkyDetailRadius_m / s - 1e-9)) : 1;
     const int kB = kV + 2 * border;
     std::vector<double> h(std::size_t(kB * kB)), road(std::size_t(kB * kB));

@@ -55,20 +55,26 @@ void BM_HeightfieldHeight(benchmark::State& state) {
 }
 BENCHMARK(BM_HeightfieldHeight)->Unit(benchmark::kMicrosecond);
 
-// One patch of level state.range(0) beside the highway's start (no ravine country there).
+// One patch of level state.range(0) beside the highway's start (no ravine country there), by
+// default (no sky detail there) or with the sky detail made to cover it (state.range(1) = 1):
+// what the detail costs where it is computed.
 void BM_TerrainPatchGenerate(benchmark::State& state) {
     static const World world{WorldSettings{}};
     const int level = int(state.range(0));
+    const auto mode = state.range(1) ? TerrainPatch::SkyDetail::Everywhere : TerrainPatch::SkyDetail::WhereGullies;
     const double size = TerrainPatch::size_m(level);
     std::int64_t n = 0;
     for (auto _ : state) {
         const PatchKey key{level, std::int64_t(std::floor(-5664.0 / size)) + n % 4,
                            std::int64_t(std::floor(-4661.0 / size)) + n / 4 % 4};
-        benchmark::DoNotOptimize(TerrainPatch::generate(world, key));
+        benchmark::DoNotOptimize(TerrainPatch::generate(world, key, mode));
         ++n;
     }
 }
-BENCHMARK(BM_TerrainPatchGenerate)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_TerrainPatchGenerate)
+    ->ArgNames({"level", "detail"})
+    ->ArgsProduct({{0, 1, 2}, {0, 1}})
+    ->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace amb

@@ -162,6 +162,56 @@ TEST(Heightfield, GulliesCutOnlyRavineCountryAndStaySmooth) {
     EXPECT_GT(rim, 4.0) << "some direction leaves the gully within 20 m";
 }
 
+// The noise's slope stays under the bound mayHaveGullies relies on: a million random
+// points, difference quotients over 1e-4 lattice units (the quintic fade keeps the slope's
+// own variation small at that step).
+TEST(Heightfield, NoiseSlopeStaysUnderItsBound) {
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> at(0.0, 289.0);
+    const double e = 1e-4;
+    double steepest = 0.0;
+    for (int n = 0; n < 1000000; ++n) {
+        const double u = at(rng), v = at(rng);
+        const double f = Heightfield::classicNoise(u, v);
+        const double du = (Heightfield::classicNoise(u + e, v) - f) / e;
+        const double dv = (Heightfield::classicNoise(u, v + e) - f) / e;
+        steepest = std::max(steepest, std::hypot(du, dv));
+    }
+    EXPECT_LT(steepest, Heightfield::kNoiseSlopeBound);
+    EXPECT_GT(steepest, 0.6 * Heightfield::kNoiseSlopeBound);  // the bound is not loose
+}
+
+// mayHaveGullies never says no where a gully could cut: discs of three radii on a grid across
+// ravine country's edges, each checked on a 4 m grid inside it. It says no over most of the
+// land, and yes in ravine country.
+TEST(Heightfield, MayHaveGulliesNeverMissesRavineCountry) {
+    const Heightfield hf(seeded(1));
+    int no = 0, yes = 0;
+    for (double cx = -6000.0; cx <= -3000.0; cx += 97.0) {
+        for (double cz = 3000.0; cz <= 6000.0; cz += 89.0) {
+            for (double r : {20.0, 46.0, 120.0}) {
+                if (hf.mayHaveGullies(cx, cz, r)) {
+                    ++yes;
+                    continue;
+                }
+                ++no;
+                for (double dx = -r; dx <= r; dx += 4.0) {
+                    for (double dz = -r; dz <= r; dz += 4.0) {
+                        if (std::hypot(dx, dz) > r) continue;
+                        ASSERT_EQ(hf.ravineMask(cx + dx, cz + dz), 0.0)
+                            << "disc " << cx << ", " << cz << " r " << r;
+                    }
+                }
+            }
+            if (hf.ravineMask(cx, cz) > 0.0) {
+                ASSERT_TRUE(hf.mayHaveGullies(cx, cz, 0.0));
+            }
+        }
+    }
+    EXPECT_GT(no, yes);
+    EXPECT_GT(yes, 0);
+}
+
 struct Stats {
     double mean = 0, sd = 0, meanSlope = 0;
 };
