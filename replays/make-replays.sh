@@ -30,3 +30,7 @@ amb="${1:-../build/bin/ambience}"
   --name far-flight \
   --description "Flight at 120 m/s a million metres from the origin (precision), late afternoon" \
   --out far-flight.json
+"$amb" replay make --mode static --at -4866,4537 --height 28 --heading 180 --pitch -50 \
+  --duration 12 --time 19.3 --name ravine-dusk \
+  --description "Stationary camera 28 m above a gully in ravine country, looking down, at dusk" \
+  --out ravine-dusk.json

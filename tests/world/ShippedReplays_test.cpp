@@ -1,6 +1,7 @@
 // ShippedReplays_test.cpp — the replays in replays/ read cleanly and still agree with the world
 // they were recorded in (a change to the terrain or road code that moves the ground under a
 // shipped replay fails here; regenerate with replays/make-replays.sh).
+#include <algorithm>
 #include <cmath>
 #include <ostream>
 #include <string>
@@ -25,6 +26,8 @@ struct Expect {
     double speedLo_mps, speedHi_mps;  // every step's speed, except across cuts
     double minDuration_s;
     int cuts;
+    double staticHeight_m = 4.0;  // a static camera's eye above the ground
+    bool ravine = false;          // shows ravine country (the others keep 500 m away from it)
 };
 
 // Names the case in test listings (instead of a byte dump).
@@ -53,7 +56,7 @@ TEST_P(ShippedReplay, ReadsAndMatchesTheWorld) {
                 ASSERT_GE(above, 20.0) << e.name << " sample " << i;
                 break;
             case ReplayMode::Static:
-                ASSERT_NEAR(above, 4.0, 0.01) << e.name << " sample " << i;
+                ASSERT_NEAR(above, e.staticHeight_m, 0.01) << e.name << " sample " << i;
                 break;
         }
         if (i == 0) continue;
@@ -66,9 +69,18 @@ TEST_P(ShippedReplay, ReadsAndMatchesTheWorld) {
         ASSERT_LE(v, e.speedHi_mps + 1e-6) << e.name << " sample " << i;
     }
     EXPECT_EQ(cuts, e.cuts);
-    // Ravine country keeps away from the shipped replays (600 m at its nearest), so the
-    // figures measured on them hold with or without gullies: none within 500 m of any sample.
     const Heightfield& hf = world.heightfield();
+    if (e.ravine) {  // a gully at least 5 m deep within 30 m of the ground under the camera
+        const glm::dvec3 p = rp.samples.front().position_m;
+        double deepest = 0.0;
+        for (double dx = -30.0; dx <= 30.0; dx += 1.0)
+            for (double dz = -30.0; dz <= 30.0; dz += 1.0)
+                deepest = std::max(deepest, hf.gullyDepth(p.x + dx, p.z + dz));
+        EXPECT_GT(deepest, 5.0) << e.name;
+        return;
+    }
+    // Ravine country keeps away from the other shipped replays (600 m at its nearest), so the
+    // figures measured on them hold with or without gullies: none within 500 m of any sample.
     for (std::size_t i = 0; i < rp.samples.size(); i += 60) {
         const glm::dvec3 p = rp.samples[i].position_m;
         for (double dx = -500.0; dx <= 500.0; dx += 100.0) {
@@ -88,7 +100,8 @@ INSTANTIATE_TEST_SUITE_P(
                     Expect{"low-flight", ReplayMode::Fly, 80.0, 80.0, 60.0, 0},
                     Expect{"stress-flight", ReplayMode::Fly, 250.0, 250.0, 60.0, 1},
                     Expect{"day-timelapse", ReplayMode::Static, 0.0, 0.0, 144.0, 0},
-                    Expect{"far-flight", ReplayMode::Fly, 120.0, 120.0, 40.0, 0}),
+                    Expect{"far-flight", ReplayMode::Fly, 120.0, 120.0, 40.0, 0},
+                    Expect{"ravine-dusk", ReplayMode::Static, 0.0, 0.0, 12.0, 0, 28.0, true}),
     [](const testing::TestParamInfo<Expect>& info) {
         std::string n = info.param.name;
         for (char& c : n)
