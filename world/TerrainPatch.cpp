@@ -166,11 +166,7 @@ double skyVisibility(const std::vector<double>& h, int kB, int c, int reach, dou
 // cut within its reach (its border's half-diagonal from its centre).
 bool carriesSkyDetail(const World& world, const PatchKey& key, TerrainPatch::SkyDetail mode) {
     if (TerrainPatch::spacing_m(key.level) > TerrainPatch::kSkyDetailMaxSpacing_m) return false;
-    switch (mode) {
-        case TerrainPatch::SkyDetail::Never: return false;
-        case TerrainPatch::SkyDetail::Everywhere: return true;
-        case TerrainPatch::SkyDetail::WhereGullies: break;
-    }
+    if (mode == TerrainPatch::SkyDetail::Everywhere) return true;
     const double half = 0.5 * TerrainPatch::size_m(key.level);
     const double reach = std::sqrt(2.0) * (half + TerrainPatch::kSkyDetailRadius_m);
     return world.heightfield().mayHaveGullies(TerrainPatch::originX_m(key) + half,

@@ -1,8 +1,9 @@
 // Heightfield_bench.cpp — cost of the world's noise, which most of the near field's builds
 // spend their time in: GLM's classic Perlin noise against the table-driven one that equals it
 // bit for bit (Heightfield::classicNoise), and one terrain height (8 to 14 octaves); one
-// terrain patch at each level (the two finest carry the per-vertex sky detail, from a height
-// grid with a 16 m border: 33 x 33 and 25 x 25 heights, against 19 x 19 for the others).
+// terrain patch at each level, with and without the per-vertex sky detail (which the two
+// finest levels carry in ravine country, from a height grid with a 16 m border: 33 x 33 and
+// 25 x 25 heights, against 19 x 19 without it).
 //   build/bin/ambience_bench --benchmark_filter='Noise|Height|Patch'
 #include <cmath>
 #include <cstdint>
