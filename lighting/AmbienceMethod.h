@@ -25,8 +25,11 @@ namespace amb {
 inline constexpr double kShadingHeight_m = 2.0;
 
 // The capture budget's upper end, cube faces per frame (the settings readers and the command
-// line): about 11 probes a frame, where a GPU with 16 x 16 faces is still far from busy.
-inline constexpr int kMaxFacesPerFrame = 64;
+// line): four probes a frame, the largest budget measured (README "Budget beyond one probe a
+// frame"; beyond 6 faces more captures of the same lattice bought almost nothing). Every probe
+// becomes an anchor, and the store rebuilds its field over all of them while any blends: the
+// budget bounds what a frame of the store costs (docs/TUNING.md "Settings keys").
+inline constexpr int kMaxFacesPerFrame = 24;
 
 struct MethodStatistics {
     std::size_t probes = 0;  // coefficient sets held (anchors, grid probes, cache entries)

@@ -138,14 +138,14 @@ Keys<AnchorStoreSettings> storeKeys() {
              "an anchor asks for a new capture after this fraction of its lifetime",
              [](T& t) -> double& { return t.regenerateFraction; });
     k.integer(
-        "searchCells", "cells", 1, 16, "nearest-anchor search, in cells of the level",
+        "searchCells", "cells", 1, 4, "nearest-anchor search, in cells of the level",
         [](T& t) -> int& { return t.searchCells; }, kCostHigh);
     k.integer(
-        "reachCells", "cells", 1, 16,
+        "reachCells", "cells", 1, 4,
         "a hole takes the residuals of the anchors within this many cells",
         [](T& t) -> int& { return t.reachCells; }, kCostHigh);
     k.integer(
-        "coarseReachCells", "cells", 1, 16, "the same at the coarsest level",
+        "coarseReachCells", "cells", 1, 4, "the same at the coarsest level",
         [](T& t) -> int& { return t.coarseReachCells; }, kCostHigh);
     k.number("finerWeight", "", 0.0, 1.0, "weight of the finer levels' anchors in a hole's fill",
              [](T& t) -> double& { return t.finerWeight; });
@@ -164,10 +164,10 @@ Keys<ProbeSchedulerSettings> schedulerKeys() {
     k.number("velocityTimeConstant_s", "s", 0.0, 60.0, "inertia of the velocity filter",
              [](T& t) -> double& { return t.velocityTimeConstant_s; });
     k.number(
-        "horizon_s", "s", 0.0, 60.0, "how far ahead the path is predicted",
+        "horizon_s", "s", 0.0, 10.0, "how far ahead the path is predicted",
         [](T& t) -> double& { return t.horizon_s; }, kCostHigh);
     k.number(
-        "pathStep_s", "s", 0.01, 60.0, "spacing of the path samples",
+        "pathStep_s", "s", 0.1, 60.0, "spacing of the path samples",
         [](T& t) -> double& { return t.pathStep_s; }, kCostLowLog);
     k.number(
         "historyLength_s", "s", 0.0, 600.0, "position history kept",
@@ -185,15 +185,15 @@ Keys<ProbeSchedulerSettings> schedulerKeys() {
         "maxLevel", "", 0, kMaxAnchorLevels - 1, "never capture finer than this level",
         [](T& t) -> int& { return t.maxLevel; }, kCostHigh);
     k.number(
-        "finestRingCells", "cells", 0.0, 100.0,
+        "finestRingCells", "cells", 0.0, 8.0,
         "finest-level candidates within this many cells of the path",
         [](T& t) -> double& { return t.finestRingCells; }, kCostHigh);
     k.number(
-        "coarseRingCells", "cells", 0.0, 100.0,
+        "coarseRingCells", "cells", 0.0, 8.0,
         "coarser-level candidates within this many cells of the path",
         [](T& t) -> double& { return t.coarseRingCells; }, kCostHigh);
     k.integer(
-        "maxWiden", "", 0, 8, "doublings of the rings when everything near is fresh",
+        "maxWiden", "", 0, 3, "doublings of the rings when everything near is fresh",
         [](T& t) -> int& { return t.maxWiden; }, kCostHigh);
     k.number(
         "minReachSpeed_mps", "m/s", 1e-3, 1e6,
@@ -226,7 +226,7 @@ Keys<CaptureSettings> captureKeys() {
         "texels brighter than this are the sun disc, left out of the SH (1e12: none)",
         [](T& t) -> double& { return t.sunThreshold; }, rebuilding(kLog));
     k.number(
-        "maxAside_m", "m", 0.0, 1000.0, "how far a probe may move out of solids",
+        "maxAside_m", "m", 0.0, 100.0, "how far a probe may move out of solids",
         [](T& t) -> double& { return t.maxAside_m; }, kCostHigh);
     k.number("defaultTimeRate_hPerS", "h/s", -10.0, 10.0,
              "rate of the time of day before it is measured (at the start only)",
@@ -239,7 +239,7 @@ Keys<CaptureSettings> captureKeys() {
         "a camera step longer than this + 3 x speed x dt is a teleport",
         [](T& t) -> double& { return t.teleportDistance_m; }, kLog);
     k.integer(
-        "fallbackFaceSize", "texels", 1, 256, "cube map size of the sky fallback",
+        "fallbackFaceSize", "texels", 1, 64, "cube map size of the sky fallback",
         [](T& t) -> int& { return t.fallbackFaceSize; }, kCostHigh);
     k.number(
         "fallbackRefresh_h", "h", 0.0, 24.0, "recompute the fallback after this much day time",
@@ -257,7 +257,7 @@ Keys<NearFieldSettings> nearFieldKeys() {
     k.boolean(
         "enabled", "the two-scale ambience", [](T& t) -> bool& { return t.enabled; }, costHigh);
     k.number(
-        "radius_m", "m", 0.0, 200.0, "occluders this close to a shading point are put back there",
+        "radius_m", "m", 0.0, 60.0, "occluders this close to a shading point are put back there",
         [](T& t) -> double& { return t.radius_m; }, costHigh);
     k.number(
         "captureRadius_m", "m", 0.0, 200.0, "probes leave out the plants this close to them",
@@ -266,42 +266,42 @@ Keys<NearFieldSettings> nearFieldKeys() {
         "plants", "trees, bushes and rocks as spheres", [](T& t) -> bool& { return t.plants; },
         costHigh);
     k.number(
-        "smallRadius_m", "m", 0.0, 200.0, "bushes and rocks (never captured) are near out to this",
+        "smallRadius_m", "m", 0.0, 100.0, "bushes and rocks (never captured) are near out to this",
         [](T& t) -> double& { return t.smallRadius_m; }, costHigh);
     k.boolean(
         "terrain", "the terrain's near horizon", [](T& t) -> bool& { return t.terrain; }, costHigh);
     k.number(
-        "terrainRadius_m", "m", 1.0, 500.0, "how far the near horizon is searched",
+        "terrainRadius_m", "m", 1.0, 200.0, "how far the near horizon is searched",
         [](T& t) -> double& { return t.terrainRadius_m; }, costHigh);
     k.boolean(
         "ground", "the ground below the point", [](T& t) -> bool& { return t.ground; }, costHigh);
     k.number(
-        "groundRadius_m", "m", 0.5, 500.0, "how far from the point's foot the ground is its own",
+        "groundRadius_m", "m", 0.5, 100.0, "how far from the point's foot the ground is its own",
         [](T& t) -> double& { return t.groundRadius_m; }, costHigh);
     k.number(
-        "groundCell_m", "m", 0.25, 64.0, "the lattice whose ground terms objects blend",
+        "groundCell_m", "m", 1.0, 64.0, "the lattice whose ground terms objects blend",
         [](T& t) -> double& { return t.groundCell_m; }, rebuilding(kCostLowLog));
     k.number(
-        "latticeRange_m", "m", 0.0, 1e6,
+        "latticeRange_m", "m", 0.0, 1000.0,
         "objects first built this close to the camera blend the lattice's ground terms",
         [](T& t) -> double& { return t.latticeRange_m; }, costHighLog);
     k.integer(
-        "cacheEntries", "", 1, 1 << 24,
+        "cacheEntries", "", 4096, 1 << 18,
         "points cached with their transfer before the cache is emptied (about 2.5 kB each)",
         [](T& t) -> int& { return t.cacheEntries; }, rebuilding(kCostLowLog));
     k.number(
-        "objectRange_m", "m", 0.0, 1e6,
+        "objectRange_m", "m", 0.0, 250.0,
         "objects farther than this from the camera take the far field alone",
         [](T& t) -> double& { return t.objectRange_m; }, costHighLog);
     k.number(
-        "cornerRange_m", "m", 0.0, 1e6,
+        "cornerRange_m", "m", 0.0, 2000.0,
         "terrain corners and road vertices farther than this take the far field alone",
         [](T& t) -> double& { return t.cornerRange_m; }, costHighLog);
     k.boolean(
         "patchMean", "a terrain corner takes the near field's mean over the patches it colours",
         [](T& t) -> bool& { return t.patchMean; }, costHigh);
     k.integer(
-        "patchSamples", "", 1, 9, "points a side of a corner's patch mean",
+        "patchSamples", "", 1, 5, "points a side of a corner's patch mean",
         [](T& t) -> int& { return t.patchSamples; }, costHigh);
     k.boolean(
         "vertexDetail",
@@ -349,17 +349,17 @@ Keys<BaselineSettings> baselineKeys() {
     k.number("hysteresis", "", 0.0, 1.0, "grid: an update keeps this much of the old value",
              [](T& t) -> double& { return t.hysteresis; });
     k.number(
-        "cacheSpacing_m", "m", 1e-3, 1e6, "reactive: lattice of the cached probes",
+        "cacheSpacing_m", "m", 1.0, 1e6, "reactive: lattice of the cached probes",
         [](T& t) -> double& { return t.cacheSpacing_m; }, kCostLowLog);
     k.number(
-        "unusedTimeout_s", "s", 1e-3, kBig,
+        "unusedTimeout_s", "s", 1e-3, 600.0,
         "reactive: a probe not looked up for this long is dropped",
         [](T& t) -> double& { return t.unusedTimeout_s; }, kCostHighLog);
     k.number(
         "objectSize_m", "m", 1e-3, 1e6, "object: objects are terrain squares of this size",
         [](T& t) -> double& { return t.objectSize_m; }, kLog);
     k.number(
-        "objectRange_m", "m", 0.0, 1e6,
+        "objectRange_m", "m", 0.0, 16384.0,
         "object: objects whose centre lies this close to the camera (at most 64 x "
         "objectSize_m)",
         [](T& t) -> double& { return t.objectRange_m; }, kCostHighLog);

@@ -14,6 +14,10 @@
 //   - `KEY=VALUE` assignments (assign), through the same checks;
 //   - the key tables (Markdown), the fuzz dictionary, and the worst case of the ranges.
 //
+// The ranges are what the program accepts and can afford: every key with a costly end set to
+// that end, all at once (worstCase()), keeps a frame within 10x the default's (docs/TUNING.md
+// "Settings keys" has the measurement).
+//
 // [SECTION] The schema     SettingSpec, SettingField, SettingsSchema<S>
 // [SECTION] The two files  volumeSettingsSchema(), baselineSettingsSchema()
 // [SECTION] Generated text the key tables (Markdown) and the fuzz dictionary

@@ -194,7 +194,7 @@ TEST(VolumeRun, BadVolumeOptionsAreInputErrors) {
         EXPECT_NE(r.err.find(fragment), std::string::npos) << r.err;
     };
     expect2("--load-anchors /nonexistent/a.vdb", "/nonexistent/a.vdb");
-    expect2("--faces-per-frame 65", "expected 1 to 64");
+    expect2("--faces-per-frame 25", "expected 1 to 24");
     expect2("--faces-per-frame 0", "--faces-per-frame");
     const std::string config = testing::TempDir() + "volume_bad_config.json";
     std::ofstream(config) << "{\"facesPerFrame\": 1, \"noSuchSetting\": 3}";

@@ -1,6 +1,7 @@
 // fuzz_sweep — amb::parseSweep (app/bench/BenchSweep.h), the parameter points of `ambience bench
 // --sweep`. Accepted points must hold what the bench relies on: the default point first, unique
-// labels without separators, 1-64 faces per frame, settings objects that serialise.
+// labels without separators, 1 to kMaxFacesPerFrame faces per frame, settings objects that
+// serialise.
 #include <set>
 
 #include "FuzzSupport.h"

@@ -253,6 +253,47 @@ TEST(SettingsSchema, AssignmentsGoThroughTheReadersChecks) {
     EXPECT_EQ(b.gridSize, 8);
 }
 
+// The worst case the ranges were measured at (docs/TUNING.md "Settings keys"): every costly key
+// at its costly end, at once, is a settings file the readers take, and it reads back as built.
+template <typename S>
+void expectTheWorstCaseIsTaken(const SettingsSchema<S>& schema) {
+    const S worst = schema.worstCase();
+    const S defaults{};
+    int costly = 0;
+    for (const auto& f : schema.fields()) {
+        SCOPED_TRACE(f.key);
+        const double v = schema.value(worst, f);
+        if (f.cost == SettingSpec::Cost::None) {
+            EXPECT_EQ(v, schema.value(defaults, f));
+            continue;
+        }
+        ++costly;
+        EXPECT_EQ(v, f.kind == Kind::Boolean               ? 1.0
+                     : f.cost == SettingSpec::Cost::AtHigh ? f.hi
+                                                           : f.lo);
+    }
+    EXPECT_GT(costly, 5);
+    const std::string text = schema.write(worst);
+    EXPECT_EQ(refusal(schema, text), "") << text;
+    EXPECT_TRUE(schema.equal(schema.read(text, "worst"), worst));
+}
+
+TEST(SettingsSchema, TheWorstCaseIsAFileTheReadersTake) {
+    expectTheWorstCaseIsTaken(volumeSettingsSchema());
+    expectTheWorstCaseIsTaken(baselineSettingsSchema());
+    // The keys whose cost the ranges bound (docs/TUNING.md "Settings keys"), among them the
+    // scheduler's search (the path samples, the rings and their widening) and the near field's
+    // reach.
+    for (const char* key :
+         {"scheduler.horizon_s", "scheduler.pathStep_s", "scheduler.finestRingCells",
+          "scheduler.coarseRingCells", "scheduler.maxWiden", "facesPerFrame", "fallbackFaceSize",
+          "fallbackRefresh_h", "nearField.radius_m", "nearField.objectRange_m",
+          "nearField.cornerRange_m", "nearField.patchSamples", "nearField.cacheEntries",
+          "store.reachCells"})
+        EXPECT_NE(volumeSettingsSchema().find(key)->cost, SettingSpec::Cost::None) << key;
+    EXPECT_EQ(volumeSettingsSchema().find("scheduler.pathStep_s")->cost, SettingSpec::Cost::AtLow);
+}
+
 // The files the project ships with settings in them read as they always have.
 TEST(SettingsSchema, TheShippedSweepsSettingsStillRead) {
     std::ifstream in(std::string(AMBIENCE_SOURCE_DIR) + "/sweeps/two-scale.json");
