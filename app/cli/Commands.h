@@ -18,6 +18,7 @@ void addProbeCommand(CLI::App& app);   // capture one cube map
 void addShCommand(CLI::App& app);      // SH tools: project
 void addBenchCommand(CLI::App& app);   // replays x methods x parameter points: speed vs error
 void addCompareCommand(CLI::App& app);  // one frame: method, reference and ambient error
+void addSettingsCommand(CLI::App& app);  // the keys of the settings files
 
 // The folder of the shipped replays (beside the executable's tree, or ./replays); "" if none.
 std::string shippedReplayDir();

@@ -33,6 +33,7 @@
 #include "app/platform/Platform.h"
 #include "app/render/Renderer.h"
 #include "app/cli/RunReport.h"
+#include "app/cli/SettingsFlags.h"
 #include "app/frame/MethodStages.h"
 #include "lighting/Baselines.h"
 #include "lighting/Metrics.h"
@@ -56,6 +57,8 @@ struct CompareOptions {
     int grid = 16;
     int referenceSize = CubeCaptureGl::kReferenceFaceSize;
     int facesPerFrame = 1;
+    bool facesPerFrameGiven = false;              // --faces-per-frame was on the command line
+    std::vector<std::string> settingAssignments;  // --set KEY=VALUE
     int stride = 2;
 };
 
@@ -104,9 +107,14 @@ CompareInputs checkInputs(const CompareOptions& o) {
         volumeSettings = ambienceSettingsFromJson(
             readTextFile(o.config, "ambience settings file", kMaxSettingsFileBytes), o.config);
     BaselineSettings baselines;
-    if (o.facesPerFrame < 1 || o.facesPerFrame > kMaxFacesPerFrame)
-        throw InputError("--faces-per-frame", "expected 1 to " + std::to_string(kMaxFacesPerFrame));
-    volumeSettings.capture.facesPerFrame = baselines.capture.facesPerFrame = o.facesPerFrame;
+    // The command line over the file, and only what it names (as `run`).
+    if (o.facesPerFrameGiven) {
+        if (o.facesPerFrame < 1 || o.facesPerFrame > kMaxFacesPerFrame)
+            throw InputError("--faces-per-frame",
+                             "expected 1 to " + std::to_string(kMaxFacesPerFrame));
+        volumeSettings.capture.facesPerFrame = baselines.capture.facesPerFrame = o.facesPerFrame;
+    }
+    applySettingAssignments(o.settingAssignments, volumeSettings, &baselines);
     if (o.grid < 2 || o.grid > 256) throw InputError("--grid", "expected 2 to 256 pixels");
     if (o.referenceSize < 4 || o.referenceSize > 256)
         throw InputError("--reference-size", "expected 4 to 256");
@@ -432,7 +440,9 @@ void addCompareCommand(CLI::App& app) {
                     "a reference sample every N pixels (default 16; each costs a 64 x 64 capture "
                     "of the full scene)");
     cmd->add_option("--reference-size", o->referenceSize, "reference face size (default 64)");
-    cmd->add_option("--faces-per-frame", o->facesPerFrame, "capture budget (default 1)");
+    auto* faces = cmd->add_option("--faces-per-frame", o->facesPerFrame,
+                                  "capture budget (default: the settings file's, 1)");
+    addSetOption(*cmd, o->settingAssignments);
     cmd->add_option("--stride", o->stride, "replay steps per frame (default 2)");
     cmd->add_option("--size", o->size, "image size WxH (default 640x360)");
     cmd->add_option("--camera", o->camera,
@@ -446,7 +456,8 @@ void addCompareCommand(CLI::App& app) {
                     "and the reference");
     cmd->add_option("--shaders", o->shaders,
                     "GLSL folder (default <exe>/../shaders or $AMBIENCE_SHADER_DIR)");
-    cmd->callback([o] {
+    cmd->callback([o, faces] {
+        o->facesPerFrameGiven = faces->count() > 0;
         if (!o->shaders.empty()) setShaderDirectory(o->shaders);
         runCompare(*o);
     });

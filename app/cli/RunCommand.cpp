@@ -29,6 +29,7 @@
 #include "app/cli/OutputPaths.h"
 #include "app/render/Renderer.h"
 #include "app/cli/RunReport.h"
+#include "app/cli/SettingsFlags.h"
 #include "app/frame/MethodStages.h"
 #include "lighting/Baselines.h"
 #include "lighting/Metrics.h"
@@ -58,6 +59,8 @@ struct RunOptions {
     std::string ambient = "volume";
     std::string ambienceConfig, saveAnchors, loadAnchors;
     int facesPerFrame = 1;
+    bool facesPerFrameGiven = false;  // --faces-per-frame was on the command line
+    std::vector<std::string> settingAssignments;  // --set KEY=VALUE
     bool debugOverlay = false;
     bool noVehicle = false;
     std::string camera = "chase";     // drive replays: chase or hood (--camera)
@@ -235,11 +238,15 @@ RunPlan planRun(RunOptions& o) {
         baselines = baselineSettingsFromJson(
             readSettingsFile(o.baselineConfig, "baseline settings file"), o.baselineConfig);
     }
-    if (o.facesPerFrame < 1 || o.facesPerFrame > kMaxFacesPerFrame)
-        throw InputError("--faces-per-frame",
-                         "expected 1 to " + std::to_string(kMaxFacesPerFrame));
-    // One capture budget for every method.
-    volumeSettings.capture.facesPerFrame = baselines.capture.facesPerFrame = o.facesPerFrame;
+    // The command line over the files, and only what it names: a budget given sets every
+    // method's; none given leaves each file's.
+    if (o.facesPerFrameGiven) {
+        if (o.facesPerFrame < 1 || o.facesPerFrame > kMaxFacesPerFrame)
+            throw InputError("--faces-per-frame",
+                             "expected 1 to " + std::to_string(kMaxFacesPerFrame));
+        volumeSettings.capture.facesPerFrame = baselines.capture.facesPerFrame = o.facesPerFrame;
+    }
+    applySettingAssignments(o.settingAssignments, volumeSettings, &baselines);
     checkLoops(replay, o);
     if (o.measureEvery < 0) throw InputError("--measure-every", "must be >= 0");
     if (!o.oracle.empty() && o.measureEvery == 0)
@@ -646,8 +653,11 @@ void addRunCommand(CLI::App& app) {
     cmd->add_option("--config,--ambience-config", o->ambienceConfig,
                     "JSON file of ambience volume settings (AmbienceVolumeSettings fields, "
                     "lighting/AmbienceVolume.h)");
-    cmd->add_option("--faces-per-frame", o->facesPerFrame,
-                    "capture budget: cube faces per frame, 1 to 64 (default 1, as in the thesis)");
+    auto* faces = cmd->add_option("--faces-per-frame", o->facesPerFrame,
+                                  "capture budget: cube faces per frame, 1 to " +
+                                      std::to_string(kMaxFacesPerFrame) +
+                                      " (default: the settings files', 1 as in the thesis)");
+    addSetOption(*cmd, o->settingAssignments);
     cmd->add_option("--face-size", o->faceSize, "capture face size N (default 16)");
     cmd->add_option("--save-anchors", o->saveAnchors, "write the anchor store at the end (.vdb)");
     cmd->add_option("--load-anchors", o->loadAnchors, "warm-start from an anchor store (.vdb)");
@@ -678,7 +688,8 @@ void addRunCommand(CLI::App& app) {
                   "over frames and video");
     cmd->add_option("--shaders", o->shaders,
                     "GLSL folder (default <exe>/../shaders or $AMBIENCE_SHADER_DIR)");
-    cmd->callback([o] {
+    cmd->callback([o, faces] {
+        o->facesPerFrameGiven = faces->count() > 0;
         if (!o->shaders.empty()) setShaderDirectory(o->shaders);
         runReplay(*o);
     });

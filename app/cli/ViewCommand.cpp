@@ -14,6 +14,7 @@
 #include <memory>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <glm/geometric.hpp>
@@ -28,6 +29,7 @@
 #include "app/render/Renderer.h"
 #include "app/platform/Platform.h"
 #include "app/cli/RunReport.h"
+#include "app/cli/SettingsFlags.h"
 #include "app/cli/TuningPanel.h"
 #include "app/render/PanelRenderer.h"
 #include "app/frame/MethodStages.h"
@@ -56,6 +58,7 @@ struct ViewOptions {
     std::string shaders;
     double time_h = -1.0;
     std::string config;      // the volume's settings (as `run --config`)
+    std::vector<std::string> settingAssignments;  // --set KEY=VALUE, after --config
     bool noPanel = false;
     std::string windowShot;  // with --frames: the window as shown, the panel included
 };
@@ -237,11 +240,14 @@ void saveShots(const ViewOptions& o, bool pKey, bool last, Renderer& renderer, P
     }
 }
 
-// The view's settings: --config, read as `ambience run --config` reads it.
+// The view's settings: --config, read as `ambience run --config` reads it, then --set.
 AmbienceVolumeSettings viewSettings(const ViewOptions& o) {
-    if (o.config.empty()) return {};
-    return ambienceSettingsFromJson(
-        readTextFile(o.config, "ambience settings file", kMaxSettingsFileBytes), o.config);
+    AmbienceVolumeSettings settings;
+    if (!o.config.empty())
+        settings = ambienceSettingsFromJson(
+            readTextFile(o.config, "ambience settings file", kMaxSettingsFileBytes), o.config);
+    applySettingAssignments(o.settingAssignments, settings, nullptr);
+    return settings;
 }
 
 void runView(const ViewOptions& o) {
@@ -386,6 +392,7 @@ void addViewCommand(CLI::App& app) {
     cmd->add_option("--config,--ambience-config", o->config,
                     "the volume's settings (JSON, as `run --config`); the panel's Save writes "
                     "and Load reads this file (default ambience-settings.json)");
+    addSetOption(*cmd, o->settingAssignments);
     cmd->add_flag("--no-panel", o->noPanel, "no tuning panel (Tab hides it while running)");
     cmd->add_option("--window-shot", o->windowShot,
                     "with --frames: save the window as shown (the panel included) here");
