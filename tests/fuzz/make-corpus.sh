@@ -3,8 +3,8 @@
 # outputs, kept small (each file under 64 kB):
 #   fuzz_replay             the shipped replays cut to their first 8 samples, and 8 samples
 #                           around the stress flight's camera cut
-#   fuzz_volume_settings,   settings examples (empty, a few keys, every key)
-#   fuzz_baseline_settings
+#   fuzz_volume_settings,   settings examples (empty, a few keys), and from the settings
+#   fuzz_baseline_settings  schema every key at its default and at its costly end
 #   fuzz_sweep              the README's sweep example and a two-point sweep
 #   fuzz_oracle             the oracle of a 30-frame run measured every 10th frame
 #   fuzz_reference          the reference of a 30-frame run (two entries, two screen witnesses)
@@ -46,28 +46,9 @@ PY
 v="$corpus/fuzz_volume_settings"
 echo '{}' >"$v/empty.json"
 echo '{"store": {"blendTime_s": 1}, "scheduler": {"corridorCells": 4}}' >"$v/tuned.json"
-cat >"$v/every-key.json" <<'JSON'
-{"store": {"coarsestSpacing_m": 243, "levels": 6, "blendTime_s": 1, "allowedSunAngle_rad": 0.05,
-           "minLifetime_s": 2, "maxLifetime_s": 600, "regenerateFraction": 0.8, "searchCells": 2,
-           "reachCells": 1, "coarseReachCells": 2, "finerWeight": 1},
- "scheduler": {"velocityTimeConstant_s": 0.5, "horizon_s": 2, "pathStep_s": 0.25,
-               "historyLength_s": 4, "roadSnap_m": 20, "roadAlignment": 0.7,
-               "teleportDistance_m": 100, "corridorCells": 4, "maxLevel": 2,
-               "finestRingCells": 1, "coarseRingCells": 2, "maxWiden": 2,
-               "minReachSpeed_mps": 1, "gapBonus_s": 0.5, "staleBias_s": 1},
- "facesPerFrame": 1, "nominalFrameTime_s": 0.016, "defaultTimeRate_hPerS": 0.0002778,
- "timeJump_h": 0.25, "sunThreshold": 5000, "fallbackFaceSize": 8, "fallbackRefresh_h": 0.0167,
- "asideFraction": 0.5, "maxAside_m": 4, "relightBySkyLevel": true}
-JSON
 b="$corpus/fuzz_baseline_settings"
 echo '{}' >"$b/empty.json"
 echo '{"gridSpacing_m": 24, "gridSize": 16}' >"$b/grid24.json"
-cat >"$b/every-key.json" <<'JSON'
-{"facesPerFrame": 1, "sunThreshold": 5000, "maxAside_m": 4, "defaultTimeRate_hPerS": 0.0002778,
- "timeJump_h": 0.25, "teleportDistance_m": 100, "gridSize": 16, "gridSpacing_m": 128,
- "hysteresis": 0.97, "cacheSpacing_m": 96, "unusedTimeout_s": 4, "objectSize_m": 256,
- "objectRange_m": 400}
-JSON
 
 # Sweeps.
 s="$corpus/fuzz_sweep"
@@ -81,11 +62,19 @@ cat >"$s/two-points.json" <<'JSON'
              "volume": {"scheduler": {"maxLevel": 4}}}]}
 JSON
 
-# Files the program writes: a short run, measured, saving its anchors; a probe.
+# Files the program writes: settings files of every key, a short run, measured, saving its
+# anchors; a probe.
 if [[ ! -x "$ambience" ]]; then
-  echo "make-corpus: no $ambience; oracle, anchor store and cube-map seeds left as they are" >&2
+  echo "make-corpus: no $ambience; every-key settings, oracle, anchor store and cube-map seeds" \
+    "left as they are" >&2
   exit 0
 fi
+# Every key the settings schema knows (lighting/SettingsSchema.h), at its default and at the
+# costly end of its range: a key added to the schema is in the seeds.
+for f in volume baseline; do
+  "$ambience" settings --defaults "$f" >"$corpus/fuzz_${f}_settings/every-key.json"
+  "$ambience" settings --worst-case "$f" >"$corpus/fuzz_${f}_settings/worst-case.json"
+done
 "$ambience" run --replay replays/highway-drive.json --max-frames 30 --no-frames --no-video \
   --measure-every 10 --oracle "$tmp/oracle.json" --out "$tmp/run" >/dev/null
 "$ambience" run --replay replays/highway-drive.json --max-frames 30 --no-frames --no-video \

@@ -5,6 +5,7 @@
 // the rebuilding ones stop a retune), `KEY=VALUE` assignments go through the same checks, and
 // the files the project ships still read.
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -292,6 +293,33 @@ TEST(SettingsSchema, TheWorstCaseIsAFileTheReadersTake) {
           "store.reachCells"})
         EXPECT_NE(volumeSettingsSchema().find(key)->cost, SettingSpec::Cost::None) << key;
     EXPECT_EQ(volumeSettingsSchema().find("scheduler.pathStep_s")->cost, SettingSpec::Cost::AtLow);
+}
+
+// The settings targets' seeds (tests/fuzz/make-corpus.sh) are settings files the readers take,
+// and every-key.json holds every key the schema knows, at its default: a seed the reader
+// refused would only ever exercise its errors.
+TEST(SettingsSchema, TheFuzzSeedsAreFilesTheReadersTake) {
+    namespace fs = std::filesystem;
+    const fs::path corpus = fs::path(AMBIENCE_SOURCE_DIR) / "tests/fuzz/corpus";
+    int seeds = 0;
+    for (const char* target : {"fuzz_volume_settings", "fuzz_baseline_settings"}) {
+        const bool volume = std::string(target) == "fuzz_volume_settings";
+        for (const auto& entry : fs::directory_iterator(corpus / target)) {
+            std::ifstream in(entry.path());
+            std::stringstream text;
+            text << in.rdbuf();
+            SCOPED_TRACE(entry.path().string());
+            const std::string said = volume ? refusal(volumeSettingsSchema(), text.str())
+                                            : refusal(baselineSettingsSchema(), text.str());
+            EXPECT_EQ(said, "");
+            if (entry.path().filename() == "every-key.json") {
+                EXPECT_EQ(text.str(), volume ? volumeSettingsSchema().write({})
+                                             : baselineSettingsSchema().write({}));
+            }
+            ++seeds;
+        }
+    }
+    EXPECT_GE(seeds, 4);
 }
 
 // The files the project ships with settings in them read as they always have.
