@@ -657,12 +657,12 @@ void markdownTable(std::ostringstream& out, const SettingsSchema<S>& schema, boo
 std::string settingsMarkdown() {
     std::ostringstream out;
     out << "#### The volume's settings file\n\n"
-           "`AmbienceVolumeSettings` (`lighting/AmbienceVolume.h`): `ambience run --config`, "
+           "`AmbienceVolumeSettings` (`lighting/AmbienceVolume.h`): `ambience run --config`,\n"
            "`view --config`, `compare --config`, `\"volume\"` in a sweep point. \"rebuilds\": a "
-           "change cannot apply to a running volume (the tuning panel rebuilds it).\n\n";
+           "change cannot\napply to a running volume (the tuning panel rebuilds it).\n\n";
     markdownTable(out, volumeSettingsSchema(), true);
     out << "\n#### The baselines' settings file\n\n"
-           "`BaselineSettings` (`lighting/Baselines.h`): `ambience run --baseline-config`, "
+           "`BaselineSettings` (`lighting/Baselines.h`): `ambience run --baseline-config`,\n"
            "`\"baseline\"` in a sweep point. The capture and near-field keys are the volume's.\n\n";
     markdownTable(out, baselineSettingsSchema(), false);
     return out.str();

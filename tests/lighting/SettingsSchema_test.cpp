@@ -295,6 +295,62 @@ TEST(SettingsSchema, TheWorstCaseIsAFileTheReadersTake) {
     EXPECT_EQ(volumeSettingsSchema().find("scheduler.pathStep_s")->cost, SettingSpec::Cost::AtLow);
 }
 
+// The text between the lines of `path` that start with `begin` and `end`, without the blank
+// lines around it ("" and a failure when either marker is missing).
+std::string between(const std::string& path, const std::string& begin, const std::string& end) {
+    std::ifstream in(path);
+    EXPECT_TRUE(in) << path;
+    std::string line, text;
+    int state = 0;  // 0 before the block, 1 in it, 2 after it
+    while (std::getline(in, line)) {
+        if (state == 0 && line.rfind(begin, 0) == 0) {
+            state = 1;
+        } else if (state == 1 && line.rfind(end, 0) == 0) {
+            state = 2;
+        } else if (state == 1) {
+            text += line + "\n";
+        }
+    }
+    EXPECT_EQ(state, 2) << path << ": no '" << begin << "' ... '" << end << "' block";
+    const std::size_t first = text.find_first_not_of('\n');
+    if (first == std::string::npos) return "";
+    return text.substr(first, text.find_last_not_of('\n') - first + 1) + "\n";
+}
+
+std::string trimmed(const std::string& text) {
+    return text.substr(0, text.find_last_not_of('\n') + 1) + "\n";
+}
+
+// docs/TUNING.md's key tables are what the schema generates (scripts/update-settings-tables.sh
+// writes them): a key added, renamed or given another range fails here until they are.
+TEST(SettingsSchema, TheDocsKeyTablesAreTheSchemas) {
+    const std::string docs = between(std::string(AMBIENCE_SOURCE_DIR) + "/docs/TUNING.md",
+                                     "<!-- settings-schema: begin", "<!-- settings-schema: end");
+    EXPECT_EQ(docs, trimmed(settingsMarkdown()))
+        << "docs/TUNING.md's key tables differ from the settings schema: run "
+           "scripts/update-settings-tables.sh";
+    // A row per key of each file.
+    for (const auto& f : volumeSettingsSchema().fields())
+        EXPECT_NE(docs.find("| `" + f.key + "` |"), std::string::npos) << f.key;
+    for (const auto& f : baselineSettingsSchema().fields())
+        EXPECT_NE(docs.find("| `" + f.key + "` |"), std::string::npos) << f.key;
+}
+
+// The fuzz dictionary names every key and object of the settings files, so that mutations of
+// the settings targets reach every key (tests/fuzz/json.dict).
+TEST(SettingsSchema, TheFuzzDictionaryHasEveryKey) {
+    const std::string dict = between(std::string(AMBIENCE_SOURCE_DIR) + "/tests/fuzz/json.dict",
+                                     "# settings-schema: begin", "# settings-schema: end");
+    EXPECT_EQ(dict, settingsFuzzDictionary())
+        << "tests/fuzz/json.dict differs from the settings schema: run "
+           "scripts/update-settings-tables.sh";
+    for (const char* name : {"store", "scheduler", "nearField", "cacheEntries", "gridSize",
+                             "facesPerFrame", "objectRange_m"})
+        EXPECT_NE(dict.find(std::string("settings_") + name + "=\"\\\"" + name + "\\\"\"\n"),
+                  std::string::npos)
+            << name;
+}
+
 // The settings targets' seeds (tests/fuzz/make-corpus.sh) are settings files the readers take,
 // and every-key.json holds every key the schema knows, at its default: a seed the reader
 // refused would only ever exercise its errors.
