@@ -23,6 +23,7 @@
 #include "lighting/ProbeEnvironment.h"
 #include "lighting/ReferenceIrradiance.h"
 #include "world/Error.h"
+#include "world/JsonText.h"
 #include "world/TextFile.h"
 
 namespace amb {
@@ -568,7 +569,7 @@ void ErrorMeter::loadOracleText(const std::string& text, const std::string& wher
                                 const std::string& signature) {
     nlohmann::json j;
     try {
-        j = nlohmann::json::parse(text);
+        j = parseJsonText(text, where);
     } catch (const nlohmann::json::exception& e) {
         throw InputError(where, std::string("malformed oracle file: ") + e.what());
     }
@@ -656,7 +657,7 @@ void ErrorMeter::loadReferenceText(const std::string& text, const std::string& w
     if (!reference_) throw InputError(where, "no reference oracle attached");
     nlohmann::json j;
     try {
-        j = nlohmann::json::parse(text);
+        j = parseJsonText(text, where);
     } catch (const nlohmann::json::exception& e) {
         throw InputError(where, std::string("malformed reference file: ") + e.what());
     }
