@@ -160,10 +160,14 @@ FrameEvents CaptureCore::beginFrame(const glm::dvec3& cameraPosition_m,
     haveTime_ = true;
     timeOfDay_h_ = timeOfDay_h;
 
-    // Motion: a step the reported (or previous) speed cannot explain is a teleport; the probe
-    // in progress belongs to the old place.
+    // Motion: a step the reported speed or the speed before it cannot explain is a teleport;
+    // the probe in progress belongs to the old place. A reported speed above any camera's is
+    // the step itself reported as a speed, not a measurement: it explains nothing.
     if (finite(cameraPosition_m)) {
-        const double reported = finite(cameraVelocity_mps) ? glm::length(cameraVelocity_mps) : 0.0;
+        const double reported =
+            finite(cameraVelocity_mps)
+                ? std::min(glm::length(cameraVelocity_mps), kMaxCameraSpeed_mps)
+                : 0.0;
         if (haveCamera_) {
             const double speed = std::max(reported, cameraSpeed_mps_);
             const double allowed = settings_.teleportDistance_m + 3.0 * speed * dt_s;

@@ -18,7 +18,9 @@
 //     a jump does to what it holds).
 //   - teleport: a camera step longer than teleportDistance_m + 3 x max(reported speed, previous
 //     reported speed) x dt is a teleport (counted); the probe in progress is dropped (counted as
-//     aborted).
+//     aborted). A reported speed counts up to kMaxCameraSpeed_mps only: a caller that measures
+//     the velocity from the step itself (the frame loop does) reports any jump as a speed that
+//     would explain it.
 //   - budget: facesPerFrame faces of CubeCapture::faceSize() per frame; a probe is the six faces
 //     of one position (one probe per 6 frames at one face per frame), each projected as it
 //     arrives (CubeMapProjector, the sun disc above sunThreshold taken out).
@@ -53,6 +55,10 @@ class JsonFields;
 class ProbeEnvironment;
 
 // ---- Settings -------------------------------------------------------------------------------
+
+// The fastest the teleport rule believes a camera moves [m/s]: the fastest camera path `ambience
+// replay make` makes (its --speed bound). A step at this speed is motion, not a teleport.
+inline constexpr double kMaxCameraSpeed_mps = 1.0e4;
 
 // Shared by every capturing method (the JSON keys of both settings files, at the top level).
 struct CaptureSettings {
