@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -19,6 +20,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "SourceHash.h"  // generated: AMBIENCE_SOURCE_HASH
 #include "app/cli/Commands.h"
 #include "app/cli/ContactSheet.h"
 #include "app/render/CubeCaptureGl.h"
@@ -322,6 +324,18 @@ struct RunMeasurement {
     std::string oracleSignature, referenceSignature;
 };
 
+// FNV-1a over the replay file's bytes, as 16 hex digits.
+std::string replayHash(const std::string& path) {
+    std::uint64_t h = 1469598103934665603ull;
+    for (const char c : readTextFile(path, "replay file", kMaxReplayFileBytes)) {
+        h ^= std::uint64_t(static_cast<unsigned char>(c));
+        h *= 1099511628211ull;
+    }
+    char text[24];
+    std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(h));
+    return text;
+}
+
 // The meter for --measure-every (none without it), its caches loaded, attached to `stages`.
 RunMeasurement startMeasurement(const RunOptions& o, const RunPlan& plan, const World& world,
                                 MethodAmbienceStages& stages) {
@@ -330,9 +344,12 @@ RunMeasurement startMeasurement(const RunOptions& o, const RunPlan& plan, const 
     MeasureSettings measureSettings;
     measureSettings.every = o.measureEvery;
     measureSettings.sunThreshold = plan.volumeSettings.capture.sunThreshold;
-    // The oracle depends on the replay, the frames measured and the capture settings only.
+    // The oracle depends on the replay (its world and path: the file's bytes), the frames
+    // measured, the capture settings and the code that captures and projects (the sources'
+    // hash, cmake/SourceHash.cmake): a cache made by other code or of another world is stale.
     m.oracleSignature =
-        fs::path(o.replay).filename().string() + " stride=" + std::to_string(o.stride) +
+        fs::path(o.replay).filename().string() + " replay=" + replayHash(o.replay) +
+        " code=" + AMBIENCE_SOURCE_HASH + " stride=" + std::to_string(o.stride) +
         " every=" + std::to_string(o.measureEvery) + " face=" + std::to_string(o.faceSize) +
         " sunThreshold=" + std::to_string(measureSettings.sunThreshold) +
         " frames=" + std::to_string(o.maxFrames) + " shadows=" + describeShadows(plan.shadows) +

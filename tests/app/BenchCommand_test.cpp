@@ -93,6 +93,31 @@ TEST(RunMeasure, OracleIsSavedReusedAndTheResultDeterministic) {
     EXPECT_EQ(c.errLines(), 1) << c.err;
 }
 
+// A cache is keyed by what made it: the replay file's bytes (its world and path, not only its
+// name) and the hash of the sources that capture and project (cmake/SourceHash.cmake). A replay
+// changed under the same name no longer reads the old oracle back as its own.
+TEST(RunMeasure, OracleCacheIsKeyedByTheReplaysBytesAndTheCode) {
+    const fs::path dir = scratchDir("run-oracle-key");
+    fs::copy_file(sourcePath("replays/highway-drive.json"), dir / "r.json");
+    const std::string common = "run --no-frames --max-frames 21 --measure-every 20 --replay " +
+                               (dir / "r.json").string() + " --oracle " +
+                               (dir / "oracle.json").string();
+    const auto a = runAmbience(common + " --out " + (dir / "a").string());
+    ASSERT_EQ(a.exitCode, 0) << a.err;
+    const std::string signature = readJson(dir / "oracle.json")["signature"].get<std::string>();
+    const auto code = signature.find(" code=");
+    ASSERT_NE(code, std::string::npos) << signature;
+    EXPECT_EQ(signature.substr(code + 6, 16).find_first_not_of("0123456789abcdef"),
+              std::string::npos)
+        << signature;
+    EXPECT_NE(signature.find(" replay="), std::string::npos) << signature;
+    // The same file name, one more space in it: another replay as far as the cache knows.
+    std::ofstream(dir / "r.json", std::ios::app) << " ";
+    const auto b = runAmbience(common + " --out " + (dir / "b").string());
+    EXPECT_EQ(b.exitCode, 2) << b.err;
+    EXPECT_NE(b.err.find("replay="), std::string::npos) << b.err;
+}
+
 // Stress, a million metres from the origin: the volume captures, stores anchors and measures a
 // finite error; nothing is rejected (float positions would have collapsed the lattice there).
 TEST(RunMeasure, FarFromTheOriginStaysFinite) {
