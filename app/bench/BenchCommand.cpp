@@ -386,6 +386,8 @@ struct Runner {
             (fs::path(out) / "oracle" / (job.replay.name + ".json")).string(),
             "--stride",
             std::to_string(stride),
+            // An oracle left in the folder by other code or another replay is made again.
+            "--replace-stale-caches",
             "--backend",
             backend,
             "--out",

@@ -36,6 +36,7 @@
 #include "lighting/Metrics.h"
 #include "world/DataPaths.h"
 #include "world/Error.h"
+#include "world/JsonText.h"
 #include "world/TextFile.h"
 #include "world/World.h"
 
@@ -79,6 +80,7 @@ struct RunOptions {
     std::string oracle;
     std::string oracleKind = "self";
     std::string reference;
+    bool replaceStale = false;  // --replace-stale-caches
     ReferenceSettings referenceSettings;
     bool referenceOn = false;
     bool noIdealVolume = false;
@@ -336,6 +338,20 @@ std::string replayHash(const std::string& path) {
     return text;
 }
 
+// True when the cache at `path` is a well-formed cache of another signature (another replay,
+// code or settings): with --replace-stale-caches it is captured anew and replaced, not read.
+// Anything else (not JSON, no signature) is left to the loader, which names what is wrong.
+bool staleCache(const std::string& path, const std::string& signature) {
+    try {
+        const nlohmann::json j =
+            parseJsonText(readTextFile(path, "cache file", kMaxOracleFileBytes), path);
+        return j.is_object() && j.contains("signature") && j["signature"].is_string() &&
+               j["signature"].get<std::string>() != signature;
+    } catch (const std::exception&) {
+        return false;
+    }
+}
+
 // The meter for --measure-every (none without it), its caches loaded, attached to `stages`.
 RunMeasurement startMeasurement(const RunOptions& o, const RunPlan& plan, const World& world,
                                 MethodAmbienceStages& stages) {
@@ -357,7 +373,8 @@ RunMeasurement startMeasurement(const RunOptions& o, const RunPlan& plan, const 
     if (o.measureEvery > 0) {
         m.meter = std::make_unique<ErrorMeter>(stages.cubeCapture(), stages.environment(),
                                                measureSettings);
-        if (!o.oracle.empty() && fs::exists(o.oracle))
+        if (!o.oracle.empty() && fs::exists(o.oracle) &&
+            !(o.replaceStale && staleCache(o.oracle, m.oracleSignature)))
             m.meter->loadOracle(o.oracle, m.oracleSignature);
     }
     // The reference oracle: the full scene at 64 x 64 (lighting/ReferenceOracle.h).
@@ -371,7 +388,8 @@ RunMeasurement startMeasurement(const RunOptions& o, const RunPlan& plan, const 
             std::make_unique<CubeCaptureGl>(world, ref.faceSize, CaptureScene::Full, plan.shadows);
         m.meter->attachReference(*m.referenceCapture, ref,
                                  plan.oracleKind == OracleKind::Reference);
-        if (!o.reference.empty() && fs::exists(o.reference))
+        if (!o.reference.empty() && fs::exists(o.reference) &&
+            !(o.replaceStale && staleCache(o.reference, m.referenceSignature)))
             m.meter->loadReference(o.reference, m.referenceSignature);
     }
     if (m.meter) stages.attachMeter(m.meter.get());
@@ -648,6 +666,9 @@ void addRunCommand(CLI::App& app) {
     cmd->add_option("--reference", o->reference,
                     "reference cache (JSON): read if it exists and matches, else written; also "
                     "turns on the reference and the error budget with --oracle-kind self");
+    cmd->add_flag("--replace-stale-caches", o->replaceStale,
+                  "an --oracle or --reference cache made for another replay, other code or other "
+                  "capture settings is captured anew and replaced (default: refused)");
     cmd->add_option("--reference-every", o->referenceSettings.every,
                     "take the reference on every K-th measured frame (default 3)");
     cmd->add_option("--reference-size", o->referenceSettings.faceSize,

@@ -116,6 +116,11 @@ TEST(RunMeasure, OracleCacheIsKeyedByTheReplaysBytesAndTheCode) {
     const auto b = runAmbience(common + " --out " + (dir / "b").string());
     EXPECT_EQ(b.exitCode, 2) << b.err;
     EXPECT_NE(b.err.find("replay="), std::string::npos) << b.err;
+    // Asked to, the run captures it anew and replaces the cache (as each bench run does).
+    const auto c = runAmbience(common + " --replace-stale-caches --out " + (dir / "c").string());
+    ASSERT_EQ(c.exitCode, 0) << c.err;
+    EXPECT_GT(readJson(dir / "c" / "report.json")["measurement"]["oracleCaptures"].get<int>(), 0);
+    EXPECT_NE(readJson(dir / "oracle.json")["signature"].get<std::string>(), signature);
 }
 
 // Stress, a million metres from the origin: the volume captures, stores anchors and measures a
