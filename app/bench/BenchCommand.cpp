@@ -38,6 +38,7 @@
 
 #include "app/bench/BenchCollect.h"
 #include "app/bench/BenchEmit.h"
+#include "app/bench/BenchStats.h"
 #include "app/bench/BenchSweep.h"
 #include "app/cli/Commands.h"
 #include "app/cli/OutputPaths.h"
@@ -771,6 +772,16 @@ double errorUpTo(const std::string& dir, const Job& j, int lastFrame) {
     return count ? sum / double(count) : std::nan("");
 }
 
+// Our run against another of the same replay: the ratio of mean errors over the frames both
+// measured, with its paired bootstrap 95 % interval (BenchStats.h).
+RatioInterval ratioAgainst(const std::string& dir, const Job& ours, const Job& other) {
+    const bool reference = stringAt(objectAt(ours.report, "measurement"), "oracle", "") == "reference";
+    const auto errors = [&](const Job& j) {
+        return readFrameErrors((fs::path(dir) / j.runDir).string(), reference);
+    };
+    return pairedBootstrapRatio(errors(ours), errors(other));
+}
+
 void writeBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
                         const std::vector<std::string>& replays, int fullLengthBudget,
                         const std::string& dir) {
@@ -791,7 +802,8 @@ void writeBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
     out << "## Budget: error against cost\n\n";
     out << "Each cell: mean error / ambience ms per frame (median), default settings at each "
            "capture budget (faces per frame). Ours / best other = our mean error over the "
-           "lowest of the other methods' at that budget. Runs above "
+           "lowest of the other methods' at that budget, over the frames both measured, with "
+           "its paired bootstrap 95 % interval. Runs above "
         << fullLengthBudget
         << " faces per frame play the first (" << fullLengthBudget
         << " / faces) of each replay, every method alike.\n\n";
@@ -803,7 +815,8 @@ void writeBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
         out << "\n";
         for (int b : budgets) {
             out << "| " << b << " |";
-            double ours = std::nan(""), best = std::nan("");
+            double best = std::nan("");
+            const Job *oursJob = nullptr, *bestJob = nullptr;
             for (const auto& m : methods) {
                 const Job* found = nullptr;
                 for (const Job& j : jobs)
@@ -816,10 +829,12 @@ void writeBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
                 }
                 const double e = errorOf(*found);
                 out << " " << fmt(e, "%.4f") << " / " << fmt(msOf(*found), "%.2f") << " |";
-                if (m == "volume") ours = e;
-                else if (std::isfinite(e) && !(e >= best)) best = e;
+                if (m == "volume") oursJob = found;
+                else if (std::isfinite(e) && !(e >= best)) best = e, bestJob = found;
             }
-            out << " **" << fmt(ours / best, "%.3g") << "** |\n";
+            out << " **"
+                << (oursJob && bestJob ? formatRatio(ratioAgainst(dir, *oursJob, *bestJob)) : "—")
+                << "** |\n";
         }
         // Runs above the full-length budget play a share of the replay: every run is also
         // measured over the frames all of them play, and the Pareto front is taken on that.
@@ -939,6 +954,7 @@ void writeSummary(const std::vector<Job>& jobs, const std::string& path,
                   const std::string& commandLine, const std::string& timing,
                   const std::string& oracle, int idealBudget, int fullLengthBudget) {
     std::ostringstream out;
+    const std::string dir = fs::path(path).parent_path().string();
     out << "# Ambience bench: speed against error\n\n";
     out << "Command: `" << commandLine << "`  \n";
     out << timing << " **Oracle: " << oracle
@@ -966,7 +982,8 @@ void writeSummary(const std::vector<Job>& jobs, const std::string& path,
                "p99 pop moving | max pop moving | ambience ms (median) | faces/s | "
                "probes (max) | kB (max) |\n";
         out << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
-        double ours = std::nan(""), grid = std::nan("");
+        const Job* ours = nullptr;
+        std::vector<const Job*> others;
         for (const Job& j : jobs) {
             if (j.replay.name != replay) continue;
             if (!j.ok) {
@@ -977,8 +994,8 @@ void writeSummary(const std::vector<Job>& jobs, const std::string& path,
             const json& r = j.report;
             const json m = objectAt(r, "measurement");
             const double e = number(m, {"error", "mean"});
-            if (j.point.label == "default" && j.method == "volume") ours = e;
-            if (j.point.label == "default" && j.method == "grid") grid = e;
+            if (j.point.label == "default" && j.method == "volume") ours = &j;
+            if (j.point.label == "default" && j.method != "volume") others.push_back(&j);
             out << "| " << (j.method == "volume" ? "**volume (ours)**" : j.method) << " | "
                 << j.point.label << " | " << fmt(e, "%.4f") << " | "
                 << fmt(number(m, {"error", "p95"}), "%.4f") << " | "
@@ -992,7 +1009,19 @@ void writeSummary(const std::vector<Job>& jobs, const std::string& path,
                 << fmt(number(r, {"ambience", "anchorsMax"}), "%.0f") << " | "
                 << fmt(number(r, {"ambience", "bytesMax"}) / 1024.0, "%.1f") << " |\n";
         }
-        out << "\nOur mean error / scrolling grid's: **" << fmt(ours / grid, "%.3g") << "**\n\n";
+        if (ours && !others.empty()) {
+            out << "\nOur mean error / each other method's (default points), over the frames "
+                   "both measured, with the paired bootstrap 95 % interval (blocks of "
+                   "consecutive measured frames resampled; app/bench/BenchStats.h):";
+            for (const Job* other : others) {
+                const RatioInterval r = ratioAgainst(dir, *ours, *other);
+                out << (other == others.front() ? " " : "; ") << other->method << " **"
+                    << formatRatio(r) << "**" << (r.excludesOne() ? "" : " (interval holds 1)");
+            }
+            out << " (" << ratioAgainst(dir, *ours, *others.front()).frames << " frames).\n\n";
+        } else {
+            out << "\n";
+        }
     }
     // Stress: every replay (the fast flight with its cut, the time-lapse, the far flight), for
     // every method: finite error, memory held, teleports and rejected probes.

@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <set>
@@ -205,6 +206,17 @@ TEST(BenchCommand, BudgetsAddPointsAndTheirSection) {
     EXPECT_NE(summary.find("## Budget: error against cost"), std::string::npos);
     EXPECT_NE(summary.find("| 2 |"), std::string::npos);
     EXPECT_NE(summary.find("Pareto front"), std::string::npos);
+    // Every ours-against-other ratio carries its paired bootstrap interval: "r [lo, hi]", with
+    // lo <= r <= hi (app/bench/BenchStats.h).
+    const auto ratio = summary.find("constant **");
+    ASSERT_NE(ratio, std::string::npos) << summary;
+    double r0 = 0, lo = 0, hi = 0;
+    ASSERT_EQ(std::sscanf(summary.c_str() + ratio, "constant **%lf [%lf, %lf]", &r0, &lo, &hi), 3)
+        << summary.substr(ratio, 60);
+    EXPECT_LE(lo, r0);
+    EXPECT_LE(r0, hi);
+    EXPECT_LT(hi, 1.0);  // the volume is far better than a constant ambient
+    EXPECT_NE(summary.find("paired bootstrap 95 % interval"), std::string::npos);
 }
 
 TEST(BenchCommand, BadInputIsOneLineAndExitCode2) {
