@@ -230,6 +230,30 @@ const ReferenceSample& ErrorMeter::reference(int frameIndex, const glm::dvec3& p
     return referenceCache_.emplace(key, std::move(sample)).first->second;
 }
 
+double ErrorMeter::drawnTerrainError(int index, double timeOfDay_h, const glm::dvec3& camera_m,
+                                     const Witness& w, const AmbienceMethod& method,
+                                     GroundCover& cover) {
+    const DrawnPatch p = environment_.drawnPatch(w.x_m, w.z_m, camera_m);
+    cover = p.cover;
+    if (!(p.size_m > 0.0) || p.cover == GroundCover::Hidden) return std::nan("");
+    // The four corners as the draw asks them (MethodAmbient::cornerIrradianceBatch: the corner
+    // kShadingHeight_m up, its normal, the patch's size for the near field's patch mean).
+    std::array<glm::dvec3, 4> at;
+    std::array<double, 4> patch;
+    std::array<glm::vec3, 4> e;
+    for (std::size_t c = 0; c < 4; ++c) {
+        at[c] = p.corner_m[c] + glm::dvec3(0.0, kShadingHeight_m, 0.0);
+        patch[c] = p.size_m;
+    }
+    method.cornerIrradianceAtPoints(4, at.data(), p.cornerNormal.data(), e.data(), patch.data());
+    const double u = (w.x_m - p.x0_m) / p.size_m, v = (w.z_m - p.z0_m) / p.size_m;
+    const glm::dvec3 drawn = glm::dvec3(e[0]) * ((1.0 - u) * (1.0 - v)) +
+                             glm::dvec3(e[1]) * (u * (1.0 - v)) +
+                             glm::dvec3(e[2]) * ((1.0 - u) * v) + glm::dvec3(e[3]) * (u * v);
+    return irradianceRelativeError(
+        drawn, surfaceReference(index, p.surface_m, p.surfaceNormal, timeOfDay_h));
+}
+
 void ErrorMeter::referenceFrame(int index, double timeOfDay_h, const glm::dvec3& camera_m,
                                 const std::vector<Witness>& witnesses,
                                 const std::vector<ShRgb>& oracles, const AmbienceMethod& method,
@@ -257,6 +281,7 @@ void ErrorMeter::referenceFrame(int index, double timeOfDay_h, const glm::dvec3&
         const ReferenceSample& ref = reference(index, r.position_m, timeOfDay_h);
         r.terms = budgetTerms(ref, oracles[i], ideal(w.x_m, w.z_m),
                               appliedAt(method, w, r.position_m), rule_);
+        r.drawnError = drawnTerrainError(index, timeOfDay_h, camera_m, w, method, r.cover);
         referenceWitnesses_.push_back(r);
     }
     const ReferenceSettings& rs = referenceSettings_;
@@ -291,25 +316,49 @@ void ErrorMeter::screenFrame(int frameIndex, double timeOfDay_h,
                              const std::vector<ScreenWitness>& pixels) {
     if (!reference_) throw InputError("--screen-witnesses", "needs the reference oracle");
     for (const ScreenWitness& p : pixels) {
-        const glm::dvec3 n = glm::normalize(p.normal);
-        const glm::dvec3 probe = p.position_m + kScreenProbeOffset_m * n;
-        const Key key{frameIndex, probe.x, probe.z, probe.y};
-        auto it = screenCache_.find(key);
-        if (it == screenCache_.end()) {
-            const auto t0 = std::chrono::steady_clock::now();
-            const glm::dvec3 e = referenceIrradianceAt(
-                reference_->faceSize(), reference_->captureAll(probe, timeOfDay_h),
-                settings_.sunThreshold, n);
-            it = screenCache_.emplace(key, ScreenEntry{glm::vec3(n), glm::vec3(e)}).first;
-            reference_s_ += secondsSince(t0);
-            ++referenceCaptures_;
-        } else {
-            ++referenceHits_;
-        }
         screenResults_.push_back(
             {frameIndex, p.kind,
-             irradianceRelativeError(p.applied, glm::dvec3(it->second.irradiance))});
+             irradianceRelativeError(
+                 p.applied, surfaceReference(frameIndex, p.position_m, p.normal, timeOfDay_h))});
     }
+}
+
+glm::dvec3 ErrorMeter::surfaceReference(int frameIndex, const glm::dvec3& surface_m,
+                                        const glm::dvec3& normal, double timeOfDay_h) {
+    const glm::dvec3 n = glm::normalize(normal);
+    const glm::dvec3 probe = surface_m + kScreenProbeOffset_m * n;
+    const Key key{frameIndex, probe.x, probe.z, probe.y};
+    auto it = screenCache_.find(key);
+    if (it == screenCache_.end()) {
+        const auto t0 = std::chrono::steady_clock::now();
+        const glm::dvec3 e =
+            referenceIrradianceAt(reference_->faceSize(), reference_->captureAll(probe, timeOfDay_h),
+                                  settings_.sunThreshold, n);
+        it = screenCache_.emplace(key, ScreenEntry{glm::vec3(n), glm::vec3(e)}).first;
+        reference_s_ += secondsSince(t0);
+        ++referenceCaptures_;
+    } else {
+        ++referenceHits_;
+    }
+    return glm::dvec3(it->second.irradiance);
+}
+
+std::vector<double> ErrorMeter::drawnErrors(int ring, int underCrown) const {
+    std::vector<double> out;
+    for (const ReferenceWitness& r : referenceWitnesses_) {
+        const int crown = r.cover == GroundCover::UnderCrown ? 1 : 0;
+        if (r.ring >= 0 && (ring < 0 || r.ring == ring) && std::isfinite(r.drawnError) &&
+            (underCrown < 0 || underCrown == crown))
+            out.push_back(r.drawnError);
+    }
+    return out;
+}
+
+std::size_t ErrorMeter::hiddenWitnesses() const {
+    std::size_t n = 0;
+    for (const ReferenceWitness& r : referenceWitnesses_)
+        n += r.ring >= 0 && r.cover == GroundCover::Hidden;
+    return n;
 }
 
 std::vector<double> ErrorMeter::screenErrors(int kind) const {

@@ -136,6 +136,15 @@ struct ReferenceWitness {
     ObjectKind object = ObjectKind::Car;
     glm::dvec3 position_m{0.0};  // where the reference and the coarse capture look from
     BudgetTerms terms;
+    // A terrain witness as the screen shows it (NaN when not taken: objects, or no patch known):
+    // the ambient the draw applies at the ground point, read as the draw reads it (the
+    // corners of the terrain patch drawn there, each at its point and normal through
+    // cornerIrradianceAtPoints, interpolated bilinearly), against the reference irradiance at
+    // that surface point and its normal: |E_drawn(n) - E_ref(n)| / |E_ref(n)|, luminance-weighted
+    // channels, E_ref from a reference capture kScreenProbeOffset_m along the normal.
+    // A witness on ground a bush, a rock or a trunk stands on is not seen: it gets none.
+    double drawnError = std::numeric_limits<double>::quiet_NaN();
+    GroundCover cover = GroundCover::Open;  // at the witness' ground point
 };
 
 // A screen witness (opt-in, on reference frames): a random pixel of the rendered main view, its
@@ -199,8 +208,18 @@ class ErrorMeter {
     // True when the latest frame() was a reference frame (screen witnesses are taken then).
     bool referenceFrameNow() const { return referenceNow_; }
     void screenFrame(int frameIndex, double timeOfDay_h, const std::vector<ScreenWitness>& pixels);
+    // E_ref at a surface point and normal (a capture kScreenProbeOffset_m along the normal),
+    // cached with the screen witnesses' references.
+    glm::dvec3 surfaceReference(int frameIndex, const glm::dvec3& surface_m,
+                                const glm::dvec3& normal, double timeOfDay_h);
     const std::vector<ScreenResult>& screenResults() const { return screenResults_; }
     std::vector<double> screenErrors(int kind = 0) const;  // kind 0: every surface
+    // The terrain witnesses' errors at the drawn normal (ReferenceWitness::drawnError), of one
+    // ring or (ring < 0) all; witnesses without one are left out.
+    // `underCrown` 0: open ground only, 1: under crowns only, -1: both.
+    std::vector<double> drawnErrors(int ring = -1, int underCrown = -1) const;
+    // Terrain witnesses on hidden ground (GroundCover::Hidden), left out of drawnErrors.
+    std::size_t hiddenWitnesses() const;
     static constexpr double kScreenProbeOffset_m = 0.25;
     double referenceSeconds() const { return reference_s_; }
     std::int64_t referenceCaptures() const { return referenceCaptures_; }
@@ -261,6 +280,8 @@ class ErrorMeter {
     double movingX_m_ = 0.0, movingZ_m_ = 0.0;
     int movingSeen_ = 0;
     ShRgb oracleAt(int frameIndex, const glm::dvec3& position_m, double timeOfDay_h);
+    double drawnTerrainError(int index, double timeOfDay_h, const glm::dvec3& camera_m,
+                             const Witness& w, const AmbienceMethod& method, GroundCover& cover);
     void referenceFrame(int index, double timeOfDay_h, const glm::dvec3& camera_m,
                         const std::vector<Witness>& witnesses, const std::vector<ShRgb>& oracles,
                         const AmbienceMethod& method, int measuredIndex);

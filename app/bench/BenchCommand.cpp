@@ -615,6 +615,12 @@ const std::vector<std::string> kColumns = {"replay",
                                            "screen_road_error_mean",
                                            "screen_object_error_mean",
                                            "screen_witnesses",
+                                           "drawn_error_mean",
+                                           "drawn_error_p95",
+                                           "drawn_witnesses",
+                                           "drawn_under_crown_error_mean",
+                                           "drawn_under_crown_witnesses",
+                                           "drawn_hidden_witnesses",
                                            "reference_s",
                                            "wall_s",
                                            "run_dir"};
@@ -671,6 +677,14 @@ std::map<std::string, std::string> resultRow(const Job& job) {
         for (const char* kind : {"car", "tree_base", "tree_crown"})
             put(std::string(kind) + "_error_mean", number(ref, {"objects", kind, "error", "mean"}));
         put("reference_s", number(ref, {"reference_s"}));
+        if (number(ref, {"drawn", "error", "count"}) > 0) {
+            put("drawn_error_mean", number(ref, {"drawn", "error", "mean"}));
+            put("drawn_error_p95", number(ref, {"drawn", "error", "p95"}));
+            put("drawn_witnesses", number(ref, {"drawn", "error", "count"}));
+            put("drawn_under_crown_error_mean", number(ref, {"drawn", "underCrown", "mean"}));
+            put("drawn_under_crown_witnesses", number(ref, {"drawn", "underCrown", "count"}));
+            put("drawn_hidden_witnesses", number(ref, {"drawn", "hidden"}));
+        }
         if (number(ref, {"screen", "error", "count"}) > 0) {
             put("screen_error_mean", number(ref, {"screen", "error", "mean"}));
             put("screen_witnesses", number(ref, {"screen", "error", "count"}));
@@ -774,10 +788,13 @@ double errorUpTo(const std::string& dir, const Job& j, int lastFrame) {
 
 // Our run against another of the same replay: the ratio of mean errors over the frames both
 // measured, with its paired bootstrap 95 % interval (BenchStats.h).
-RatioInterval ratioAgainst(const std::string& dir, const Job& ours, const Job& other) {
-    const bool reference = stringAt(objectAt(ours.report, "measurement"), "oracle", "") == "reference";
+// With `drawn`, the terrain witnesses' errors at the drawn normal (reference runs only).
+RatioInterval ratioAgainst(const std::string& dir, const Job& ours, const Job& other,
+                           bool drawn = false) {
+    const bool reference =
+        stringAt(objectAt(ours.report, "measurement"), "oracle", "") == "reference";
     const auto errors = [&](const Job& j) {
-        return readFrameErrors((fs::path(dir) / j.runDir).string(), reference);
+        return readFrameErrors((fs::path(dir) / j.runDir).string(), reference, drawn);
     };
     return pairedBootstrapRatio(errors(ours), errors(other));
 }
@@ -978,10 +995,21 @@ void writeSummary(const std::vector<Job>& jobs, const std::string& path,
     // Headline: default point, per replay.
     for (const std::string& replay : replays) {
         out << "## " << replay << "\n\n";
-        out << "| method | point | mean error | p95 error | max error | p99 pop | max pop | "
+        const bool drawn = oracle == "reference";
+        if (drawn && replay == replays.front())
+            out << "Error at the drawn normal: the terrain witnesses as the screen shows them, "
+                   "the ambient the draw applies there (the drawn patch's corners, each at its "
+                   "normal, interpolated across the patch) against the reference irradiance at "
+                   "that surface point and its normal (lighting/Metrics.h ReferenceWitness); "
+                   "witnesses under tree crowns are in the mean and also shown alone; those on "
+                   "ground a bush, rock or trunk hides are left out. Sphere: the same "
+                   "witnesses' error over the whole sphere of normals.\n\n";
+        out << "| method | point | " << (drawn ? "error at the drawn normal (terrain) | " : "")
+            << (drawn ? "sphere " : "")
+            << "mean error | p95 error | max error | p99 pop | max pop | "
                "p99 pop moving | max pop moving | ambience ms (median) | faces/s | "
                "probes (max) | kB (max) |\n";
-        out << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+        out << (drawn ? "|---" : "") << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
         const Job* ours = nullptr;
         std::vector<const Job*> others;
         for (const Job& j : jobs) {
@@ -997,7 +1025,17 @@ void writeSummary(const std::vector<Job>& jobs, const std::string& path,
             if (j.point.label == "default" && j.method == "volume") ours = &j;
             if (j.point.label == "default" && j.method != "volume") others.push_back(&j);
             out << "| " << (j.method == "volume" ? "**volume (ours)**" : j.method) << " | "
-                << j.point.label << " | " << fmt(e, "%.4f") << " | "
+                << j.point.label << " | ";
+            if (drawn) {
+                const auto d = [&](const char* a, const char* b) {
+                    return number(m, {"reference", "drawn", a, b});
+                };
+                out << "**" << fmt(d("error", "mean"), "%.4f") << "** (under crowns "
+                    << fmt(d("underCrown", "mean"), "%.3f") << ", "
+                    << fmt(d("underCrown", "count"), "%.0f") << " of "
+                    << fmt(d("error", "count"), "%.0f") << ") | ";
+            }
+            out << fmt(e, "%.4f") << " | "
                 << fmt(number(m, {"error", "p95"}), "%.4f") << " | "
                 << fmt(number(m, {"error", "max"}), "%.3f") << " | "
                 << fmt(number(m, {"pop", "p99"}), "%.5f") << " | "
@@ -1010,15 +1048,24 @@ void writeSummary(const std::vector<Job>& jobs, const std::string& path,
                 << fmt(number(r, {"ambience", "bytesMax"}) / 1024.0, "%.1f") << " |\n";
         }
         if (ours && !others.empty()) {
-            out << "\nOur mean error / each other method's (default points), over the frames "
-                   "both measured, with the paired bootstrap 95 % interval (blocks of "
-                   "consecutive measured frames resampled; app/bench/BenchStats.h):";
-            for (const Job* other : others) {
-                const RatioInterval r = ratioAgainst(dir, *ours, *other);
-                out << (other == others.front() ? " " : "; ") << other->method << " **"
-                    << formatRatio(r) << "**" << (r.excludesOne() ? "" : " (interval holds 1)");
+            // The drawn normal's ratio first (the headline) with the reference, then the
+            // sphere's.
+            for (const bool atDrawn : drawn ? std::vector<bool>{true, false}
+                                            : std::vector<bool>{false}) {
+                out << "\nOur mean error" << (atDrawn ? " at the drawn normal" : drawn ? " over the sphere of normals" : "")
+                    << " / each other method's (default points), over the frames both "
+                       "measured, with the paired bootstrap 95 % interval (blocks of "
+                       "consecutive measured frames resampled; app/bench/BenchStats.h):";
+                int frames = 0;
+                for (const Job* other : others) {
+                    const RatioInterval r = ratioAgainst(dir, *ours, *other, atDrawn);
+                    frames = std::max(frames, r.frames);
+                    out << (other == others.front() ? " " : "; ") << other->method << " **"
+                        << formatRatio(r) << "**" << (r.excludesOne() ? "" : " (interval holds 1)");
+                }
+                out << " (" << frames << " frames).\n";
             }
-            out << " (" << ratioAgainst(dir, *ours, *others.front()).frames << " frames).\n\n";
+            out << "\n";
         } else {
             out << "\n";
         }

@@ -22,7 +22,7 @@ double FrameErrors::mean() const {
     return count ? sum / count : std::nan("");
 }
 
-FrameErrors readFrameErrors(const std::string& runDir, bool reference) {
+FrameErrors readFrameErrors(const std::string& runDir, bool reference, bool drawn) {
     FrameErrors out;
     std::string text;
     try {
@@ -33,19 +33,29 @@ FrameErrors readFrameErrors(const std::string& runDir, bool reference) {
     }
     std::stringstream in(text);
     std::string line;
-    std::getline(in, line);  // the header
+    std::getline(in, line);  // the header: the error's column by name
+    std::size_t column = reference ? 5 : 4;
+    {
+        std::stringstream cells(line);
+        std::size_t i = 0;
+        bool found = !drawn;
+        for (std::string cell; std::getline(cells, cell, ','); ++i)
+            if (drawn && cell == "drawn") column = i, found = true;
+        if (!found) return out;
+    }
     while (std::getline(in, line)) {
         std::vector<std::string> f;
         std::stringstream cells(line);
         for (std::string cell; std::getline(cells, cell, ',');) f.push_back(cell);
-        if (f.size() < 6) continue;
+        if (f.size() <= column) continue;
         // reference.csv: frame,witness,x,y,z,total,...; measure.csv: frame,...,error_mean (4).
         if (reference && f[1].rfind("ring_", 0) != 0) continue;  // objects are not headline
         char* end = nullptr;
         const long frame = std::strtol(f[0].c_str(), &end, 10);
         if (end == f[0].c_str() || frame < 0 || frame > 100000000) continue;
-        const double e = std::strtod(f[reference ? 5 : 4].c_str(), nullptr);
-        if (std::isfinite(e)) out.add(int(frame), e);
+        char* numberEnd = nullptr;
+        const double e = std::strtod(f[column].c_str(), &numberEnd);
+        if (numberEnd != f[column].c_str() && std::isfinite(e)) out.add(int(frame), e);
     }
     return out;
 }

@@ -32,7 +32,9 @@ struct FrameErrors {
 // the reference oracle, else measure.csv's per-frame mean error (every measured frame has the
 // same witnesses). Read through the bounded, link-refusing reader; a file that is missing or
 // unreadable gives no frames.
-FrameErrors readFrameErrors(const std::string& runDir, bool reference);
+// With `drawn`, reference.csv's "drawn" column instead (the terrain witnesses at the drawn
+// normal; witnesses without one are left out).
+FrameErrors readFrameErrors(const std::string& runDir, bool reference, bool drawn = false);
 
 struct RatioInterval {
     double ratio = 0.0;         // mean(ours) / mean(other) over the frames both measured

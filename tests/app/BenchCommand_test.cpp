@@ -124,6 +124,50 @@ TEST(RunMeasure, OracleCacheIsKeyedByTheReplaysBytesAndTheCode) {
     EXPECT_NE(readJson(dir / "oracle.json")["signature"].get<std::string>(), signature);
 }
 
+// With the reference, every terrain witness is also graded as the screen shows it: the drawn
+// patch's corners at their normals against the reference at the surface and its normal. Each
+// ring witness gets a finite error unless the ground it stands on is hidden (a bush, a rock,
+// a trunk); those under crowns are counted apart; reference.csv carries the per-witness value.
+TEST(RunMeasure, ReferenceGradesTheDrawnNormal) {
+    const fs::path dir = scratchDir("run-drawn");
+    const auto r = runAmbience(
+        "run --no-frames --max-frames 21 --measure-every 10 --oracle-kind reference "
+        "--reference-every 1 --no-ideal-volume --out " + (dir / "a").string());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const auto ref = readJson(dir / "a" / "report.json")["measurement"]["reference"];
+    const auto drawn = ref["drawn"];
+    const int graded = drawn["error"]["count"].get<int>();
+    const int hidden = drawn["hidden"].get<int>();
+    EXPECT_GT(graded, 0);
+    EXPECT_LE(drawn["underCrown"]["count"].get<int>(), graded);
+    EXPECT_EQ(drawn["open"]["count"].get<int>() + drawn["underCrown"]["count"].get<int>(), graded);
+    const double mean = drawn["error"]["mean"].get<double>();
+    EXPECT_TRUE(std::isfinite(mean) && mean > 0.0 && mean < 5.0) << mean;
+    // reference.csv: one row per witness; the terrain rows' drawn column filled unless hidden.
+    std::ifstream csv(dir / "a" / "reference.csv");
+    std::string line;
+    std::getline(csv, line);
+    EXPECT_EQ(line.substr(line.size() - 12), ",drawn,cover");
+    int terrain = 0, filled = 0, hiddenRows = 0;
+    while (std::getline(csv, line)) {
+        if (line.find(",ring_") == std::string::npos) continue;
+        ++terrain;
+        const std::string cover = line.substr(line.rfind(',') + 1);
+        const std::string rest = line.substr(0, line.rfind(','));
+        const std::string value = rest.substr(rest.rfind(',') + 1);
+        if (cover == "hidden") {
+            ++hiddenRows;
+            EXPECT_TRUE(value.empty()) << line;
+        } else {
+            EXPECT_TRUE(cover == "open" || cover == "crown") << line;
+            filled += !value.empty();
+        }
+    }
+    EXPECT_EQ(filled, graded);
+    EXPECT_EQ(hiddenRows, hidden);
+    EXPECT_EQ(terrain, graded + hidden);  // every terrain witness has a drawn patch
+}
+
 // Stress, a million metres from the origin: the volume captures, stores anchors and measures a
 // finite error; nothing is rejected (float positions would have collapsed the lattice there).
 TEST(RunMeasure, FarFromTheOriginStaysFinite) {
