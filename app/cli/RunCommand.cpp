@@ -329,13 +329,14 @@ RunMeasurement startMeasurement(const RunOptions& o, const RunPlan& plan, const 
     // The error measurement: the oracle's captures use the same capture as the method.
     MeasureSettings measureSettings;
     measureSettings.every = o.measureEvery;
-    measureSettings.sunThreshold = plan.volumeSettings.capture.sunThreshold;
-    // The oracle depends on the replay, the frames measured and the capture settings only.
+    // The oracle depends on the replay, the frames measured and the capture settings only (the
+    // sun's texel left out by its direction: "sun=texel", which oracles saved while a luminance
+    // threshold left it out do not match).
     m.oracleSignature =
         fs::path(o.replay).filename().string() + " stride=" + std::to_string(o.stride) +
         " every=" + std::to_string(o.measureEvery) + " face=" + std::to_string(o.faceSize) +
-        " sunThreshold=" + std::to_string(measureSettings.sunThreshold) +
-        " frames=" + std::to_string(o.maxFrames) + " shadows=" + describeShadows(plan.shadows) +
+        " sun=texel frames=" + std::to_string(o.maxFrames) +
+        " shadows=" + describeShadows(plan.shadows) +
         (o.loops > 1 ? " loops=" + std::to_string(o.loops) : std::string());
     if (o.measureEvery > 0) {
         m.meter = std::make_unique<ErrorMeter>(stages.cubeCapture(), stages.environment(),
