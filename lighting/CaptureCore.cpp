@@ -65,12 +65,14 @@ FacesResult captureProbeFaces(CubeCapture& capture, CubeMapProjector& projector,
     AMB_CHECK(cube.size() == faceFloats * kCubeFaces);
 
     t0 = Clock::now();
+    // The sun's texel is left out by the direction the capture put the disc at (SunTexel.h).
+    const std::optional<glm::dvec3> sun = capture.sunDirection(timeOfDay_h);
     for (int f = facesDone; f < facesDone + count; ++f) {
         const float* face = cube.data() + faceFloats * std::size_t(f);
         for (std::size_t t = 0; t < faceFloats && !bad; ++t) {
             if (!(face[t] >= 0.0f) || !std::isfinite(face[t])) bad = true;
         }
-        projector.addFace(f, face);
+        projector.addFace(f, face, sun);
     }
     result.project_s = secondsSince(t0);
     result.faces = count;
@@ -106,9 +108,7 @@ CaptureCore::CaptureCore(CubeCapture& capture, const ProbeEnvironment& environme
                          const CaptureSettings& settings)
     : capture_(capture), environment_(environment), settings_(settings) {
     AMB_CHECK(settings.facesPerFrame >= 1 && settings.fallbackFaceSize >= 1);
-    CubeMapProjector::Options options;
-    options.sunThreshold = settings.sunThreshold;
-    projector_ = std::make_unique<CubeMapProjector>(capture_.faceSize(), options);
+    projector_ = std::make_unique<CubeMapProjector>(capture_.faceSize());
     timeRate_hPerS_ = settings.defaultTimeRate_hPerS;
 }
 

@@ -23,7 +23,8 @@
 //     would explain it.
 //   - budget: facesPerFrame faces of CubeCapture::faceSize() per frame; a probe is the six faces
 //     of one position (one probe per 6 frames at one face per frame), each projected as it
-//     arrives (CubeMapProjector, the sun disc above sunThreshold taken out).
+//     arrives (CubeMapProjector), the sun's texel left out by the direction the capture put
+//     the disc at (CubeCapture::sunDirection, lighting/SunTexel.h) at every face size.
 //   - rejection: a probe with any texel that is NaN, infinite or negative, or with a coefficient
 //     that is not finite or above AnchorStore::kMaxCoefficient in float, is counted in
 //     rejectedProbes and never handed to the method.
@@ -63,8 +64,9 @@ inline constexpr double kMaxCameraSpeed_mps = 1.0e4;
 // Shared by every capturing method (the JSON keys of both settings files, at the top level).
 struct CaptureSettings {
     int facesPerFrame = 1;  // capture budget (the thesis' one face per frame, 9.1)
-    // Texels brighter (luminance radiance [W sr^-1 m^-2]) are the sun disc: taken out of the SH
-    // (the renderer lights the sun directly). The JSON key is "sunThreshold".
+    // Retired: the sun is left out of the SH by its direction (lighting/SunTexel.h), not by a
+    // luminance threshold (no capture texel but the sun's comes near one). Still read (JSON key
+    // "sunThreshold") so that settings files naming it stay valid; no projection uses it.
     double sunThreshold = kSunThreshold_Wpsrm2;
     double maxAside_m = 4.0;  // how far ProbeEnvironment::placeProbe may move a probe [m]
     double defaultTimeRate_hPerS = 1.0 / 3600.0;  // before the rate is measured (real time)

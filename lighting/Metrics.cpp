@@ -130,17 +130,15 @@ std::vector<Witness> witnessPoints(const MeasureSettings& settings, double camer
 
 ShRgb oracleSh(CubeCapture& capture, const ProbeEnvironment& environment,
                const MeasureSettings& settings, double x_m, double z_m, double timeOfDay_h) {
-    return oracleShAt(capture, settings, environment.placeProbe(x_m, z_m, settings.maxAside_m),
-                      timeOfDay_h);
+    return oracleShAt(capture, environment.placeProbe(x_m, z_m, settings.maxAside_m), timeOfDay_h);
 }
 
-ShRgb oracleShAt(CubeCapture& capture, const MeasureSettings& settings,
-                 const glm::dvec3& position_m, double timeOfDay_h) {
-    // Bad texels are zeroed and counted by the projection; the coefficients stay finite.
+ShRgb oracleShAt(CubeCapture& capture, const glm::dvec3& position_m, double timeOfDay_h) {
+    // Bad texels are zeroed and counted by the projection; the coefficients stay finite. The
+    // sun's texel is left out by its direction, as the methods leave it out (CaptureCore).
     const std::vector<float> cube = capture.captureAll(position_m, timeOfDay_h);
-    CubeMapProjector::Options options;
-    options.sunThreshold = settings.sunThreshold;
-    return toFloat(projectCubeMap(capture.faceSize(), cube, options).sh);
+    return toFloat(
+        projectCubeMap(capture.faceSize(), cube, {}, capture.sunDirection(timeOfDay_h)).sh);
 }
 
 OracleKind parseOracleKind(const std::string& text, const std::string& where) {
@@ -190,7 +188,7 @@ ShRgb ErrorMeter::cachedOracle(const Key& key, double timeOfDay_h,
         return it->second;
     }
     const auto t0 = std::chrono::steady_clock::now();
-    const ShRgb sh = oracleShAt(capture_, settings_, position(), timeOfDay_h);
+    const ShRgb sh = oracleShAt(capture_, position(), timeOfDay_h);
     oracle_s_ += secondsSince(t0);
     ++oracleCaptures_;
     oracleCache_.emplace(key, sh);
@@ -224,7 +222,7 @@ const ReferenceSample& ErrorMeter::reference(int frameIndex, const glm::dvec3& p
     const auto t0 = std::chrono::steady_clock::now();
     const std::vector<float> cube = reference_->captureAll(position_m, timeOfDay_h);
     ReferenceSample sample =
-        referenceSample(reference_->faceSize(), cube, settings_.sunThreshold, rule_);
+        referenceSample(reference_->faceSize(), cube, reference_->sunDirection(timeOfDay_h), rule_);
     reference_s_ += secondsSince(t0);
     ++referenceCaptures_;
     return referenceCache_.emplace(key, std::move(sample)).first->second;
@@ -333,7 +331,7 @@ glm::dvec3 ErrorMeter::surfaceReference(int frameIndex, const glm::dvec3& surfac
         const auto t0 = std::chrono::steady_clock::now();
         const glm::dvec3 e =
             referenceIrradianceAt(reference_->faceSize(), reference_->captureAll(probe, timeOfDay_h),
-                                  settings_.sunThreshold, n);
+                                  reference_->sunDirection(timeOfDay_h), n);
         it = screenCache_.emplace(key, ScreenEntry{glm::vec3(n), glm::vec3(e)}).first;
         reference_s_ += secondsSince(t0);
         ++referenceCaptures_;

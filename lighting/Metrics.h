@@ -38,8 +38,9 @@
 // [SECTION] Oracle
 //   A fresh capture at the exact point and time with the same capture settings: the probe placed
 //   as the volume places its probes (probeHeight above the ground, moved out of plants), six
-//   faces, projected with the same sun threshold. It does not depend on the method, so a run
-//   can save the oracle of a replay and other runs of the same replay read it back.
+//   faces, projected with the sun's texel left out by its direction as the methods leave it. It
+//   does not depend on the method, so a run can save the oracle of a replay and other runs of the
+//   same replay read it back.
 #pragma once
 
 #include <cstddef>
@@ -97,8 +98,8 @@ struct MeasureSettings {
     int popPoints = 3;              // the camera's ground point + popPoints - 1 ring-1 witnesses
     double cornerSpacing_m = 32.0;  // witnesses sit on this lattice (terrain patch corners)
     double maxAside_m = 4.0;        // oracle probe placement, as CaptureSettings::maxAside_m
-    // Luminance radiance [W sr^-1 m^-2] above which a texel is the sun disc, left out of the
-    // oracle as the methods leave it out (CaptureSettings::sunThreshold).
+    // Retired with CaptureSettings::sunThreshold: the oracles leave the sun's texel out by its
+    // direction (CubeCapture::sunDirection), as the methods do. Kept until its setters go.
     double sunThreshold = kSunThreshold_Wpsrm2;
     int rings() const { return int(ringRadii.size()); }  // ring 0 + ringRadii.size() - 1 bands
 };
@@ -120,8 +121,7 @@ ShRgb appliedAt(const AmbienceMethod& method, const Witness& w, const glm::dvec3
 ShRgb oracleSh(CubeCapture& capture, const ProbeEnvironment& environment,
                const MeasureSettings& settings, double x_m, double z_m, double timeOfDay_h);
 // The same for a capture at `position_m` itself (an object witness: not moved).
-ShRgb oracleShAt(CubeCapture& capture, const MeasureSettings& settings,
-                 const glm::dvec3& position_m, double timeOfDay_h);
+ShRgb oracleShAt(CubeCapture& capture, const glm::dvec3& position_m, double timeOfDay_h);
 
 // Which oracle the headline error (errors(), ringErrors()) is taken against.
 enum class OracleKind { Self, Reference };

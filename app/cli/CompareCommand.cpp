@@ -226,7 +226,7 @@ ReferenceGrid sampleReference(const CompareOptions& o, const Size& size, const W
             const glm::dvec3 probe = at + ErrorMeter::kScreenProbeOffset_m * n;
             const glm::dvec3 ref = referenceIrradianceAt(
                 o.referenceSize, reference.captureAll(probe, frame.rec.timeOfDay_h),
-                kSunThreshold_Wpsrm2, n);
+                reference.sunDirection(frame.rec.timeOfDay_h), n);
             const glm::dvec3 a(applied.rgba[4 * p], applied.rgba[4 * p + 1],
                                applied.rgba[4 * p + 2]);
             GridSample& s = samples[std::size_t(gy) * gw + gx];

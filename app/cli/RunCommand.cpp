@@ -359,16 +359,16 @@ RunMeasurement startMeasurement(const RunOptions& o, const RunPlan& plan, const 
     // The error measurement: the oracle's captures use the same capture as the method.
     MeasureSettings measureSettings;
     measureSettings.every = o.measureEvery;
-    measureSettings.sunThreshold = plan.volumeSettings.capture.sunThreshold;
     // The oracle depends on the replay (its world and path: the file's bytes), the frames
     // measured, the capture settings and the code that captures and projects (the sources'
     // hash, cmake/SourceHash.cmake): a cache made by other code or of another world is stale.
+    // The sun's texel is left out by its direction ("sun=texel").
     m.oracleSignature =
         fs::path(o.replay).filename().string() + " replay=" + replayHash(o.replay) +
         " code=" + AMBIENCE_SOURCE_HASH + " stride=" + std::to_string(o.stride) +
         " every=" + std::to_string(o.measureEvery) + " face=" + std::to_string(o.faceSize) +
-        " sunThreshold=" + std::to_string(measureSettings.sunThreshold) +
-        " frames=" + std::to_string(o.maxFrames) + " shadows=" + describeShadows(plan.shadows) +
+        " sun=texel frames=" + std::to_string(o.maxFrames) +
+        " shadows=" + describeShadows(plan.shadows) +
         (o.loops > 1 ? " loops=" + std::to_string(o.loops) : std::string());
     if (o.measureEvery > 0) {
         m.meter = std::make_unique<ErrorMeter>(stages.cubeCapture(), stages.environment(),
