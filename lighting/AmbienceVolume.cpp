@@ -8,13 +8,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <functional>
-#include <map>
 
-#include <nlohmann/json.hpp>
-
-#include "lighting/JsonFields.h"
 #include "lighting/ProbeEnvironment.h"
+#include "lighting/SettingsSchema.h"
 #include "world/Conventions.h"
 #include "world/Error.h"
 
@@ -40,62 +36,7 @@ ProbeKey probeKey(const LatticeKey& key) {
 
 AmbienceVolumeSettings ambienceSettingsFromJson(const std::string& jsonText,
                                                 const std::string& where) {
-    constexpr double kBig = 1e9;
-    AmbienceVolumeSettings s;
-    readJsonSettings(jsonText, where, [&](JsonFields& f) {
-        f.object("store", [&](JsonFields& o) {
-            AnchorStoreSettings& t = s.store;
-            o.number("coarsestSpacing_m", t.coarsestSpacing_m, kMinFinestSpacing_m, 1e6);
-            o.integer("levels", t.levels, 1, kMaxAnchorLevels);
-            o.number("blendTime_s", t.blendTime_s, 0.0, 3600.0);
-            o.number("allowedSunAngle_rad", t.allowedSunAngle_rad, 1e-6, kPi);
-            o.number("minLifetime_s", t.minLifetime_s, 1e-3, kBig);
-            o.number("maxLifetime_s", t.maxLifetime_s, 1e-3, kBig);
-            o.number("regenerateFraction", t.regenerateFraction, 0.0, 1.0);
-            o.integer("searchCells", t.searchCells, 1, 16);
-            o.integer("reachCells", t.reachCells, 1, 16);
-            o.integer("coarseReachCells", t.coarseReachCells, 1, 16);
-            o.number("finerWeight", t.finerWeight, 0.0, 1.0);
-            o.boolean("smoothInterpolation", t.smoothInterpolation);
-            o.boolean("bilinearFixedPoints", t.bilinearFixedPoints);
-        });
-        f.object("scheduler", [&](JsonFields& o) {
-            ProbeSchedulerSettings& t = s.scheduler;
-            o.number("velocityTimeConstant_s", t.velocityTimeConstant_s, 0.0, 60.0);
-            o.number("horizon_s", t.horizon_s, 0.0, 60.0);
-            o.number("pathStep_s", t.pathStep_s, 0.01, 60.0);
-            o.number("historyLength_s", t.historyLength_s, 0.0, 600.0);
-            o.number("roadSnap_m", t.roadSnap_m, 0.0, 1000.0);
-            o.number("roadAlignment", t.roadAlignment, 0.0, 1.0);
-            o.number("corridorCells", t.corridorCells, 0.01, 100.0);
-            o.integer("maxLevel", t.maxLevel, 0, kMaxAnchorLevels - 1);
-            o.number("finestRingCells", t.finestRingCells, 0.0, 100.0);
-            o.number("coarseRingCells", t.coarseRingCells, 0.0, 100.0);
-            o.integer("maxWiden", t.maxWiden, 0, 8);
-            o.number("minReachSpeed_mps", t.minReachSpeed_mps, 1e-3, 1e6);
-            o.number("gapBonus_s", t.gapBonus_s, -1e3, 1e3);
-            o.number("staleBias_s", t.staleBias_s, -1e3, 1e3);
-            o.number("adaptiveThreshold", t.adaptiveThreshold, 0.0, 10.0);
-        });
-        readCaptureSettings(f, s.capture);
-        f.number("nominalFrameTime_s", s.nominalFrameTime_s, 1e-4, 10.0);
-        f.number("asideFraction", s.asideFraction, 0.0, 10.0);
-        f.boolean("relightBySkyLevel", s.relightBySkyLevel);
-    });
-    if (s.store.minLifetime_s > s.store.maxLifetime_s) {
-        throw InputError(where, "'store': minLifetime_s exceeds maxLifetime_s");
-    }
-    // Every point a replay may hold (|x|, |z| up to 1e8 m) must have an integer key on the
-    // finest lattice (AnchorStore.h "Lattice").
-    // (With a relative margin, so that 4.05 m over 5 levels, 0.05 m up to rounding, passes.)
-    const double finest_m = finestSpacing_m(s.store);
-    if (!(finest_m >= kMinFinestSpacing_m * (1.0 - 1e-9))) {
-        throw InputError(where,
-                         "'store': the finest spacing coarsestSpacing_m / 3^(levels - 1) is " +
-                             jsonNumber(finest_m) + " m, below " + jsonNumber(kMinFinestSpacing_m) +
-                             " m (raise coarsestSpacing_m or lower levels)");
-    }
-    return s;
+    return volumeSettingsSchema().read(jsonText, where);
 }
 
 // ---- Construction, sky level ---------------------------------------------------------------------
@@ -113,29 +54,9 @@ AmbienceVolume::AmbienceVolume(CubeCapture& capture, const ProbeEnvironment& env
 
 AmbienceVolume::~AmbienceVolume() = default;
 
-namespace {
-
-bool sameNearField(const NearFieldSettings& a, const NearFieldSettings& b) {
-    return a.enabled == b.enabled && a.radius_m == b.radius_m &&
-           a.captureRadius_m == b.captureRadius_m && a.plants == b.plants &&
-           a.smallRadius_m == b.smallRadius_m && a.terrain == b.terrain &&
-           a.terrainRadius_m == b.terrainRadius_m && a.ground == b.ground &&
-           a.groundRadius_m == b.groundRadius_m && a.groundCell_m == b.groundCell_m &&
-           a.latticeRange_m == b.latticeRange_m &&
-           a.cacheEntries == b.cacheEntries &&
-           a.objectRange_m == b.objectRange_m && a.cornerRange_m == b.cornerRange_m &&
-           a.patchMean == b.patchMean && a.patchSamples == b.patchSamples &&
-           a.vertexDetail == b.vertexDetail;
-}
-
-}  // namespace
-
 bool AmbienceVolume::retunable(const AmbienceVolumeSettings& from,
                                const AmbienceVolumeSettings& to) {
-    return from.store.coarsestSpacing_m == to.store.coarsestSpacing_m &&
-           from.store.levels == to.store.levels &&
-           from.capture.sunThreshold == to.capture.sunThreshold &&
-           sameNearField(from.capture.nearField, to.capture.nearField);
+    return volumeSettingsSchema().sameWhereRebuilding(from, to);
 }
 
 void AmbienceVolume::retune(const AmbienceVolumeSettings& settings) {

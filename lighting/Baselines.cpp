@@ -19,12 +19,11 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <glm/geometric.hpp>
-#include <nlohmann/json.hpp>
 
 #include "lighting/AnchorField.h"
 #include "lighting/AnchorStore.h"
-#include "lighting/JsonFields.h"
 #include "lighting/ProbeEnvironment.h"
+#include "lighting/SettingsSchema.h"
 #include "world/Error.h"
 
 namespace amb {
@@ -39,9 +38,6 @@ double secondsSince(Clock::time_point t0) {
 // Cell coordinates beyond this are not formed (x / s must convert to int64 exactly; points that
 // far out get the fallback).
 constexpr double kMaxCell = 1.0e15;
-
-// objectRange_m / objectSize_m at most: 64 scans 129^2 objects per probe choice.
-constexpr double kMaxObjectRangeCells = 64.0;
 
 CellKey cellKey(const ProbeKey& key) {
     return {key.i, key.k};
@@ -110,25 +106,7 @@ bool bilinear(double x_m, double z_m, double spacing_m, const Lookup& lookup, Sh
 // ---- Settings from JSON -------------------------------------------------------------------------
 
 BaselineSettings baselineSettingsFromJson(const std::string& jsonText, const std::string& where) {
-    constexpr double kBig = 1e9;
-    BaselineSettings s;
-    readJsonSettings(jsonText, where, [&](JsonFields& f) {
-        readCaptureSettings(f, s.capture);
-        f.integer("gridSize", s.gridSize, 2, 256);
-        f.number("gridSpacing_m", s.gridSpacing_m, 1e-3, 1e6);
-        f.number("hysteresis", s.hysteresis, 0.0, 1.0);
-        f.number("cacheSpacing_m", s.cacheSpacing_m, 1e-3, 1e6);
-        f.number("unusedTimeout_s", s.unusedTimeout_s, 1e-3, kBig);
-        f.number("objectSize_m", s.objectSize_m, 1e-3, 1e6);
-        f.number("objectRange_m", s.objectRange_m, 0.0, 1e6);
-    });
-    // Each choice of the next object scans the (2 range / size + 1)^2 objects around the camera.
-    if (s.objectRange_m > kMaxObjectRangeCells * s.objectSize_m) {
-        throw InputError(
-            where, "'objectRange_m' may be at most " + std::to_string(int(kMaxObjectRangeCells)) +
-                       " x objectSize_m (each probe choice scans the objects in range)");
-    }
-    return s;
+    return baselineSettingsSchema().read(jsonText, where);
 }
 
 // ---- Shared machinery ---------------------------------------------------------------------------

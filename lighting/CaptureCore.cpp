@@ -5,14 +5,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <limits>
 
 #include <glm/geometric.hpp>
 
 #include "lighting/AnchorStore.h"
 #include "lighting/CubeCapture.h"
 #include "lighting/CubeMapProjector.h"
-#include "lighting/JsonFields.h"
 #include "lighting/ProbeEnvironment.h"
 #include "world/Error.h"
 
@@ -86,20 +84,6 @@ double dayDifference_h(double a, double b) {
     if (d > 12.0) d -= 24.0;
     if (d <= -12.0) d += 24.0;
     return d;
-}
-
-// ---- Settings -----------------------------------------------------------------------------------
-
-void readCaptureSettings(JsonFields& f, CaptureSettings& s) {
-    f.integer("facesPerFrame", s.facesPerFrame, 1, kMaxFacesPerFrame);
-    f.number("sunThreshold", s.sunThreshold, 0.0, std::numeric_limits<double>::infinity());
-    f.number("maxAside_m", s.maxAside_m, 0.0, 1000.0);
-    f.number("defaultTimeRate_hPerS", s.defaultTimeRate_hPerS, -10.0, 10.0);
-    f.number("timeJump_h", s.timeJump_h, 0.0, 12.0);
-    f.number("teleportDistance_m", s.teleportDistance_m, 0.0, 1e9);
-    f.integer("fallbackFaceSize", s.fallbackFaceSize, 1, 256);
-    f.number("fallbackRefresh_h", s.fallbackRefresh_h, 0.0, 24.0);
-    f.object("nearField", [&](JsonFields& inner) { readNearFieldSettings(inner, s.nearField); });
 }
 
 // ---- Clock --------------------------------------------------------------------------------------

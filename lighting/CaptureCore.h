@@ -52,7 +52,6 @@ namespace amb {
 
 class CubeCapture;
 class CubeMapProjector;
-class JsonFields;
 class ProbeEnvironment;
 
 // ---- Settings -------------------------------------------------------------------------------
@@ -83,8 +82,7 @@ struct CaptureSettings {
     }
 };
 
-// Reads the keys above from a settings object (JsonFields, lighting/JsonFields.h).
-void readCaptureSettings(JsonFields& fields, CaptureSettings& settings);
+// The JSON keys and their ranges: lighting/SettingsSchema.h.
 
 // ---- Probes ---------------------------------------------------------------------------------
 

@@ -12,7 +12,6 @@
 #include <tbb/task_arena.h>
 #include <glm/geometric.hpp>
 
-#include "lighting/JsonFields.h"
 #include "world/Conventions.h"
 #include "world/Error.h"
 #include "world/Sky.h"
@@ -20,26 +19,6 @@
 #include "world/World.h"
 
 namespace amb {
-
-void readNearFieldSettings(JsonFields& f, NearFieldSettings& s) {
-    f.boolean("enabled", s.enabled);
-    f.number("radius_m", s.radius_m, 0.0, 200.0);
-    f.number("captureRadius_m", s.captureRadius_m, 0.0, 200.0);
-    f.number("smallRadius_m", s.smallRadius_m, 0.0, 200.0);
-    f.boolean("plants", s.plants);
-    f.boolean("terrain", s.terrain);
-    f.number("terrainRadius_m", s.terrainRadius_m, 1.0, 500.0);
-    f.boolean("ground", s.ground);
-    f.number("groundRadius_m", s.groundRadius_m, 0.5, 500.0);
-    f.number("groundCell_m", s.groundCell_m, 0.25, 64.0);
-    f.number("latticeRange_m", s.latticeRange_m, 0.0, 1e6);
-    f.integer("cacheEntries", s.cacheEntries, 1, 1 << 24);
-    f.number("objectRange_m", s.objectRange_m, 0.0, 1e6);
-    f.number("cornerRange_m", s.cornerRange_m, 0.0, 1e6);
-    f.boolean("patchMean", s.patchMean);
-    f.integer("patchSamples", s.patchSamples, 1, 9);
-    f.boolean("vertexDetail", s.vertexDetail);
-}
 
 double rangeWeight(double distance_m, double range_m) {
     if (!(distance_m < range_m)) return 0.0;

@@ -165,7 +165,6 @@
 
 namespace amb {
 
-class JsonFields;
 class World;
 
 inline constexpr double kNearFade = 0.25;  // see Radii
@@ -215,11 +214,6 @@ struct NearFieldSettings {
 // The near field's weight at distance_m (horizontal) from the camera for a range: 1 out to
 // (1 - kNearFade) range, 0 from range on, smoothstep between (see Range).
 double rangeWeight(double distance_m, double range_m);
-// Reads {"enabled", "radius_m", "captureRadius_m", "smallRadius_m", "plants", "terrain",
-// "terrainRadius_m", "ground", "groundRadius_m", "groundCell_m", "latticeRange_m", "cacheEntries",
-// "objectRange_m", "cornerRange_m", "patchMean", "patchSamples", "vertexDetail"}
-// (JsonFields, lighting/JsonFields.h).
-void readNearFieldSettings(JsonFields& fields, NearFieldSettings& settings);
 
 struct SphereOccluder {
     glm::dvec3 centre_m{0.0};

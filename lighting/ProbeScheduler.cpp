@@ -46,6 +46,7 @@ ProbeScheduler::ProbeScheduler(const ProbeSchedulerSettings& settings) : setting
 // ---- Motion model -------------------------------------------------------------------------------
 
 void ProbeScheduler::reset() {
+    ++motion_;
     history_.clear();
     velocity_ = glm::dvec3(0.0);
     initialised_ = false;
@@ -60,6 +61,7 @@ double ProbeScheduler::speed_mps() const {
 void ProbeScheduler::observe(const glm::dvec3& position_m, const glm::dvec3& velocity_mps,
                              double now_s) {
     if (!finite(position_m) || !std::isfinite(now_s)) return;
+    ++motion_;
     const double dt = initialised_ ? std::max(0.0, now_s - now_) : 0.0;
     // Velocity: as reported, else from the position history.
     glm::dvec3 measured = velocity_mps;
@@ -160,10 +162,69 @@ bool ProbeScheduler::coarseIsUniform(const AnchorStore& store, const LatticeKey&
     return true;
 }
 
+ProbeScheduler::Candidates& ProbeScheduler::candidates(const AnchorStore& store, int finest,
+                                                       double reachSpeed, int widen) const {
+    if (candidates_.size() <= std::size_t(widen)) candidates_.resize(std::size_t(widen) + 1);
+    Candidates& c = candidates_[std::size_t(widen)];
+    if (c.motion == motion_ && c.store == &store && c.coarsestSpacing_m == store.spacing_m(0) &&
+        c.levels == store.levels() && c.finest == finest && c.reachSpeed == reachSpeed &&
+        c.widen == widen) {
+        return c;
+    }
+    c = Candidates{};
+    c.motion = motion_;
+    c.store = &store;
+    c.coarsestSpacing_m = store.spacing_m(0);
+    c.levels = store.levels();
+    c.finest = finest;
+    c.reachSpeed = reachSpeed;
+    c.widen = widen;
+    c.path = predictedPath();
+    const double grow = double(1 << widen);
+    // Points of every level up to `finest` within the level's ring around the path.
+    std::unordered_set<std::uint64_t> seen;
+    for (int L = finest; L >= 0; --L) {
+        const double s = store.spacing_m(L);
+        const double ring =
+            (L == finest ? settings_.finestRingCells : settings_.coarseRingCells) * grow * s;
+        for (const PathSample& p : c.path) {
+            const double i0 = std::ceil((p.position_m.x - ring) / s);
+            const double i1 = std::floor((p.position_m.x + ring) / s);
+            const double k0 = std::ceil((p.position_m.z - ring) / s);
+            const double k1 = std::floor((p.position_m.z + ring) / s);
+            for (double di = i0; di <= i1; di += 1.0) {
+                for (double dk = k0; dk <= k1; dk += 1.0) {
+                    const LatticeKey key = store.canonical({L, std::int32_t(di), std::int32_t(dk)});
+                    const double d = std::hypot(store.keyX_m(key) - p.position_m.x,
+                                                store.keyZ_m(key) - p.position_m.z);
+                    if (d > ring) continue;
+                    if (seen.insert(packKey(key)).second) c.keys.push_back(key);
+                }
+            }
+        }
+    }
+    c.reach_s.assign(c.keys.size(), std::numeric_limits<double>::quiet_NaN());
+    return c;
+}
+
+double ProbeScheduler::timeToReach(Candidates& c, std::size_t index,
+                                   const AnchorStore& store) const {
+    double& reach = c.reach_s[index];
+    if (!std::isnan(reach)) return reach;
+    const LatticeKey& key = c.keys[index];
+    const glm::dvec3 x{store.keyX_m(key), 0.0, store.keyZ_m(key)};
+    reach = std::numeric_limits<double>::infinity();
+    for (const PathSample& p : c.path) {
+        // tau grows along the path: from here on no sample comes sooner.
+        if (p.tau_s >= reach) break;
+        reach = std::min(reach, p.tau_s + horizontalDistance(x, p.position_m) / c.reachSpeed);
+    }
+    return reach;
+}
+
 std::optional<ProbeChoice> ProbeScheduler::choose(const AnchorStore& store, double probesPerSecond,
                                                   const std::vector<LatticeKey>& busy) const {
     if (!initialised_) return std::nullopt;
-    const std::vector<PathSample> path = predictedPath();
     const int finest = finestLevel(store, probesPerSecond);
     const double reachSpeed = std::max(speed_mps(), settings_.minReachSpeed_mps);
     const double regen = store.settings().regenerateFraction;
@@ -171,43 +232,15 @@ std::optional<ProbeChoice> ProbeScheduler::choose(const AnchorStore& store, doub
     for (const LatticeKey& b : busy) busyKeys.insert(packKey(store.canonical(b)));
 
     for (int widen = 0; widen <= settings_.maxWiden; ++widen) {
-        const double grow = double(1 << widen);
-        // Points of every level up to `finest` within the level's ring around the path.
-        std::unordered_set<std::uint64_t> seen;
-        std::vector<LatticeKey> keys;
-        for (int L = finest; L >= 0; --L) {
-            const double s = store.spacing_m(L);
-            const double ring =
-                (L == finest ? settings_.finestRingCells : settings_.coarseRingCells) * grow * s;
-            for (const PathSample& p : path) {
-                const double i0 = std::ceil((p.position_m.x - ring) / s);
-                const double i1 = std::floor((p.position_m.x + ring) / s);
-                const double k0 = std::ceil((p.position_m.z - ring) / s);
-                const double k1 = std::floor((p.position_m.z + ring) / s);
-                for (double di = i0; di <= i1; di += 1.0) {
-                    for (double dk = k0; dk <= k1; dk += 1.0) {
-                        const LatticeKey key =
-                            store.canonical({L, std::int32_t(di), std::int32_t(dk)});
-                        const double d = std::hypot(store.keyX_m(key) - p.position_m.x,
-                                                    store.keyZ_m(key) - p.position_m.z);
-                        if (d > ring) continue;
-                        if (seen.insert(packKey(key)).second) keys.push_back(key);
-                    }
-                }
-            }
-        }
-
+        Candidates& candidates = this->candidates(store, finest, reachSpeed, widen);
         std::optional<ProbeChoice> best;
-        for (const LatticeKey& key : keys) {
+        for (std::size_t i = 0; i < candidates.keys.size(); ++i) {
+            const LatticeKey& key = candidates.keys[i];
             if (busyKeys.count(packKey(key))) continue;
             const Anchor* anchor = store.find(key);
             if (anchor && !anchor->regenerationRequested && !anchor->expired) continue;  // fresh
             if (!anchor && coarseIsUniform(store, key)) continue;
-            const glm::dvec3 x{store.keyX_m(key), 0.0, store.keyZ_m(key)};
-            double reach = std::numeric_limits<double>::infinity();
-            for (const PathSample& p : path) {
-                reach = std::min(reach, p.tau_s + horizontalDistance(x, p.position_m) / reachSpeed);
-            }
+            const double reach = timeToReach(candidates, i, store);
             ProbeChoice c;
             c.key = key;
             c.timeToReach_s = reach;

@@ -23,6 +23,10 @@
 //                                                     1 when it expires)
 //                          Points with a fresh anchor are skipped. When none is left, the
 //                          corridor widens (up to maxWiden doublings), then the scheduler idles.
+//                          The candidates and their time to reach depend only on the motion
+//                          observed and the lattice: they are found once a frame (between two
+//                          observe calls) and kept for the frame's other choices, so a budget of
+//                          many probes a frame does not search the rings again for each.
 #pragma once
 
 #include <cstdint>
@@ -83,9 +87,15 @@ class ProbeScheduler {
 
     const ProbeSchedulerSettings& settings() const { return settings_; }
     // Every setting is read where it is used, so new ones apply from the next observe/choose.
-    void setSettings(const ProbeSchedulerSettings& settings) { settings_ = settings; }
+    void setSettings(const ProbeSchedulerSettings& settings) {
+        settings_ = settings;
+        ++motion_;
+    }
     // Roads to follow when the camera drives on one (may be null; must outlive the scheduler).
-    void setRoads(const RoadNetwork* roads) { roads_ = roads; }
+    void setRoads(const RoadNetwork* roads) {
+        roads_ = roads;
+        ++motion_;
+    }
 
     // Feeds the camera at simulation time now_s. A non-finite velocity is replaced by the one
     // from the position history.
@@ -119,6 +129,22 @@ class ProbeScheduler {
   private:
     // True when adaptive density leaves the new point `key` out (see adaptiveThreshold).
     bool coarseIsUniform(const AnchorStore& store, const LatticeKey& key) const;
+    // The lattice points of every level up to `finest` within the level's ring (widened
+    // `widen` times) around the path, and each one's time to reach (NaN until asked), as of the
+    // motion last observed.
+    struct Candidates {
+        std::uint64_t motion = 0;
+        const AnchorStore* store = nullptr;
+        double coarsestSpacing_m = 0.0;
+        int levels = 0, finest = -1, widen = -1;
+        double reachSpeed = 0.0;
+        std::vector<PathSample> path;
+        std::vector<LatticeKey> keys;
+        std::vector<double> reach_s;
+    };
+    Candidates& candidates(const AnchorStore& store, int finest, double reachSpeed,
+                           int widen) const;
+    double timeToReach(Candidates& c, std::size_t index, const AnchorStore& store) const;
     ProbeSchedulerSettings settings_;
     const RoadNetwork* roads_ = nullptr;
     struct Observation {
@@ -134,6 +160,8 @@ class ProbeScheduler {
     int roadIndex_ = -1;
     double roadAlong_m_ = 0.0;
     double roadDirection_ = 1.0;  // +1 along increasing arc length, -1 against
+    std::uint64_t motion_ = 0;    // counts changes of the motion (observe, reset, settings, roads)
+    mutable std::vector<Candidates> candidates_;  // by widen: this frame's
 };
 
 }  // namespace amb

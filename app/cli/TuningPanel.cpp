@@ -11,13 +11,11 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <iterator>
 #include <utility>
 
 #include <imgui.h>
 #include <imgui_impl_glfw.h>
 #include <imgui_stdlib.h>
-#include <nlohmann/json.hpp>
 
 #include "app/frame/MethodStages.h"
 #include "app/render/CubeCaptureGl.h"
@@ -62,261 +60,32 @@ bool LiveMethod::apply(const AmbienceVolumeSettings& settings) {
 
 // ---- [SECTION] Settings ------------------------------------------------------------------------
 
+// The rows are the volume's keys as the settings schema has them (lighting/SettingsSchema.h).
+
 namespace {
 
 using Kind = SettingInfo::Kind;
-using S = AmbienceVolumeSettings;
-
-// One row: key, kind, widget range, logarithmic, help, the field (rebuilds: see makeTable).
-const SettingInfo kRows[] = {
-    // store (lighting/AnchorStore.h)
-    {"store.coarsestSpacing_m", Kind::Number, 27.0, 2187.0, true,
-     "spacing of the coarsest lattice level [m]; level L has s_0 / 3^L",
-     [](S& s) -> void* { return &s.store.coarsestSpacing_m; }, false},
-    {"store.levels", Kind::Integer, 1, 8, false,
-     "lattice levels (the finest is s_0 / 3^(levels - 1))",
-     [](S& s) -> void* { return &s.store.levels; }, false},
-    {"store.blendTime_s", Kind::Number, 0.0, 10.0, false,
-     "a refreshed anchor blends, a new one fades in, over this time [s]",
-     [](S& s) -> void* { return &s.store.blendTime_s; }, false},
-    {"store.allowedSunAngle_rad", Kind::Number, 0.001, 0.5, true,
-     "a capture is out of date once the sun has moved this far [rad]",
-     [](S& s) -> void* { return &s.store.allowedSunAngle_rad; }, false},
-    {"store.minLifetime_s", Kind::Number, 0.1, 600.0, true, "shortest anchor lifetime [s]",
-     [](S& s) -> void* { return &s.store.minLifetime_s; }, false},
-    {"store.maxLifetime_s", Kind::Number, 1.0, 3600.0, true,
-     "longest anchor lifetime (also while time stands still) [s]",
-     [](S& s) -> void* { return &s.store.maxLifetime_s; }, false},
-    {"store.regenerateFraction", Kind::Number, 0.0, 1.0, false,
-     "an anchor asks for a new capture after this fraction of its lifetime",
-     [](S& s) -> void* { return &s.store.regenerateFraction; }, false},
-    {"store.searchCells", Kind::Integer, 1, 16, false, "nearest-anchor search, in cells",
-     [](S& s) -> void* { return &s.store.searchCells; }, false},
-    {"store.reachCells", Kind::Integer, 1, 16, false,
-     "a hole takes the residuals of the anchors within this many cells",
-     [](S& s) -> void* { return &s.store.reachCells; }, false},
-    {"store.coarseReachCells", Kind::Integer, 1, 16, false, "the same at the coarsest level",
-     [](S& s) -> void* { return &s.store.coarseReachCells; }, false},
-    {"store.finerWeight", Kind::Number, 0.0, 1.0, false,
-     "weight of the finer levels' anchors in a hole's fill",
-     [](S& s) -> void* { return &s.store.finerWeight; }, false},
-    {"store.smoothInterpolation", Kind::Boolean, 0, 1, false,
-     "bicubic Hermite cells (C1); off: bilinear",
-     [](S& s) -> void* { return &s.store.smoothInterpolation; }, false},
-    {"store.bilinearFixedPoints", Kind::Boolean, 0, 1, false,
-     "terrain corners and road vertices read bilinear cells",
-     [](S& s) -> void* { return &s.store.bilinearFixedPoints; }, false},
-    // scheduler (lighting/ProbeScheduler.h)
-    {"scheduler.velocityTimeConstant_s", Kind::Number, 0.0, 5.0, false,
-     "inertia of the velocity filter [s]",
-     [](S& s) -> void* { return &s.scheduler.velocityTimeConstant_s; }, false},
-    {"scheduler.horizon_s", Kind::Number, 0.0, 10.0, false,
-     "how far ahead the path is predicted [s]",
-     [](S& s) -> void* { return &s.scheduler.horizon_s; }, false},
-    {"scheduler.pathStep_s", Kind::Number, 0.01, 2.0, true, "spacing of the path samples [s]",
-     [](S& s) -> void* { return &s.scheduler.pathStep_s; }, false},
-    {"scheduler.historyLength_s", Kind::Number, 0.0, 10.0, false, "position history kept [s]",
-     [](S& s) -> void* { return &s.scheduler.historyLength_s; }, false},
-    {"scheduler.roadSnap_m", Kind::Number, 0.0, 50.0, false,
-     "within the road's half width + this the camera is on it [m]",
-     [](S& s) -> void* { return &s.scheduler.roadSnap_m; }, false},
-    {"scheduler.roadAlignment", Kind::Number, 0.0, 1.0, false,
-     "|cos| between motion and road needed to follow the road",
-     [](S& s) -> void* { return &s.scheduler.roadAlignment; }, false},
-    {"scheduler.corridorCells", Kind::Number, 0.1, 16.0, true,
-     "width of the finest-level corridor along the path [cells]",
-     [](S& s) -> void* { return &s.scheduler.corridorCells; }, false},
-    {"scheduler.maxLevel", Kind::Integer, 0, 7, false, "never capture finer than this level",
-     [](S& s) -> void* { return &s.scheduler.maxLevel; }, false},
-    {"scheduler.finestRingCells", Kind::Number, 0.0, 8.0, false,
-     "finest-level candidates within this many cells of the path",
-     [](S& s) -> void* { return &s.scheduler.finestRingCells; }, false},
-    {"scheduler.coarseRingCells", Kind::Number, 0.0, 8.0, false,
-     "coarser-level candidates within this many cells of the path",
-     [](S& s) -> void* { return &s.scheduler.coarseRingCells; }, false},
-    {"scheduler.maxWiden", Kind::Integer, 0, 8, false,
-     "doublings of the rings when everything near is fresh",
-     [](S& s) -> void* { return &s.scheduler.maxWiden; }, false},
-    {"scheduler.minReachSpeed_mps", Kind::Number, 0.1, 100.0, true,
-     "speed assumed for the time to reach a point when slower [m/s]",
-     [](S& s) -> void* { return &s.scheduler.minReachSpeed_mps; }, false},
-    {"scheduler.gapBonus_s", Kind::Number, -5.0, 5.0, false,
-     "priority of a point with no anchor of its level near it [s]",
-     [](S& s) -> void* { return &s.scheduler.gapBonus_s; }, false},
-    {"scheduler.staleBias_s", Kind::Number, -5.0, 5.0, false,
-     "cost of refreshing an anchor that asks for it, at urgency 0 [s]",
-     [](S& s) -> void* { return &s.scheduler.staleBias_s; }, false},
-    {"scheduler.adaptiveThreshold", Kind::Number, 0.0, 1.0, false,
-     "adaptive density: skip a finer point where the coarser anchors agree within this (0: off)",
-     [](S& s) -> void* { return &s.scheduler.adaptiveThreshold; }, false},
-    // capture, shared by every capturing method (lighting/CaptureCore.h)
-    {"facesPerFrame", Kind::Integer, 1, kMaxFacesPerFrame, false,
-     "capture budget: cube faces per frame (a probe is 6)",
-     [](S& s) -> void* { return &s.capture.facesPerFrame; }, false},
-    {"sunThreshold", Kind::Number, 100.0, 1e7, true,
-     "texels brighter than this are the sun disc, left out of the SH [W sr^-1 m^-2]",
-     [](S& s) -> void* { return &s.capture.sunThreshold; }, false},
-    {"maxAside_m", Kind::Number, 0.0, 20.0, false, "how far a probe may move out of solids [m]",
-     [](S& s) -> void* { return &s.capture.maxAside_m; }, false},
-    {"defaultTimeRate_hPerS", Kind::Number, -0.01, 0.01, false,
-     "rate of the time of day before it is measured [h/s] (at the start only)",
-     [](S& s) -> void* { return &s.capture.defaultTimeRate_hPerS; }, false},
-    {"timeJump_h", Kind::Number, 0.0, 12.0, false,
-     "a larger change of the time of day in one frame is a jump [h]",
-     [](S& s) -> void* { return &s.capture.timeJump_h; }, false},
-    {"teleportDistance_m", Kind::Number, 0.0, 1000.0, false,
-     "a camera step longer than this + 3 x speed x dt is a teleport [m]",
-     [](S& s) -> void* { return &s.capture.teleportDistance_m; }, false},
-    {"fallbackFaceSize", Kind::Integer, 1, 64, false, "cube map size of the sky fallback",
-     [](S& s) -> void* { return &s.capture.fallbackFaceSize; }, false},
-    {"fallbackRefresh_h", Kind::Number, 0.0, 1.0, false,
-     "recompute the fallback after this much day time [h]",
-     [](S& s) -> void* { return &s.capture.fallbackRefresh_h; }, false},
-    // the volume's own (lighting/AmbienceVolume.h)
-    {"nominalFrameTime_s", Kind::Number, 0.001, 0.1, true,
-     "frame time assumed before one is seen [s] (at the start only)",
-     [](S& s) -> void* { return &s.nominalFrameTime_s; }, false},
-    {"asideFraction", Kind::Number, 0.0, 2.0, false,
-     "a probe may move aside this x its level's spacing (and at most maxAside_m)",
-     [](S& s) -> void* { return &s.asideFraction; }, false},
-    {"relightBySkyLevel", Kind::Boolean, 0, 1, false,
-     "read stale anchors scaled by the sky level now over the sky level at their capture",
-     [](S& s) -> void* { return &s.relightBySkyLevel; }, false},
-    // the near field (lighting/NearField.h)
-    {"nearField.enabled", Kind::Boolean, 0, 1, false, "the two-scale ambience",
-     [](S& s) -> void* { return &s.capture.nearField.enabled; }, false},
-    {"nearField.radius_m", Kind::Number, 0.0, 60.0, false,
-     "occluders this close to a shading point are put back there [m]",
-     [](S& s) -> void* { return &s.capture.nearField.radius_m; }, false},
-    {"nearField.captureRadius_m", Kind::Number, 0.0, 60.0, false,
-     "probes leave out the plants this close to them [m]",
-     [](S& s) -> void* { return &s.capture.nearField.captureRadius_m; }, false},
-    {"nearField.plants", Kind::Boolean, 0, 1, false, "trees, bushes and rocks as spheres",
-     [](S& s) -> void* { return &s.capture.nearField.plants; }, false},
-    {"nearField.smallRadius_m", Kind::Number, 0.0, 200.0, false,
-     "bushes and rocks (never captured) are near out to this [m]",
-     [](S& s) -> void* { return &s.capture.nearField.smallRadius_m; }, false},
-    {"nearField.terrain", Kind::Boolean, 0, 1, false, "the terrain's near horizon",
-     [](S& s) -> void* { return &s.capture.nearField.terrain; }, false},
-    {"nearField.terrainRadius_m", Kind::Number, 1.0, 200.0, false,
-     "how far the near horizon is searched [m]",
-     [](S& s) -> void* { return &s.capture.nearField.terrainRadius_m; }, false},
-    {"nearField.ground", Kind::Boolean, 0, 1, false, "the ground below the point",
-     [](S& s) -> void* { return &s.capture.nearField.ground; }, false},
-    {"nearField.groundRadius_m", Kind::Number, 0.5, 100.0, false,
-     "how far from the point's foot the ground is its own [m]",
-     [](S& s) -> void* { return &s.capture.nearField.groundRadius_m; }, false},
-    {"nearField.groundCell_m", Kind::Number, 0.25, 32.0, false,
-     "the lattice whose ground terms objects blend [m]",
-     [](S& s) -> void* { return &s.capture.nearField.groundCell_m; }, false},
-    {"nearField.latticeRange_m", Kind::Number, 0.0, 1000.0, false,
-     "objects first built this close to the camera blend the lattice's ground terms [m]",
-     [](S& s) -> void* { return &s.capture.nearField.latticeRange_m; }, false},
-    {"nearField.cacheEntries", Kind::Integer, 1, 1 << 20, true,
-     "points cached with their transfer before the cache is emptied",
-     [](S& s) -> void* { return &s.capture.nearField.cacheEntries; }, false},
-    {"nearField.objectRange_m", Kind::Number, 0.0, 1000.0, false,
-     "objects farther than this from the camera take the far field alone [m]",
-     [](S& s) -> void* { return &s.capture.nearField.objectRange_m; }, false},
-    {"nearField.cornerRange_m", Kind::Number, 0.0, 100000.0, false,
-     "terrain corners and road vertices farther than this take the far field alone [m]",
-     [](S& s) -> void* { return &s.capture.nearField.cornerRange_m; }, false},
-    {"nearField.patchMean", Kind::Boolean, 0, 1, false,
-     "a terrain corner takes the near field's mean over the patches it colours",
-     [](S& s) -> void* { return &s.capture.nearField.patchMean; }, false},
-    {"nearField.patchSamples", Kind::Integer, 1, 9, false,
-     "points a side of a corner's patch mean",
-     [](S& s) -> void* { return &s.capture.nearField.patchSamples; }, false},
-    {"nearField.vertexDetail", Kind::Boolean, 0, 1, false,
-     "the terrain's ambient scaled by its own sky visibility at each vertex of fine patches",
-     [](S& s) -> void* { return &s.capture.nearField.vertexDetail; }, false},
-};
-
-std::vector<SettingInfo> makeTable() {
-    std::vector<SettingInfo> t(std::begin(kRows), std::end(kRows));
-    // Whether a change rebuilds: ask the volume (one truth), with each field moved alone.
-    const AmbienceVolumeSettings defaults;
-    for (SettingInfo& info : t) {
-        AmbienceVolumeSettings moved = defaults;
-        setSettingValue(moved, info,
-                        info.kind == Kind::Boolean ? 1.0 - settingValue(defaults, info)
-                                                   : settingValue(defaults, info) + 1.0);
-        info.rebuilds = !AmbienceVolume::retunable(defaults, moved);
-    }
-    return t;
-}
-
-std::vector<std::string> splitKey(const std::string& key) {
-    std::vector<std::string> parts;
-    std::size_t start = 0;
-    for (std::size_t dot; (dot = key.find('.', start)) != std::string::npos; start = dot + 1)
-        parts.push_back(key.substr(start, dot - start));
-    parts.push_back(key.substr(start));
-    return parts;
-}
 
 }  // namespace
 
 const std::vector<SettingInfo>& tunableSettings() {
-    static const std::vector<SettingInfo> table = makeTable();
-    return table;
+    return volumeSettingsSchema().fields();
 }
 
 const SettingInfo* findSetting(const std::string& key) {
-    for (const SettingInfo& info : tunableSettings())
-        if (key == info.key) return &info;
-    return nullptr;
+    return volumeSettingsSchema().find(key);
 }
 
 double settingValue(const AmbienceVolumeSettings& settings, const SettingInfo& info) {
-    void* p = info.field(const_cast<AmbienceVolumeSettings&>(settings));
-    switch (info.kind) {
-        case Kind::Number:
-            return *static_cast<double*>(p);
-        case Kind::Integer:
-            return double(*static_cast<int*>(p));
-        case Kind::Boolean:
-            return *static_cast<bool*>(p) ? 1.0 : 0.0;
-    }
-    return 0.0;
+    return SettingsSchema<AmbienceVolumeSettings>::value(settings, info);
 }
 
 void setSettingValue(AmbienceVolumeSettings& settings, const SettingInfo& info, double value) {
-    void* p = info.field(settings);
-    switch (info.kind) {
-        case Kind::Number:
-            *static_cast<double*>(p) = value;
-            break;
-        case Kind::Integer:
-            *static_cast<int*>(p) = int(std::lround(value));
-            break;
-        case Kind::Boolean:
-            *static_cast<bool*>(p) = value != 0.0;
-            break;
-    }
+    SettingsSchema<AmbienceVolumeSettings>::setValue(settings, info, value);
 }
 
 std::string settingsToJson(const AmbienceVolumeSettings& settings) {
-    nlohmann::ordered_json root = nlohmann::ordered_json::object();
-    for (const SettingInfo& info : tunableSettings()) {
-        nlohmann::ordered_json* at = &root;
-        const std::vector<std::string> parts = splitKey(info.key);
-        for (std::size_t i = 0; i + 1 < parts.size(); ++i) at = &(*at)[parts[i]];
-        const double v = settingValue(settings, info);
-        nlohmann::ordered_json& slot = (*at)[parts.back()];
-        switch (info.kind) {
-            case Kind::Number:
-                slot = v;
-                break;
-            case Kind::Integer:
-                slot = int(v);
-                break;
-            case Kind::Boolean:
-                slot = v != 0.0;
-                break;
-        }
-    }
-    return root.dump(2) + "\n";
+    return volumeSettingsSchema().write(settings);
 }
 
 // ---- [SECTION] TuningPanel: construction and the frame
@@ -652,20 +421,20 @@ bool TuningPanel::settingWidget(const SettingInfo& info) {
     switch (info.kind) {
         case Kind::Boolean: {
             bool b = v != 0.0;
-            changed = ImGui::Checkbox(info.key, &b);
+            changed = ImGui::Checkbox(info.key.c_str(), &b);
             v = b ? 1.0 : 0.0;
             break;
         }
         case Kind::Integer: {
             int i = int(v), lo = int(info.lo), hi = int(info.hi);
-            changed = ImGui::SliderInt(info.key, &i, lo, hi, "%d",
+            changed = ImGui::SliderInt(info.key.c_str(), &i, lo, hi, "%d",
                                        info.logarithmic ? ImGuiSliderFlags_Logarithmic : 0);
             v = i;
             break;
         }
         case Kind::Number:
             changed =
-                ImGui::SliderScalar(info.key, ImGuiDataType_Double, &v, &info.lo, &info.hi, "%.4g",
+                ImGui::SliderScalar(info.key.c_str(), ImGuiDataType_Double, &v, &info.lo, &info.hi, "%.4g",
                                     info.logarithmic ? ImGuiSliderFlags_Logarithmic : 0);
             break;
     }
@@ -705,18 +474,18 @@ void TuningPanel::drawSettings() {
         return;
     }
     ImGui::TextDisabled("%d rebuilds so far; (r) rebuilds the method", method_.rebuilds());
-    const char* group = "";
+    std::string group;
     bool open = false;
     for (const SettingInfo& info : tunableSettings()) {
-        const std::vector<std::string> parts = splitKey(info.key);
-        const char* g = parts.size() > 1 ? (parts[0] == "store"       ? "store"
-                                            : parts[0] == "scheduler" ? "scheduler"
-                                                                      : "nearField")
-                                         : "capture and volume";
-        if (std::string(g) != group) {
+        // The groups of the file: the objects ("store", "scheduler", "nearField"), and the
+        // keys at its top level.
+        const std::size_t dot = info.key.find('.');
+        const std::string g =
+            dot == std::string::npos ? "capture and volume" : info.key.substr(0, dot);
+        if (g != group) {
             if (open) ImGui::TreePop();
             group = g;
-            open = ImGui::TreeNode(g);
+            open = ImGui::TreeNode(g.c_str());
         }
         if (!open) continue;
         if (info.rebuilds) {

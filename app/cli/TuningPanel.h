@@ -5,9 +5,9 @@
 //                          place where the volume allows it (AmbienceVolume::retunable: all but
 //                          the lattice, the sun threshold and the near field); otherwise the
 //                          method is rebuilt with them, its anchors starting over.
-// [SECTION] Settings       every key of the volume's settings file (ambienceSettingsFromJson) as
-//                          a row of one table: its widget, its range and whether changing it
-//                          rebuilds the method; settingsToJson writes the file `--config` reads.
+// [SECTION] Settings       every key of the volume's settings file as a row: the settings
+//                          schema's keys (lighting/SettingsSchema.h), each with its widget over
+//                          the key's range; settingsToJson writes the file `--config` reads.
 // [SECTION] TuningPanel    the window: the replay (pause, scrub, speed), the view (debug
 //                          overlay, ambient alone), the frame's stage times as scrolling plots,
 //                          anchors per level and bytes held, the error at the camera's ground
@@ -23,6 +23,7 @@
 
 #include "app/frame/FrameLoop.h"
 #include "lighting/AmbienceVolume.h"
+#include "lighting/SettingsSchema.h"
 
 namespace amb {
 
@@ -61,16 +62,10 @@ class LiveMethod {
 
 // ---- Settings --------------------------------------------------------------------------------
 
-struct SettingInfo {
-    enum class Kind { Number, Integer, Boolean };
-    const char* key;  // its path in the settings file: "store.blendTime_s", "facesPerFrame"
-    Kind kind;
-    double lo, hi;     // the widget's range (the reader's own range may be wider)
-    bool logarithmic;  // the slider moves in ratios
-    const char* help;
-    void* (*field)(AmbienceVolumeSettings&);  // the double, int or bool it sets
-    bool rebuilds;  // a change cannot apply in place (AmbienceVolume::retunable)
-};
+// A row: a key of the volume's settings file as the settings schema describes it
+// (lighting/SettingsSchema.h): its kind, its range (the widget's), whether its slider moves in
+// ratios, its help, whether a change rebuilds the method, and the field it sets.
+using SettingInfo = SettingField<AmbienceVolumeSettings>;
 // Every key ambienceSettingsFromJson reads, in the file's order.
 const std::vector<SettingInfo>& tunableSettings();
 const SettingInfo* findSetting(const std::string& key);

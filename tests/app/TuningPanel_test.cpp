@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -27,6 +28,8 @@
 #include "app/render/PanelRenderer.h"
 #include "app/render/Renderer.h"
 #include "lighting/AmbienceVolume.h"
+#include "lighting/JsonFields.h"
+#include "lighting/SettingsSchema.h"
 #include "world/Error.h"
 #include "world/World.h"
 // GLFW after glad (app/render/Renderer.h), with no GL header of its own.
@@ -38,12 +41,14 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A value of `info` away from the default, inside its widget range: switches flipped, numbers
-// and integers at 37 % of the range (so that lifetimes stay ordered: min 222 s, max 1333 s; the
-// lattice 826 m over 4 levels, finest 31 m).
+// A value of `info` away from the default, inside its widget range (the schema's): switches
+// flipped, numbers and integers at 37 % of the slider (of the ratio hi / lo where the slider is
+// logarithmic), so that set one at a time or all at once the values pass the reader's checks
+// that bind keys together: the lifetimes 27.5 s both, the lattice 25 m over 4 levels.
 double movedValue(const SettingInfo& info, double current) {
     if (info.kind == SettingInfo::Kind::Boolean) return 1.0 - current;
-    double v = info.lo + 0.37 * (info.hi - info.lo);
+    double v = info.logarithmic && info.lo > 0.0 ? info.lo * std::pow(info.hi / info.lo, 0.37)
+                                                 : info.lo + 0.37 * (info.hi - info.lo);
     if (info.kind == SettingInfo::Kind::Integer) v = std::round(v);
     if (v == current) v = info.kind == SettingInfo::Kind::Integer ? v + 1.0 : v * 1.25 + 0.5;
     return v;
@@ -100,6 +105,47 @@ TEST(TuningPanel, EveryKeyOfTheSettingsFileIsInTheTable) {
     EXPECT_EQ(j.at("store").at("blendTime_s").get<double>(), 1.0);
     EXPECT_EQ(j.at("nearField").at("radius_m").get<double>(), 20.0);
     EXPECT_EQ(j.at("facesPerFrame").get<int>(), 1);
+}
+
+// The panel, the reader and the schema agree: the rows are the schema's keys in its order, each
+// widget's range is the key's, and what the panel would write at either end of a range the
+// reader takes, while the next value beyond it is refused naming the key and the range.
+TEST(TuningPanel, TheRowsAreTheSchemasKeysWithTheReadersRanges) {
+    const auto& keys = volumeSettingsSchema().fields();
+    ASSERT_EQ(tunableSettings().size(), keys.size());
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+        const SettingInfo& row = tunableSettings()[i];
+        SCOPED_TRACE(row.key);
+        EXPECT_EQ(row.key, keys[i].key);
+        EXPECT_EQ(row.lo, keys[i].lo);
+        EXPECT_EQ(row.hi, keys[i].hi);
+        EXPECT_EQ(findSetting(row.key), &row);
+        if (row.kind == SettingInfo::Kind::Boolean) continue;
+        const std::string leaf = row.key.substr(row.key.rfind('.') + 1);
+        const std::string range =
+            "'" + leaf + "' must be in [" + jsonNumber(row.lo) + ", " + jsonNumber(row.hi) + "]";
+        const double step = row.kind == SettingInfo::Kind::Integer ? 1.0 : 0.0;
+        const double inf = std::numeric_limits<double>::infinity();
+        const double outside[2] = {step > 0 ? row.lo - step : std::nextafter(row.lo, -inf),
+                                   step > 0 ? row.hi + step : std::nextafter(row.hi, inf)};
+        for (int end = 0; end < 2; ++end) {
+            AmbienceVolumeSettings s;
+            setSettingValue(s, row, end == 0 ? row.lo : row.hi);
+            try {
+                ambienceSettingsFromJson(settingsToJson(s), "panel");
+            } catch (const InputError& e) {
+                // Only a check that binds keys together may refuse an end (the finest spacing).
+                EXPECT_EQ(std::string(e.what()).find("must be"), std::string::npos) << e.what();
+            }
+            setSettingValue(s, row, outside[end]);
+            try {
+                ambienceSettingsFromJson(settingsToJson(s), "panel");
+                ADD_FAILURE() << outside[end] << " taken";
+            } catch (const InputError& e) {
+                EXPECT_NE(std::string(e.what()).find(range), std::string::npos) << e.what();
+            }
+        }
+    }
 }
 
 TEST(TuningPanel, OnlyTheLatticeTheSunThresholdAndTheNearFieldRebuild) {

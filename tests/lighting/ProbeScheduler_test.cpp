@@ -8,6 +8,7 @@
 #include <cmath>
 #include <iostream>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -224,6 +225,58 @@ TEST(ProbeScheduler, IdlesOnceTheRingsAreFreshUnlessToldToWiden) {
     EXPECT_GT(counts[1], 4 * counts[0]);  // rings twice and four times as wide
     EXPECT_GT(farthest[1], 2.0);
     EXPECT_LE(farthest[1], 4.0 + 1e-9);
+}
+
+// A frame's choices share its candidates (found at the first, kept until the next observe):
+// several choices a frame, with points busy and anchors stored between them, come out exactly
+// as a scheduler that searches afresh for each; and a new frame's motion is seen.
+TEST(ProbeScheduler, ManyChoicesAFrameChooseAsIfEachSearchedAfresh) {
+    AnchorStoreSettings storeSettings;
+    storeSettings.blendTime_s = 0.0;
+    storeSettings.regenerateFraction = 0.3;
+    AnchorStore store(storeSettings);
+    ProbeSchedulerSettings settings;
+    settings.maxWiden = 2;
+    settings.maxLevel = kMaxAnchorLevels - 1;
+    settings.horizon_s = 6.0;
+    settings.pathStep_s = 0.1;
+    ProbeScheduler kept(settings), afresh(settings);
+    int choices = 0, moved = 0;
+    std::optional<LatticeKey> previousFirst;
+    for (int frame = 0; frame < 40; ++frame) {
+        const double t = frame * 0.25;
+        const glm::dvec3 cam(30.0 * t, 0.0, 5.0 * std::sin(t));
+        const glm::dvec3 velocity(30.0, 0.0, 5.0 * std::cos(t));
+        kept.observe(cam, velocity, t);
+        afresh.observe(cam, velocity, t);
+        store.advance(t);
+        std::vector<LatticeKey> busy;
+        for (int k = 0; k < 8; ++k) {
+            afresh.setSettings(afresh.settings());  // forgets its candidates
+            const auto a = kept.choose(store, 40.0, busy);
+            const auto b = afresh.choose(store, 40.0, busy);
+            ASSERT_EQ(a.has_value(), b.has_value()) << frame << " " << k;
+            if (!a) break;
+            EXPECT_EQ(a->key, b->key) << frame << " " << k;
+            EXPECT_EQ(a->cost_s, b->cost_s);
+            EXPECT_EQ(a->timeToReach_s, b->timeToReach_s);
+            EXPECT_EQ(a->refresh, b->refresh);
+            if (k == 0) {
+                moved += previousFirst && *previousFirst != a->key;
+                previousFirst = a->key;
+            }
+            // Every other choice becomes an anchor at once, the others stay busy.
+            if (k % 2) {
+                store.insert(a->key, ShRgb{}, {store.keyX_m(a->key), 2.0, store.keyZ_m(a->key)},
+                             3.0);
+            } else {
+                busy.push_back(a->key);
+            }
+            ++choices;
+        }
+    }
+    EXPECT_GT(choices, 200);
+    EXPECT_GT(moved, 5);  // the candidates follow the camera from frame to frame
 }
 
 TEST(ProbeScheduler, AdaptiveDensityLeavesUniformCellsCoarse) {
