@@ -3,6 +3,7 @@
 # build in one command, and the README's results table taken from that RESULTS.md.
 #
 #   scripts/make-figures.sh [--short] [--out DIR | --docs] [--work DIR] [--bin AMBIENCE] [--no-soak]
+#                           [--resume]
 #
 #   (no option)  the full setting: the frames at 640x360 and full reference resolution, the
 #                viewer's panel after 150 frames, the one-hour soak, and a reference bench of
@@ -17,6 +18,9 @@
 #   --work DIR   where the runs go (default out/figures or out/figures-short; DIR/work with --out)
 #   --bin FILE   the ambience executable (default build/bin/ambience)
 #   --no-soak    leave docs/soak-memory.png as it is (the soak alone takes about 10 minutes)
+#   --resume     keep the compare runs and the bench already in the work folder that ran with
+#                the same options and are newer than the executable (a run stopped half way goes
+#                on where it was; RESULTS.md says what was kept)
 #
 # Needs what setup.sh installs: oiiotool (openimageio-tools) for the mosaics, xvfb-run for the
 # viewer, python3 for RESULTS.md. Runs kept in the work folder are reused where ambience reuses
@@ -28,11 +32,11 @@ set -euo pipefail
 {
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(dirname "$here")"
-short=0 out="" docs=0 work="" bin="$root/build/bin/ambience" soak=1
+short=0 out="" docs=0 work="" bin="$root/build/bin/ambience" soak=1 resume=0
 
 usage() {
   echo "make-figures.sh: $1 (usage: make-figures.sh [--short] [--out DIR | --docs]" \
-    "[--work DIR] [--bin FILE] [--no-soak])" >&2
+    "[--work DIR] [--bin FILE] [--no-soak] [--resume])" >&2
   exit 2
 }
 while [[ $# -gt 0 ]]; do
@@ -43,7 +47,8 @@ while [[ $# -gt 0 ]]; do
     --bin) [[ $# -ge 2 ]] || usage "--bin needs a file"; bin="$2"; shift 2 ;;
     --docs) docs=1; shift ;;
     --no-soak) soak=0; shift ;;
-    -h|--help) sed -n '2,27p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    --resume) resume=1; shift ;;
+    -h|--help) sed -n '2,29p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) usage "unknown argument '$1'" ;;
   esac
 done
@@ -116,10 +121,11 @@ if ((short)); then
   bench_args=(--replays highway-drive --max-frames 60 --reference-every 3 --screen-witnesses 2)
 else
   size=640x360 grid=16 refsize=64 drive_frame=600 static_frame=300 view_frames=150
-  bench_args=(--replays highway-drive,mountain-drive,low-flight --screen-witnesses 4)
+  bench_args=(--replays highway-drive,mountain-drive,low-flight --screen-witnesses 2)
 fi
 bench_args+=(--oracle reference --out "$work/bench")
 
+kept=()
 frames_tsv="$work/frames.tsv"
 printf 'picture\tpanel\tcompare.json\tcommand\n' >"$frames_tsv"
 
@@ -150,8 +156,17 @@ compare() {
   local cmd=("$bin" compare "$@" --size "$size" --grid "$grid" --reference-size "$refsize"
              --out "$dir")
   local t=$SECONDS
-  run "$dir.log" "${cmd[@]}"
-  step "compare $name: $((SECONDS - t)) s"
+  # The run's own command line beside it, so that --resume keeps only a run of these options.
+  if ((resume)) && [[ $dir/compare.json -nt $bin && -f $dir.cmd ]] &&
+     [[ $(cat "$dir.cmd") == "${cmd[*]}" ]]; then
+    step "compare $name: kept (--resume)"
+    kept+=("$name")
+  else
+    rm -f "$dir/compare.json"
+    run "$dir.log" "${cmd[@]}"
+    echo "${cmd[*]}" >"$dir.cmd"
+    step "compare $name: $((SECONDS - t)) s"
+  fi
   printf '%s\t%s\t%s\t%s\n' "$picture" "$panel" "$dir/compare.json" "$(show "${cmd[@]}")" \
     >>"$frames_tsv"
 }
@@ -225,9 +240,18 @@ fi
 step "bench: $(show "$bin" bench "${bench_args[@]}")"
 t=$SECONDS
 bench_cmd=("$bin" bench "${bench_args[@]}")
-run "$work/bench.log" "${bench_cmd[@]}"
-bench_s=$((SECONDS - t))
-step "bench: $bench_s s"
+timing=()
+if ((resume)) && [[ $work/bench/results.csv -nt $bin && -f $work/bench.cmd ]] &&
+   [[ $(cat "$work/bench.cmd") == "${bench_cmd[*]}" ]]; then
+  step "bench: kept (--resume)"
+  kept+=(bench)
+else
+  rm -f "$work/bench/results.csv"
+  run "$work/bench.log" "${bench_cmd[@]}"
+  echo "${bench_cmd[*]}" >"$work/bench.cmd"
+  step "bench: $((SECONDS - t)) s"
+  timing=(--bench-seconds "$((SECONDS - t))")
+fi
 
 step "docs: $dest/RESULTS.md, $readme_out"
 [[ $readme_out == "$root/README.md" ]] || cp "$root/README.md" "$readme_out"
@@ -237,7 +261,7 @@ soak_log=()
 ((soak)) && soak_log=(--soak-log "$work/soak.log")
 "$python" "$here/results-md.py" --bench "$work/bench" --frames "$frames_tsv" "${soak_log[@]}" \
   --command "$(show "${bench_cmd[@]}")" --setting "$setting" --commit "$commit" \
-  --bench-seconds "$bench_s" --total-seconds "$((SECONDS - start_all))" \
+  "${timing[@]}" --kept "${kept[*]}" --total-seconds "$((SECONDS - start_all))" \
   --out "$dest/RESULTS.md" --readme "$readme_out"
 step "done in $((SECONDS - start_all)) s ($setting setting)"
 exit 0

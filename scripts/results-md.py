@@ -204,6 +204,8 @@ def main():
     p.add_argument("--commit", default="unknown")
     p.add_argument("--bench-seconds", type=float)
     p.add_argument("--total-seconds", type=float)
+    p.add_argument("--kept", default="",
+                   help="what --resume kept from an earlier run (compare names, 'bench')")
     p.add_argument("--out", required=True)
     p.add_argument("--readme")
     p.add_argument("--soak-log", help="the output of tests/soak.sh, when the soak ran")
@@ -212,10 +214,17 @@ def main():
     rows = read_results(a.bench)
     block = headline(rows, a.setting, a.command)
     timing = []
-    if a.bench_seconds is not None:
-        timing.append("the bench %.1f min" % (a.bench_seconds / 60))
+    bench_s = a.bench_seconds
+    if bench_s is None:  # kept from an earlier run: the bench's own record of its wall time
+        with open(os.path.join(a.bench, "summary.md")) as f:
+            m = re.search(r"Wall time ([0-9.]+) min", f.read())
+        bench_s = float(m.group(1)) * 60 if m else None
+    if bench_s is not None:
+        timing.append("the bench %.1f min" % (bench_s / 60))
     if a.total_seconds is not None:
-        timing.append("the whole script %.1f min" % (a.total_seconds / 60))
+        timing.append("the script %.1f min" % (a.total_seconds / 60) +
+                      (" with %s kept from an earlier run of the same options (--resume)" %
+                       ", ".join(a.kept.split()) if a.kept.strip() else ""))
     doc = [
         HEADER,
         "# Results",
