@@ -221,10 +221,13 @@ def main():
         bench_s = float(m.group(1)) * 60 if m else None
     if bench_s is not None:
         timing.append("the bench %.1f min" % (bench_s / 60))
+    kept = a.kept.split()
+    what = (["the compare runs " + ", ".join(k for k in kept if k != "bench")]
+            if [k for k in kept if k != "bench"] else []) + (["the bench"] if "bench" in kept else [])
     if a.total_seconds is not None:
         timing.append("the script %.1f min" % (a.total_seconds / 60) +
-                      (" with %s kept from an earlier run of the same options (--resume)" %
-                       ", ".join(a.kept.split()) if a.kept.strip() else ""))
+                      (", with %s kept from a stopped run of the same options and build "
+                       "(--resume)" % " and ".join(what) if what else ""))
     doc = [
         HEADER,
         "# Results",
