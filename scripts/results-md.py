@@ -63,14 +63,24 @@ def headline(rows, setting, command):
                      key=lambda m: (METHOD_ORDER.index(m) if m in METHOD_ORDER else 99, m))
     cell = {(r["replay"], r["method"]): r for r in rows}
     oracle = next((r.get("oracle") for r in rows if r.get("oracle")), "?")
+    # With the reference, the headline is the error at the drawn normal (terrain witnesses as
+    # the screen shows them), the sphere's figure beside it.
+    drawn = any(number(r, "drawn_error_mean") is not None for r in rows)
+    key = "drawn_error_mean" if drawn else "error_mean"
     lines = [
         "Setting: **%s** (`scripts/make-figures.sh%s`). Bench: `%s`" %
         (setting, " --short" if setting == "short" else "", command),
         "",
-        "Each cell: mean error against the %s oracle (relative L2 distance of the applied "
-        "irradiance over the sphere of normals, luminance-weighted; lower is better) · the "
-        "ambience's time a frame (median: predict, capture, store, interpolate and lookups), "
-        "at the same capture budget (one 16x16 face a frame)." % oracle,
+        ("Each cell: mean error against the %s oracle at the drawn normal (the terrain "
+         "witnesses as the screen shows them, luminance-weighted relative error; lower is "
+         "better), then in brackets the same witnesses over the sphere of normals · the "
+         "ambience's time a frame (median: predict, capture, store, interpolate and lookups), "
+         "at the same capture budget (one 16x16 face a frame). Ratios with their bootstrap "
+         "intervals: the bench's summary below." % oracle) if drawn else
+        ("Each cell: mean error against the %s oracle (relative L2 distance of the applied "
+         "irradiance over the sphere of normals, luminance-weighted; lower is better) · the "
+         "ambience's time a frame (median: predict, capture, store, interpolate and lookups), "
+         "at the same capture budget (one 16x16 face a frame)." % oracle),
         "",
         "| method | " + " | ".join(replays) + " |",
         "|---|" + "---|" * len(replays),
@@ -85,18 +95,20 @@ def headline(rows, setting, command):
             elif r.get("status") != "ok":
                 cells.append("failed")
             else:
-                e = fmt_error(number(r, "error_mean"))
+                e = fmt_error(number(r, key))
                 if m == "volume":
                     e = "**%s**" % e
+                if drawn:
+                    e += " (%s)" % fmt_error(number(r, "error_mean"))
                 cells.append("%s · %s" % (e, fmt_ms(number(r, "ambience_ms_median"))))
         lines.append("| %s | %s |" % (name, " | ".join(cells)))
     ratios = []
     for rp in replays:
         ours = cell.get((rp, "volume"))
-        ours_e = number(ours, "error_mean") if ours and ours.get("status") == "ok" else None
-        others = [(number(r, "error_mean"), m) for (p, m), r in cell.items()
+        ours_e = number(ours, key) if ours and ours.get("status") == "ok" else None
+        others = [(number(r, key), m) for (p, m), r in cell.items()
                   if p == rp and m != "volume" and r.get("status") == "ok"
-                  and number(r, "error_mean") is not None]
+                  and number(r, key) is not None]
         if ours_e is None or not others:
             ratios.append("—")
             continue
