@@ -57,6 +57,7 @@ struct CompareOptions {
     int grid = 16;
     int referenceSize = CubeCaptureGl::kReferenceFaceSize;
     int facesPerFrame = 1;
+    bool facesPerFrameGiven = false;
     int stride = 2;
 };
 
@@ -107,7 +108,9 @@ CompareInputs checkInputs(const CompareOptions& o) {
     BaselineSettings baselines;
     if (o.facesPerFrame < 1 || o.facesPerFrame > kMaxFacesPerFrame)
         throw InputError("--faces-per-frame", "expected 1 to " + std::to_string(kMaxFacesPerFrame));
-    volumeSettings.capture.facesPerFrame = baselines.capture.facesPerFrame = o.facesPerFrame;
+    // Only when given: a --config's facesPerFrame (the panel's Save writes it) stands otherwise.
+    if (o.facesPerFrameGiven)
+        volumeSettings.capture.facesPerFrame = baselines.capture.facesPerFrame = o.facesPerFrame;
     if (o.grid < 2 || o.grid > 256) throw InputError("--grid", "expected 2 to 256 pixels");
     if (o.referenceSize < 4 || o.referenceSize > 256)
         throw InputError("--reference-size", "expected 4 to 256");
@@ -451,8 +454,9 @@ void addCompareCommand(CLI::App& app) {
                     "and the reference");
     cmd->add_option("--shaders", o->shaders,
                     "GLSL folder (default <exe>/../shaders or $AMBIENCE_SHADER_DIR)");
-    cmd->callback([o, frame] {
+    cmd->callback([o, frame, cmd] {
         o->frameGiven = frame->count() > 0;
+        o->facesPerFrameGiven = cmd->get_option("--faces-per-frame")->count() > 0;
         if (!o->shaders.empty()) setShaderDirectory(o->shaders);
         runCompare(*o);
     });

@@ -61,6 +61,7 @@ struct RunOptions {
     std::string ambient = "volume";
     std::string ambienceConfig, saveAnchors, loadAnchors;
     int facesPerFrame = 1;
+    bool facesPerFrameGiven = false;
     bool debugOverlay = false;
     bool noVehicle = false;
     std::string camera = "chase";     // drive replays: chase or hood (--camera)
@@ -243,7 +244,9 @@ RunPlan planRun(RunOptions& o) {
         throw InputError("--faces-per-frame",
                          "expected 1 to " + std::to_string(kMaxFacesPerFrame));
     // One capture budget for every method.
-    volumeSettings.capture.facesPerFrame = baselines.capture.facesPerFrame = o.facesPerFrame;
+    // Only when given: a --config's facesPerFrame (the panel's Save writes it) stands otherwise.
+    if (o.facesPerFrameGiven)
+        volumeSettings.capture.facesPerFrame = baselines.capture.facesPerFrame = o.facesPerFrame;
     checkLoops(replay, o);
     if (o.measureEvery < 0) throw InputError("--measure-every", "must be >= 0");
     if (!o.oracle.empty() && o.measureEvery == 0)
@@ -716,7 +719,8 @@ void addRunCommand(CLI::App& app) {
                   "over frames and video");
     cmd->add_option("--shaders", o->shaders,
                     "GLSL folder (default <exe>/../shaders or $AMBIENCE_SHADER_DIR)");
-    cmd->callback([o] {
+    cmd->callback([o, cmd] {
+        o->facesPerFrameGiven = cmd->get_option("--faces-per-frame")->count() > 0;
         if (!o->shaders.empty()) setShaderDirectory(o->shaders);
         runReplay(*o);
     });

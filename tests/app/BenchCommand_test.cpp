@@ -168,6 +168,25 @@ TEST(RunMeasure, ReferenceGradesTheDrawnNormal) {
     EXPECT_EQ(terrain, graded + hidden);  // every terrain witness has a drawn patch
 }
 
+// A settings file's facesPerFrame (the tuning panel's Save writes it) was reset to 1 by the
+// command line's default: --faces-per-frame now applies only when given.
+TEST(RunMeasure, ConfigFacesPerFrameStandsUnlessTheFlagIsGiven) {
+    const fs::path dir = scratchDir("run-faces");
+    std::ofstream(dir / "v.json") << R"({"facesPerFrame": 6})";
+    const std::string common = "run --no-frames --max-frames 31 --config " +
+                               (dir / "v.json").string();
+    const auto a = runAmbience(common + " --out " + (dir / "a").string());
+    ASSERT_EQ(a.exitCode, 0) << a.err;
+    const auto b = runAmbience(common + " --faces-per-frame 2 --out " + (dir / "b").string());
+    ASSERT_EQ(b.exitCode, 0) << b.err;
+    const auto facesOf = [&](const char* run) {
+        return readJson(dir / run / "report.json")["ambience"]["facesCaptured"].get<double>();
+    };
+    // 31 frames: the config's 6 faces a frame capture about 3 times what the flag's 2 do.
+    EXPECT_GT(facesOf("a"), 2.5 * facesOf("b")) << facesOf("a") << " vs " << facesOf("b");
+    EXPECT_GT(facesOf("b"), 31.0);  // more than one face a frame
+}
+
 // Stress, a million metres from the origin: the volume captures, stores anchors and measures a
 // finite error; nothing is rejected (float positions would have collapsed the lattice there).
 TEST(RunMeasure, FarFromTheOriginStaysFinite) {
