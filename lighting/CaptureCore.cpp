@@ -63,12 +63,14 @@ FacesResult captureProbeFaces(CubeCapture& capture, CubeMapProjector& projector,
     AMB_CHECK(cube.size() == faceFloats * kCubeFaces);
 
     t0 = Clock::now();
+    // The sun's texel is left out by the direction the capture put the disc at (SunTexel.h).
+    const std::optional<glm::dvec3> sun = capture.sunDirection(timeOfDay_h);
     for (int f = facesDone; f < facesDone + count; ++f) {
         const float* face = cube.data() + faceFloats * std::size_t(f);
         for (std::size_t t = 0; t < faceFloats && !bad; ++t) {
             if (!(face[t] >= 0.0f) || !std::isfinite(face[t])) bad = true;
         }
-        projector.addFace(f, face);
+        projector.addFace(f, face, sun);
     }
     result.project_s = secondsSince(t0);
     result.faces = count;
@@ -90,9 +92,7 @@ CaptureCore::CaptureCore(CubeCapture& capture, const ProbeEnvironment& environme
                          const CaptureSettings& settings)
     : capture_(capture), environment_(environment), settings_(settings) {
     AMB_CHECK(settings.facesPerFrame >= 1 && settings.fallbackFaceSize >= 1);
-    CubeMapProjector::Options options;
-    options.sunThreshold = settings.sunThreshold;
-    projector_ = std::make_unique<CubeMapProjector>(capture_.faceSize(), options);
+    projector_ = std::make_unique<CubeMapProjector>(capture_.faceSize());
     timeRate_hPerS_ = settings.defaultTimeRate_hPerS;
 }
 
@@ -144,10 +144,14 @@ FrameEvents CaptureCore::beginFrame(const glm::dvec3& cameraPosition_m,
     haveTime_ = true;
     timeOfDay_h_ = timeOfDay_h;
 
-    // Motion: a step the reported (or previous) speed cannot explain is a teleport; the probe
-    // in progress belongs to the old place.
+    // Motion: a step the reported speed or the speed before it cannot explain is a teleport;
+    // the probe in progress belongs to the old place. A reported speed above any camera's is
+    // the step itself reported as a speed, not a measurement: it explains nothing.
     if (finite(cameraPosition_m)) {
-        const double reported = finite(cameraVelocity_mps) ? glm::length(cameraVelocity_mps) : 0.0;
+        const double reported =
+            finite(cameraVelocity_mps)
+                ? std::min(glm::length(cameraVelocity_mps), kMaxCameraSpeed_mps)
+                : 0.0;
         if (haveCamera_) {
             const double speed = std::max(reported, cameraSpeed_mps_);
             const double allowed = settings_.teleportDistance_m + 3.0 * speed * dt_s;

@@ -18,10 +18,13 @@
 //     a jump does to what it holds).
 //   - teleport: a camera step longer than teleportDistance_m + 3 x max(reported speed, previous
 //     reported speed) x dt is a teleport (counted); the probe in progress is dropped (counted as
-//     aborted).
+//     aborted). A reported speed counts up to kMaxCameraSpeed_mps only: a caller that measures
+//     the velocity from the step itself (the frame loop does) reports any jump as a speed that
+//     would explain it.
 //   - budget: facesPerFrame faces of CubeCapture::faceSize() per frame; a probe is the six faces
 //     of one position (one probe per 6 frames at one face per frame), each projected as it
-//     arrives (CubeMapProjector, the sun disc above sunThreshold taken out).
+//     arrives (CubeMapProjector), the sun's texel left out by the direction the capture put
+//     the disc at (CubeCapture::sunDirection, lighting/SunTexel.h) at every face size.
 //   - rejection: a probe with any texel that is NaN, infinite or negative, or with a coefficient
 //     that is not finite or above AnchorStore::kMaxCoefficient in float, is counted in
 //     rejectedProbes and never handed to the method.
@@ -53,11 +56,16 @@ class ProbeEnvironment;
 
 // ---- Settings -------------------------------------------------------------------------------
 
+// The fastest the teleport rule believes a camera moves [m/s]: the fastest camera path `ambience
+// replay make` makes (its --speed bound). A step at this speed is motion, not a teleport.
+inline constexpr double kMaxCameraSpeed_mps = 1.0e4;
+
 // Shared by every capturing method (the JSON keys of both settings files, at the top level).
 struct CaptureSettings {
     int facesPerFrame = 1;  // capture budget (the thesis' one face per frame, 9.1)
-    // Texels brighter (luminance radiance [W sr^-1 m^-2]) are the sun disc: taken out of the SH
-    // (the renderer lights the sun directly). The JSON key is "sunThreshold".
+    // Retired: the sun is left out of the SH by its direction (lighting/SunTexel.h), not by a
+    // luminance threshold (no capture texel but the sun's comes near one). Still read (JSON key
+    // "sunThreshold") so that settings files naming it stay valid; no projection uses it.
     double sunThreshold = kSunThreshold_Wpsrm2;
     double maxAside_m = 4.0;  // how far ProbeEnvironment::placeProbe may move a probe [m]
     double defaultTimeRate_hPerS = 1.0 / 3600.0;  // before the rate is measured (real time)

@@ -10,6 +10,7 @@
 
 #include <array>
 #include <cstddef>
+#include <optional>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -42,7 +43,8 @@ class CubeCapture {
     // texel. `cube` is resized to 6 N^2 x 3 if it has another size; faces outside the mask are
     // left as they are, so a cube can be filled over several calls (one face per frame).
     // The sun disc is added to the texel that holds the sun direction with its whole energy
-    // (radiance x disc solid angle / texel solid angle), unless terrain or trees hide it.
+    // (radiance x disc solid angle / texel solid angle), unless terrain or trees hide it
+    // (lighting/SunTexel.h: sunTexel, sunTexelRadiance).
     virtual CubeCaptureStats capture(const glm::dvec3& position_m, double timeOfDay_h,
                                      CubeFaceMask faces, std::vector<float>& cube) = 0;
 
@@ -54,6 +56,15 @@ class CubeCapture {
                                         double nearRadius_m) {
         (void)nearRadius_m;
         return capture(position_m, timeOfDay_h, faces, cube);
+    }
+
+    // The direction whose texel gets the sun disc in a capture at `timeOfDay_h`: what whoever
+    // leaves the sun out of the SH is told (CubeMapProjector::addFace, the reference oracle).
+    // None when the capture adds no disc then (the sun below the horizon, or a capture that
+    // draws no sun, as this default says).
+    virtual std::optional<glm::dvec3> sunDirection(double timeOfDay_h) const {
+        (void)timeOfDay_h;
+        return std::nullopt;
     }
 
     // Triangles per face of the latest capture (the capture scene's size; 0 if not known).

@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 
 #include <OpenImageIO/imageio.h>
@@ -129,6 +130,17 @@ CubeMapImage readCubeMap(const std::string& path) {
         image.rgb[3 * t] = image.rgb[3 * t + 1] = image.rgb[3 * t + 2] = grey[t];
     }
     return image;
+}
+
+void checkCubeMapOutput(const std::string& path, const std::string& where) {
+    // The writer writeCubeMap asks for, created and dropped: nothing is opened or written.
+    if (OIIO::ImageOutput::create(path)) return;
+    (void)OIIO::geterror();  // the reason is the one below; keep OpenImageIO's queue empty
+    const std::string ext = std::filesystem::path(path).extension().string();
+    throw InputError(where, "cannot write a cube map to '" + path + "': " +
+                                (ext.empty() ? std::string("no file extension")
+                                             : "no image format writes '" + ext + "' files") +
+                                " (.exr for HDR)");
 }
 
 void writeCubeMap(const std::string& path, int n, const std::vector<float>& rgb) {

@@ -32,4 +32,10 @@ CubeMapImage readCubeMap(const std::string& path);
 // InputError naming the file when it cannot be written.
 void writeCubeMap(const std::string& path, int n, const std::vector<float>& rgb);
 
+// Throws InputError naming `where` (an option, "--out") when writeCubeMap could not write `path`
+// for its format: OpenImageIO has no writer for the file's extension. Creates no file: a command
+// calls it with its other checks, before any work. (Whether the folder exists and is writable is
+// the command's own check.)
+void checkCubeMapOutput(const std::string& path, const std::string& where);
+
 }  // namespace amb

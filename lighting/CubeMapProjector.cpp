@@ -21,8 +21,10 @@
 #include <immintrin.h>
 #endif
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
+#include "lighting/SunTexel.h"
 #include "world/Error.h"
 
 namespace amb {
@@ -541,13 +543,32 @@ CubeMapProjector::CubeMapProjector(int faceSize, const Options& options)
 
 // ---- Projection of one face ------------------------------------------------------------------
 
-void CubeMapProjector::addFace(int face, const float* rgb) {
+void CubeMapProjector::addFace(int face, const float* rgb,
+                               const std::optional<glm::dvec3>& sunDirection) {
     AMB_CHECK(face >= 0 && face < kCubeFaces);
     // Filled in place: each path sets every coefficient, the sun sums and counts start at zero.
     FaceSum& sum = faces_[face];
     sum.sunIrradiance = {};
     sum.sunDirection = {};
     sum.bad = 0;
+    // The sun's texel (SunTexel.h): projected from a copy with that texel filled from its
+    // neighbours; what the fill took away is the directional light, along the sun direction.
+    const CubeTexel t = sunDirection ? sunTexel(*sunDirection, n_) : CubeTexel{-1, 0, 0};
+    if (t.face == face) {
+        sunFace_.assign(rgb, rgb + 3 * std::size_t(n_) * n_);
+        glm::vec3 removed, filled;
+        if (fillSunTexel(sunFace_.data(), face, n_, *sunDirection, &removed, &filled)) {
+            rgb = sunFace_.data();
+            const double omega = cubeTexelSolidAngle(t.i, t.j, n_);
+            const glm::dvec3 excess = glm::max(glm::dvec3(removed) - glm::dvec3(filled), 0.0);
+            const glm::dvec3 dir = glm::normalize(*sunDirection);
+            const double w = omega * luminance(excess.x, excess.y, excess.z);
+            for (int c = 0; c < 3; ++c) {
+                sum.sunIrradiance[c] += omega * excess[c];
+                sum.sunDirection[c] += w * dir[c];
+            }
+        }
+    }
     if (table_) {
         projectTable(face, rgb, sum);
     } else {
@@ -556,9 +577,10 @@ void CubeMapProjector::addFace(int face, const float* rgb) {
     sum.present = true;
 }
 
-void CubeMapProjector::addCubeMap(const float* rgb) {
+void CubeMapProjector::addCubeMap(const float* rgb, const std::optional<glm::dvec3>& sunDirection) {
     const std::size_t faceFloats = 3 * std::size_t(n_) * n_;
-    for (int face = 0; face < kCubeFaces; ++face) addFace(face, rgb + face * faceFloats);
+    for (int face = 0; face < kCubeFaces; ++face)
+        addFace(face, rgb + face * faceFloats, sunDirection);
 }
 
 void CubeMapProjector::takeSunTexel(int face, int i, int j, float r, float g, float b,
@@ -707,10 +729,11 @@ std::int64_t CubeMapProjector::badTexels() const {
 }
 
 CubeMapProjection projectCubeMap(int n, const std::vector<float>& rgb,
-                                 const CubeMapProjector::Options& options) {
+                                 const CubeMapProjector::Options& options,
+                                 const std::optional<glm::dvec3>& sunDirection) {
     AMB_CHECK(n >= 1 && rgb.size() == std::size_t(kCubeFaces) * n * n * 3);
     CubeMapProjector projector(n, options);
-    projector.addCubeMap(rgb.data());
+    projector.addCubeMap(rgb.data(), sunDirection);
     return {projector.coefficients(), projector.sun(), projector.badTexels()};
 }
 

@@ -12,16 +12,24 @@
 // Bad-texel policy: a texel with any channel NaN, +-Inf or negative contributes nothing (it is
 // treated as black) and is counted in badTexels(); it never reaches the coefficients.
 //
-// Sun extraction: with Options::sunThreshold set, texels whose luminance (Rec. 709 weights)
-// exceeds it are left out of the SH and summed into one DirectionalLight instead (irradiance
-// sum L omega, direction the luminance-weighted mean), so the sun does not ring (SH.h).
+// The sun, as the methods and the oracles leave it out: a face added with the capture's sun
+// direction has the texel holding it replaced by its neighbours' sky (lighting/SunTexel.h, the
+// same texel the capture put the disc in, at every face size); what that takes away (the disc's
+// energy, L omega over the texel) is the directional light sun(), along the given direction.
+// Sun extraction by luminance (Options::sunThreshold, off by default; for the ringing study and
+// cube maps of unknown origin): texels whose luminance (Rec. 709 weights) exceeds it are left
+// out of the SH and summed into sun() instead (irradiance sum L omega, direction the
+// luminance-weighted mean), so the sun does not ring (SH.h).
 #pragma once
 
 #include <array>
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <vector>
+
+#include <glm/vec3.hpp>
 
 #include "lighting/SH.h"
 
@@ -37,7 +45,8 @@ class CubeMapProjector {
 
     struct Options {
         // Luminance radiance [W sr^-1 m^-2] above which a texel is taken into the directional
-        // sun light; infinity = no extraction (the methods pass CaptureSettings::sunThreshold).
+        // sun light; infinity = no extraction. The methods and the oracles do not use it: they
+        // pass the capture's sun direction to addFace instead (see above).
         double sunThreshold = std::numeric_limits<double>::infinity();
         // Use the AVX2 + FMA table kernels when the CPU has them (false: the portable loops,
         // e.g. to compare the two).
@@ -50,10 +59,13 @@ class CubeMapProjector {
     int faceSize() const { return n_; }
 
     // Projects one face: `rgb` holds N x N texels, row-major from row 0, 3 floats per texel.
-    // `face` is 0..5 in the order +X, -X, +Y, -Y, +Z, -Z.
-    void addFace(int face, const float* rgb);
+    // `face` is 0..5 in the order +X, -X, +Y, -Y, +Z, -Z. With `sunDirection` (that of the
+    // capture the face comes from, CubeCapture::sunDirection), the sun's texel is left out as
+    // above when it lies on this face; `rgb` itself is not changed.
+    void addFace(int face, const float* rgb,
+                 const std::optional<glm::dvec3>& sunDirection = std::nullopt);
     // Projects a whole map: 6 faces in order, each as in addFace.
-    void addCubeMap(const float* rgb);
+    void addCubeMap(const float* rgb, const std::optional<glm::dvec3>& sunDirection = std::nullopt);
 
     void reset();
     bool complete() const;  // all six faces added
@@ -82,6 +94,7 @@ class CubeMapProjector {
     Options options_;
     std::shared_ptr<const Table> table_;  // null for N > kTableMaxFaceSize
     std::vector<float> scratch_;          // the face de-interleaved: 3 planes of padded N^2
+    std::vector<float> sunFace_;          // a face with its sun texel filled
     std::array<FaceSum, kCubeFaces> faces_;
 };
 
@@ -91,8 +104,10 @@ struct CubeMapProjection {
     DirectionalLight sun;
     std::int64_t badTexels = 0;
 };
-// `rgb`: 6 N^2 texels, face-major, row-major, 3 floats per texel (AMB_CHECKed size).
+// `rgb`: 6 N^2 texels, face-major, row-major, 3 floats per texel (AMB_CHECKed size);
+// `sunDirection`: the capture's, whose texel is left out (see above).
 CubeMapProjection projectCubeMap(int n, const std::vector<float>& rgb,
-                                 const CubeMapProjector::Options& options = {});
+                                 const CubeMapProjector::Options& options = {},
+                                 const std::optional<glm::dvec3>& sunDirection = std::nullopt);
 
 }  // namespace amb

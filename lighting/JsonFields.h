@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "world/Error.h"
+#include "world/JsonText.h"
 
 namespace amb {
 
@@ -94,7 +95,7 @@ class JsonFields {
 inline void readJsonSettings(const std::string& jsonText, const std::string& where,
                              const std::function<void(JsonFields&)>& read) {
     try {
-        const nlohmann::json root = nlohmann::json::parse(jsonText);
+        const nlohmann::json root = parseJsonText(jsonText, where);
         JsonFields fields(root, where);
         read(fields);
         fields.finish();

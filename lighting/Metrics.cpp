@@ -23,6 +23,7 @@
 #include "lighting/ProbeEnvironment.h"
 #include "lighting/ReferenceIrradiance.h"
 #include "world/Error.h"
+#include "world/JsonText.h"
 #include "world/TextFile.h"
 
 namespace amb {
@@ -129,17 +130,15 @@ std::vector<Witness> witnessPoints(const MeasureSettings& settings, double camer
 
 ShRgb oracleSh(CubeCapture& capture, const ProbeEnvironment& environment,
                const MeasureSettings& settings, double x_m, double z_m, double timeOfDay_h) {
-    return oracleShAt(capture, settings, environment.placeProbe(x_m, z_m, settings.maxAside_m),
-                      timeOfDay_h);
+    return oracleShAt(capture, environment.placeProbe(x_m, z_m, settings.maxAside_m), timeOfDay_h);
 }
 
-ShRgb oracleShAt(CubeCapture& capture, const MeasureSettings& settings,
-                 const glm::dvec3& position_m, double timeOfDay_h) {
-    // Bad texels are zeroed and counted by the projection; the coefficients stay finite.
+ShRgb oracleShAt(CubeCapture& capture, const glm::dvec3& position_m, double timeOfDay_h) {
+    // Bad texels are zeroed and counted by the projection; the coefficients stay finite. The
+    // sun's texel is left out by its direction, as the methods leave it out (CaptureCore).
     const std::vector<float> cube = capture.captureAll(position_m, timeOfDay_h);
-    CubeMapProjector::Options options;
-    options.sunThreshold = settings.sunThreshold;
-    return toFloat(projectCubeMap(capture.faceSize(), cube, options).sh);
+    return toFloat(
+        projectCubeMap(capture.faceSize(), cube, {}, capture.sunDirection(timeOfDay_h)).sh);
 }
 
 OracleKind parseOracleKind(const std::string& text, const std::string& where) {
@@ -189,7 +188,7 @@ ShRgb ErrorMeter::cachedOracle(const Key& key, double timeOfDay_h,
         return it->second;
     }
     const auto t0 = std::chrono::steady_clock::now();
-    const ShRgb sh = oracleShAt(capture_, settings_, position(), timeOfDay_h);
+    const ShRgb sh = oracleShAt(capture_, position(), timeOfDay_h);
     oracle_s_ += secondsSince(t0);
     ++oracleCaptures_;
     oracleCache_.emplace(key, sh);
@@ -223,10 +222,34 @@ const ReferenceSample& ErrorMeter::reference(int frameIndex, const glm::dvec3& p
     const auto t0 = std::chrono::steady_clock::now();
     const std::vector<float> cube = reference_->captureAll(position_m, timeOfDay_h);
     ReferenceSample sample =
-        referenceSample(reference_->faceSize(), cube, settings_.sunThreshold, rule_);
+        referenceSample(reference_->faceSize(), cube, reference_->sunDirection(timeOfDay_h), rule_);
     reference_s_ += secondsSince(t0);
     ++referenceCaptures_;
     return referenceCache_.emplace(key, std::move(sample)).first->second;
+}
+
+double ErrorMeter::drawnTerrainError(int index, double timeOfDay_h, const glm::dvec3& camera_m,
+                                     const Witness& w, const AmbienceMethod& method,
+                                     GroundCover& cover) {
+    const DrawnPatch p = environment_.drawnPatch(w.x_m, w.z_m, camera_m);
+    cover = p.cover;
+    if (!(p.size_m > 0.0) || p.cover == GroundCover::Hidden) return std::nan("");
+    // The four corners as the draw asks them (MethodAmbient::cornerIrradianceBatch: the corner
+    // kShadingHeight_m up, its normal, the patch's size for the near field's patch mean).
+    std::array<glm::dvec3, 4> at;
+    std::array<double, 4> patch;
+    std::array<glm::vec3, 4> e;
+    for (std::size_t c = 0; c < 4; ++c) {
+        at[c] = p.corner_m[c] + glm::dvec3(0.0, kShadingHeight_m, 0.0);
+        patch[c] = p.size_m;
+    }
+    method.cornerIrradianceAtPoints(4, at.data(), p.cornerNormal.data(), e.data(), patch.data());
+    const double u = (w.x_m - p.x0_m) / p.size_m, v = (w.z_m - p.z0_m) / p.size_m;
+    const glm::dvec3 drawn = glm::dvec3(e[0]) * ((1.0 - u) * (1.0 - v)) +
+                             glm::dvec3(e[1]) * (u * (1.0 - v)) +
+                             glm::dvec3(e[2]) * ((1.0 - u) * v) + glm::dvec3(e[3]) * (u * v);
+    return irradianceRelativeError(
+        drawn, surfaceReference(index, p.surface_m, p.surfaceNormal, timeOfDay_h));
 }
 
 void ErrorMeter::referenceFrame(int index, double timeOfDay_h, const glm::dvec3& camera_m,
@@ -256,6 +279,7 @@ void ErrorMeter::referenceFrame(int index, double timeOfDay_h, const glm::dvec3&
         const ReferenceSample& ref = reference(index, r.position_m, timeOfDay_h);
         r.terms = budgetTerms(ref, oracles[i], ideal(w.x_m, w.z_m),
                               appliedAt(method, w, r.position_m), rule_);
+        r.drawnError = drawnTerrainError(index, timeOfDay_h, camera_m, w, method, r.cover);
         referenceWitnesses_.push_back(r);
     }
     const ReferenceSettings& rs = referenceSettings_;
@@ -290,25 +314,49 @@ void ErrorMeter::screenFrame(int frameIndex, double timeOfDay_h,
                              const std::vector<ScreenWitness>& pixels) {
     if (!reference_) throw InputError("--screen-witnesses", "needs the reference oracle");
     for (const ScreenWitness& p : pixels) {
-        const glm::dvec3 n = glm::normalize(p.normal);
-        const glm::dvec3 probe = p.position_m + kScreenProbeOffset_m * n;
-        const Key key{frameIndex, probe.x, probe.z, probe.y};
-        auto it = screenCache_.find(key);
-        if (it == screenCache_.end()) {
-            const auto t0 = std::chrono::steady_clock::now();
-            const glm::dvec3 e = referenceIrradianceAt(
-                reference_->faceSize(), reference_->captureAll(probe, timeOfDay_h),
-                settings_.sunThreshold, n);
-            it = screenCache_.emplace(key, ScreenEntry{glm::vec3(n), glm::vec3(e)}).first;
-            reference_s_ += secondsSince(t0);
-            ++referenceCaptures_;
-        } else {
-            ++referenceHits_;
-        }
         screenResults_.push_back(
             {frameIndex, p.kind,
-             irradianceRelativeError(p.applied, glm::dvec3(it->second.irradiance))});
+             irradianceRelativeError(
+                 p.applied, surfaceReference(frameIndex, p.position_m, p.normal, timeOfDay_h))});
     }
+}
+
+glm::dvec3 ErrorMeter::surfaceReference(int frameIndex, const glm::dvec3& surface_m,
+                                        const glm::dvec3& normal, double timeOfDay_h) {
+    const glm::dvec3 n = glm::normalize(normal);
+    const glm::dvec3 probe = surface_m + kScreenProbeOffset_m * n;
+    const Key key{frameIndex, probe.x, probe.z, probe.y};
+    auto it = screenCache_.find(key);
+    if (it == screenCache_.end()) {
+        const auto t0 = std::chrono::steady_clock::now();
+        const glm::dvec3 e =
+            referenceIrradianceAt(reference_->faceSize(), reference_->captureAll(probe, timeOfDay_h),
+                                  reference_->sunDirection(timeOfDay_h), n);
+        it = screenCache_.emplace(key, ScreenEntry{glm::vec3(n), glm::vec3(e)}).first;
+        reference_s_ += secondsSince(t0);
+        ++referenceCaptures_;
+    } else {
+        ++referenceHits_;
+    }
+    return glm::dvec3(it->second.irradiance);
+}
+
+std::vector<double> ErrorMeter::drawnErrors(int ring, int underCrown) const {
+    std::vector<double> out;
+    for (const ReferenceWitness& r : referenceWitnesses_) {
+        const int crown = r.cover == GroundCover::UnderCrown ? 1 : 0;
+        if (r.ring >= 0 && (ring < 0 || r.ring == ring) && std::isfinite(r.drawnError) &&
+            (underCrown < 0 || underCrown == crown))
+            out.push_back(r.drawnError);
+    }
+    return out;
+}
+
+std::size_t ErrorMeter::hiddenWitnesses() const {
+    std::size_t n = 0;
+    for (const ReferenceWitness& r : referenceWitnesses_)
+        n += r.ring >= 0 && r.cover == GroundCover::Hidden;
+    return n;
 }
 
 std::vector<double> ErrorMeter::screenErrors(int kind) const {
@@ -568,7 +616,7 @@ void ErrorMeter::loadOracleText(const std::string& text, const std::string& wher
                                 const std::string& signature) {
     nlohmann::json j;
     try {
-        j = nlohmann::json::parse(text);
+        j = parseJsonText(text, where);
     } catch (const nlohmann::json::exception& e) {
         throw InputError(where, std::string("malformed oracle file: ") + e.what());
     }
@@ -656,7 +704,7 @@ void ErrorMeter::loadReferenceText(const std::string& text, const std::string& w
     if (!reference_) throw InputError(where, "no reference oracle attached");
     nlohmann::json j;
     try {
-        j = nlohmann::json::parse(text);
+        j = parseJsonText(text, where);
     } catch (const nlohmann::json::exception& e) {
         throw InputError(where, std::string("malformed reference file: ") + e.what());
     }

@@ -38,8 +38,9 @@
 // [SECTION] Oracle
 //   A fresh capture at the exact point and time with the same capture settings: the probe placed
 //   as the volume places its probes (probeHeight above the ground, moved out of plants), six
-//   faces, projected with the same sun threshold. It does not depend on the method, so a run
-//   can save the oracle of a replay and other runs of the same replay read it back.
+//   faces, projected with the sun's texel left out by its direction as the methods leave it. It
+//   does not depend on the method, so a run can save the oracle of a replay and other runs of the
+//   same replay read it back.
 #pragma once
 
 #include <cstddef>
@@ -97,8 +98,8 @@ struct MeasureSettings {
     int popPoints = 3;              // the camera's ground point + popPoints - 1 ring-1 witnesses
     double cornerSpacing_m = 32.0;  // witnesses sit on this lattice (terrain patch corners)
     double maxAside_m = 4.0;        // oracle probe placement, as CaptureSettings::maxAside_m
-    // Luminance radiance [W sr^-1 m^-2] above which a texel is the sun disc, left out of the
-    // oracle as the methods leave it out (CaptureSettings::sunThreshold).
+    // Retired with CaptureSettings::sunThreshold: the oracles leave the sun's texel out by its
+    // direction (CubeCapture::sunDirection), as the methods do. Kept until its setters go.
     double sunThreshold = kSunThreshold_Wpsrm2;
     int rings() const { return int(ringRadii.size()); }  // ring 0 + ringRadii.size() - 1 bands
 };
@@ -120,8 +121,7 @@ ShRgb appliedAt(const AmbienceMethod& method, const Witness& w, const glm::dvec3
 ShRgb oracleSh(CubeCapture& capture, const ProbeEnvironment& environment,
                const MeasureSettings& settings, double x_m, double z_m, double timeOfDay_h);
 // The same for a capture at `position_m` itself (an object witness: not moved).
-ShRgb oracleShAt(CubeCapture& capture, const MeasureSettings& settings,
-                 const glm::dvec3& position_m, double timeOfDay_h);
+ShRgb oracleShAt(CubeCapture& capture, const glm::dvec3& position_m, double timeOfDay_h);
 
 // Which oracle the headline error (errors(), ringErrors()) is taken against.
 enum class OracleKind { Self, Reference };
@@ -136,6 +136,15 @@ struct ReferenceWitness {
     ObjectKind object = ObjectKind::Car;
     glm::dvec3 position_m{0.0};  // where the reference and the coarse capture look from
     BudgetTerms terms;
+    // A terrain witness as the screen shows it (NaN when not taken: objects, or no patch known):
+    // the ambient the draw applies at the ground point, read as the draw reads it (the
+    // corners of the terrain patch drawn there, each at its point and normal through
+    // cornerIrradianceAtPoints, interpolated bilinearly), against the reference irradiance at
+    // that surface point and its normal: |E_drawn(n) - E_ref(n)| / |E_ref(n)|, luminance-weighted
+    // channels, E_ref from a reference capture kScreenProbeOffset_m along the normal.
+    // A witness on ground a bush, a rock or a trunk stands on is not seen: it gets none.
+    double drawnError = std::numeric_limits<double>::quiet_NaN();
+    GroundCover cover = GroundCover::Open;  // at the witness' ground point
 };
 
 // A screen witness (opt-in, on reference frames): a random pixel of the rendered main view, its
@@ -199,8 +208,18 @@ class ErrorMeter {
     // True when the latest frame() was a reference frame (screen witnesses are taken then).
     bool referenceFrameNow() const { return referenceNow_; }
     void screenFrame(int frameIndex, double timeOfDay_h, const std::vector<ScreenWitness>& pixels);
+    // E_ref at a surface point and normal (a capture kScreenProbeOffset_m along the normal),
+    // cached with the screen witnesses' references.
+    glm::dvec3 surfaceReference(int frameIndex, const glm::dvec3& surface_m,
+                                const glm::dvec3& normal, double timeOfDay_h);
     const std::vector<ScreenResult>& screenResults() const { return screenResults_; }
     std::vector<double> screenErrors(int kind = 0) const;  // kind 0: every surface
+    // The terrain witnesses' errors at the drawn normal (ReferenceWitness::drawnError), of one
+    // ring or (ring < 0) all; witnesses without one are left out.
+    // `underCrown` 0: open ground only, 1: under crowns only, -1: both.
+    std::vector<double> drawnErrors(int ring = -1, int underCrown = -1) const;
+    // Terrain witnesses on hidden ground (GroundCover::Hidden), left out of drawnErrors.
+    std::size_t hiddenWitnesses() const;
     static constexpr double kScreenProbeOffset_m = 0.25;
     double referenceSeconds() const { return reference_s_; }
     std::int64_t referenceCaptures() const { return referenceCaptures_; }
@@ -261,6 +280,8 @@ class ErrorMeter {
     double movingX_m_ = 0.0, movingZ_m_ = 0.0;
     int movingSeen_ = 0;
     ShRgb oracleAt(int frameIndex, const glm::dvec3& position_m, double timeOfDay_h);
+    double drawnTerrainError(int index, double timeOfDay_h, const glm::dvec3& camera_m,
+                             const Witness& w, const AmbienceMethod& method, GroundCover& cover);
     void referenceFrame(int index, double timeOfDay_h, const glm::dvec3& camera_m,
                         const std::vector<Witness>& witnesses, const std::vector<ShRgb>& oracles,
                         const AmbienceMethod& method, int measuredIndex);

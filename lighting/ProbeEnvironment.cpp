@@ -11,6 +11,7 @@
 
 #include "world/Conventions.h"
 #include "world/SkyGround.h"
+#include "world/TerrainPatch.h"
 #include "world/Vegetation.h"
 #include "world/World.h"
 
@@ -165,6 +166,45 @@ std::vector<ObjectWitness> WorldProbeEnvironment::objectWitnesses(double cameraX
         out.push_back(top);
     }
     return out;
+}
+
+DrawnPatch WorldProbeEnvironment::drawnPatch(double x_m, double z_m,
+                                             const glm::dvec3& camera_m) const {
+    if (!(camera_m == leavesCamera_)) {
+        leaves_.clear();
+        for (const PatchKey& key : TerrainPatchCache(world_).selectPatches(camera_m)) {
+            const double size = TerrainPatch::size_m(key.level);
+            leaves_.push_back({double(key.i) * size, double(key.k) * size, size});
+        }
+        leavesCamera_ = camera_m;
+    }
+    DrawnPatch p;
+    p.surface_m = glm::dvec3(x_m, world_.height(x_m, z_m), z_m);
+    p.surfaceNormal = world_.normal(x_m, z_m);
+    // A tree's footprint is its crown's; its trunk, about kTrunkRadius_m x its scale, hides the
+    // ground as bushes and rocks do within theirs.
+    constexpr double kTrunkRadius_m = 0.4;
+    for (const Plant& plant : world_.vegetation().inDisc(x_m, z_m, 3.2 * 2.0)) {
+        const double d = std::hypot(plant.position_m.x - x_m, plant.position_m.z - z_m);
+        const bool tree = plant.kind == PlantKind::Conifer || plant.kind == PlantKind::Broadleaf;
+        if (d >= Vegetation::footprintRadius_m(plant.kind) * plant.scale) continue;
+        if (!tree || d < kTrunkRadius_m * plant.scale) {
+            p.cover = GroundCover::Hidden;
+            break;
+        }
+        p.cover = GroundCover::UnderCrown;
+    }
+    for (const auto& [x0, z0, size] : leaves_) {
+        if (!(x_m >= x0 && x_m < x0 + size && z_m >= z0 && z_m < z0 + size)) continue;
+        p.x0_m = x0, p.z0_m = z0, p.size_m = size;
+        for (int c = 0; c < 4; ++c) {
+            const double x = x0 + ((c & 1) ? size : 0.0), z = z0 + ((c & 2) ? size : 0.0);
+            p.corner_m[std::size_t(c)] = glm::dvec3(x, world_.height(x, z), z);
+            p.cornerNormal[std::size_t(c)] = world_.normal(x, z);
+        }
+        break;
+    }
+    return p;
 }
 
 }  // namespace amb

@@ -23,6 +23,8 @@
 //   outside its crown towards the camera). An object's ambience is read at its ground point.
 #pragma once
 
+#include <array>
+#include <cmath>
 #include <memory>
 #include <vector>
 
@@ -40,6 +42,23 @@ struct ObjectWitness {
     ObjectKind kind = ObjectKind::Car;
     glm::dvec3 position_m{0.0};        // where the reference looks from
     double groundX_m = 0.0, groundZ_m = 0.0;  // where the draw reads the object's ambience
+};
+
+// The terrain patch the main view draws around a ground point for a camera (world/TerrainPatch.h
+// selectPatches: the quadtree leaf holding the point), as the draw shades it: the ambient is
+// looked up at the leaf's four corners with their normals, and interpolated bilinearly across
+// it. `size_m` 0: no patch known (the point's own value stands for it).
+// What stands on a ground point: nothing, a tree's crown above it (the ground there is seen
+// under the crown), or a bush, a rock or a trunk on it (the ground there is not seen at all).
+enum class GroundCover { Open, UnderCrown, Hidden };
+
+struct DrawnPatch {
+    double x0_m = 0.0, z0_m = 0.0, size_m = 0.0;  // the leaf covers [x0, x0 + size) x [z0, ...)
+    std::array<glm::dvec3, 4> corner_m{};        // ground points (x0,z0), (x1,z0), (x0,z1), (x1,z1)
+    std::array<glm::dvec3, 4> cornerNormal{};    // unit, World::normal there
+    glm::dvec3 surface_m{0.0};                   // the ground at the point itself
+    glm::dvec3 surfaceNormal{0.0, 1.0, 0.0};     // unit, World::normal there
+    GroundCover cover = GroundCover::Open;         // at the point itself
 };
 
 class ProbeEnvironment {
@@ -61,6 +80,12 @@ class ProbeEnvironment {
         (void)carHeight_m, (void)measuredIndex;
         return {};
     }
+    // The patch drawn around ground point (x, z) for a camera at `camera_m` (see DrawnPatch);
+    // none by default.
+    virtual DrawnPatch drawnPatch(double x_m, double z_m, const glm::dvec3& camera_m) const {
+        (void)x_m, (void)z_m, (void)camera_m;
+        return {};
+    }
 };
 
 struct WorldProbeEnvironmentSettings {
@@ -78,10 +103,15 @@ class WorldProbeEnvironment : public ProbeEnvironment {
     std::vector<ObjectWitness> objectWitnesses(double cameraX_m, double cameraZ_m, int trees,
                                                double near_m, double far_m, double carHeight_m,
                                                int measuredIndex) const override;
+    DrawnPatch drawnPatch(double x_m, double z_m, const glm::dvec3& camera_m) const override;
 
   private:
     const World& world_;
     WorldProbeEnvironmentSettings settings_;
+    // The leaves of the last camera drawnPatch was asked for (a reference frame asks once per
+    // terrain witness, all for one camera).
+    mutable glm::dvec3 leavesCamera_{std::nan("")};
+    mutable std::vector<std::array<double, 3>> leaves_;  // x0, z0, size
 };
 
 }  // namespace amb

@@ -6,41 +6,44 @@
 
 #include "lighting/CubeMapProjector.h"
 #include "lighting/Metrics.h"
+#include "lighting/SunTexel.h"
 #include "world/Conventions.h"
 #include "world/Error.h"
 
 namespace amb {
 
 ReferenceSample referenceSample(int faceSize, const std::vector<float>& cube,
-                                double sunThreshold, const SphereRule& rule) {
+                                const std::optional<glm::dvec3>& sunDirection,
+                                const SphereRule& rule) {
     AMB_CHECK(faceSize >= 1 && cube.size() == std::size_t(kCubeFaces) * faceSize * faceSize * 3);
     ReferenceSample out;
-    CubeMapProjector::Options options;
-    options.sunThreshold = sunThreshold;
-    out.sh = toFloat(projectCubeMap(faceSize, cube, options).sh);
+    out.sh = toFloat(projectCubeMap(faceSize, cube, {}, sunDirection).sh);
     // The texels the projection leaves out (the sun's, bad ones) are left out here too.
     std::vector<float> kept(cube);
-    dropSunTexels(kept, sunThreshold);
+    dropSunTexel(kept, faceSize, sunDirection);
     const CubeIrradiance irradiance(faceSize, kept);
     out.irradiance.reserve(rule.directions.size());
     for (const glm::dvec3& d : rule.directions) out.irradiance.emplace_back(irradiance.at(d));
     return out;
 }
 
-void dropSunTexels(std::vector<float>& cube, double sunThreshold) {
+void dropSunTexel(std::vector<float>& cube, int faceSize,
+                  const std::optional<glm::dvec3>& sunDirection) {
+    AMB_CHECK(faceSize >= 1 && cube.size() == std::size_t(kCubeFaces) * faceSize * faceSize * 3);
+    // First the sun (it skips bad neighbours, as the projector's fill does), then the bad texels.
+    if (sunDirection) fillSunTexel(cube.data(), faceSize, *sunDirection);
     for (std::size_t t = 0; t + 2 < cube.size(); t += 3) {
         const float r = cube[t], g = cube[t + 1], b = cube[t + 2];
         const bool bad = !(std::isfinite(r) && std::isfinite(g) && std::isfinite(b)) || r < 0.0f ||
                          g < 0.0f || b < 0.0f;
-        const double luminance =
-            kLuminanceWeights[0] * r + kLuminanceWeights[1] * g + kLuminanceWeights[2] * b;
-        if (bad || luminance > sunThreshold) cube[t] = cube[t + 1] = cube[t + 2] = 0.0f;
+        if (bad) cube[t] = cube[t + 1] = cube[t + 2] = 0.0f;
     }
 }
 
-glm::dvec3 referenceIrradianceAt(int faceSize, std::vector<float> cube, double sunThreshold,
+glm::dvec3 referenceIrradianceAt(int faceSize, std::vector<float> cube,
+                                 const std::optional<glm::dvec3>& sunDirection,
                                  const glm::dvec3& normal) {
-    dropSunTexels(cube, sunThreshold);
+    dropSunTexel(cube, faceSize, sunDirection);
     return CubeIrradiance(faceSize, cube).at(normal);
 }
 

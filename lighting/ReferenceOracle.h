@@ -5,11 +5,13 @@
 // [SECTION] Reference oracle
 //   At a witness point: a 64 x 64 cube map of the full scene as the main view draws it (every
 //   plant with its full mesh, bushes and rocks, the terrain at its finest level near the point;
-//   the capture's CaptureScene::Full), the sun's texels left out exactly as the methods leave
-//   them out (luminance above sunThreshold goes to the directional light, which the renderer
-//   draws apart). Its irradiance is taken straight from the cube map (CubeIrradiance: exact per
-//   texel) at the directions of a sphere rule, never through SH. Kept per witness: those
-//   irradiances, and the order-2 SH of the same cube (the projector's), for the budget's term a.
+//   the capture's CaptureScene::Full), the sun's texel left out exactly as the methods leave it
+//   out: the texel the capture put the disc in, found by the capture's sun direction and filled
+//   from its neighbours' sky (lighting/SunTexel.h), the same light left out at 64^2 as at the
+//   methods' 16^2 (the renderer lights the sun apart). Its irradiance is taken straight from the
+//   cube map (CubeIrradiance: exact per texel) at the directions of a sphere rule, never through
+//   SH. Kept per witness: those irradiances, and the order-2 SH of the same cube (the projector's),
+//   for the budget's term a.
 // [SECTION] Error on the reference
 //   ||E_x - E_ref|| / ||E_ref|| over the sphere of normals by the rule (ReferenceIrradiance.h);
 //   the rule of degree 9 is exact for the SH parts and resolves the smooth higher bands of E_ref.
@@ -58,16 +60,21 @@ struct ReferenceSample {
     std::vector<glm::vec3> irradiance;   // E_ref at the rule's directions
 };
 
-// The reference of one cube map (N x N faces, layout of CubeCapture), texels above
-// `sunThreshold` (luminance) and bad texels left out.
+// The reference of one cube map (N x N faces, layout of CubeCapture) whose capture put the sun
+// at `sunDirection` (CubeCapture::sunDirection; none: no sun), the sun's texel and bad texels
+// left out.
 ReferenceSample referenceSample(int faceSize, const std::vector<float>& cube,
-                                double sunThreshold, const SphereRule& rule);
+                                const std::optional<glm::dvec3>& sunDirection,
+                                const SphereRule& rule);
 
-// Zeroes the texels the methods' projection leaves out of the SH (luminance above
-// `sunThreshold`, and bad ones: NaN, infinite or negative), in place.
-void dropSunTexels(std::vector<float>& cube, double sunThreshold);
-// E_ref(n) at one normal: a reference cube captured at `probe`, sun texels dropped.
-glm::dvec3 referenceIrradianceAt(int faceSize, std::vector<float> cube, double sunThreshold,
+// The cube as the methods' projection sees it, in place: the sun's texel filled from its
+// neighbours (fillSunTexel, lighting/SunTexel.h) and bad texels (NaN, infinite or negative)
+// zeroed.
+void dropSunTexel(std::vector<float>& cube, int faceSize,
+                  const std::optional<glm::dvec3>& sunDirection);
+// E_ref(n) at one normal: a reference cube captured at `probe`, the sun's texel dropped.
+glm::dvec3 referenceIrradianceAt(int faceSize, std::vector<float> cube,
+                                 const std::optional<glm::dvec3>& sunDirection,
                                  const glm::dvec3& normal);
 // |a - ref| / |ref| with luminance-weighted channels (one normal: a screen witness).
 double irradianceRelativeError(const glm::dvec3& applied, const glm::dvec3& ref);

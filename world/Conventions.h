@@ -12,7 +12,7 @@
 //   Linear HDR float RGB. The sun may be ~10^5 times the sky; tone mapping happens only at display.
 //   Units: the sky model's cd/m^2 over a luminous efficacy of 100 lm/W, roughly W sr^-1 m^-2
 //   (world/Sky.h). Luminance = Rec. 709 weights (0.2126, 0.7152, 0.0722) . linear RGB.
-//   Texels brighter than kSunThreshold_Wpsrm2 (luminance radiance) are the sun disc.
+//   The sun disc is in one cube-map texel, known by its direction (lighting/SunTexel.h).
 //   The distant ground below the horizon is flat and Lambertian with albedo kGroundAlbedo
 //   (world/SkyGround.h). shaders/conventions.glsl repeats pi, the weights and the albedo;
 //   tests/world/Conventions_test.cpp checks that the two agree.
@@ -56,9 +56,9 @@ constexpr T luminance(const glm::vec<3, T, Q>& rgb) {
 // Albedo of the flat Lambertian ground below the horizon (the fallback scene, the sky texture's
 // lower half, the hemisphere ambient). A float, as the fallback has always read it.
 inline constexpr float kGroundAlbedo = 0.2f;
-// Luminance radiance [W sr^-1 m^-2, the sky model's units] above which a cube-map texel is the
-// sun disc, kept out of the SH as a directional light (docs/ARCHITECTURE.md "Spherical harmonics").
-// The default of every `sunThreshold` setting.
+// Luminance radiance [W sr^-1 m^-2] that once told the sun's cube-map texel (a low sun's 16^2
+// texel stays under it: the texel is now found by the sun's direction, docs/ARCHITECTURE.md
+// "Spherical harmonics"). The default of the retired `sunThreshold` settings.
 inline constexpr double kSunThreshold_Wpsrm2 = 5000.0;
 
 // ---- SH constants (full precision) ----------------------------------------------------------

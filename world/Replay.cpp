@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "world/Error.h"
+#include "world/JsonText.h"
 #include "world/TextFile.h"
 
 namespace amb {
@@ -154,7 +155,7 @@ Replay parseReplay(const std::string& text, const std::string& where) {
     Reader r{where};
     json doc;
     try {
-        doc = json::parse(text);
+        doc = parseJsonText(text, where);
     } catch (const json::exception& e) {  // parse_error, and out_of_range for 1e400
         std::string msg = e.what();
         // nlohmann's message starts with "[json.exception.parse_error.101] "; keep the rest.

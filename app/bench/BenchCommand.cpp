@@ -12,6 +12,7 @@
 // Slurm instead (BenchEmit.h), and `--collect DIR` reads them back: every run's result is read
 // from its folder (readRun), whoever ran it.
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -35,15 +36,19 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "app/bench/BenchCollect.h"
 #include "app/bench/BenchEmit.h"
+#include "app/bench/BenchStats.h"
 #include "app/bench/BenchSweep.h"
 #include "app/cli/Commands.h"
+#include "app/cli/OutputPaths.h"
 #include "app/cli/RunReport.h"
 #include "app/frame/MethodStages.h"
 #include "app/platform/Platform.h"
 #include "lighting/Metrics.h"
 #include "world/DataPaths.h"
 #include "world/Error.h"
+#include "world/TextFile.h"
 
 extern char** environ;
 
@@ -107,6 +112,27 @@ std::string selfExecutable() {
 
 // ---- What to run -----------------------------------------------------------------------------
 
+// A replay's name is its file's stem made a plain file name (OutputPaths.h safeFileStem): it
+// names the run folders and the oracle caches, so two replays of one bench must not share it,
+// and its path goes into the emitted command lines, so it must be one line.
+ReplayRef replayRef(const fs::path& file, std::vector<ReplayRef>& taken) {
+    const std::string path = fs::weakly_canonical(file).string();
+    if (hasControlCharacter(path))
+        throw InputError("--replays", "the path '" + printable(path) +
+                                          "' holds a control character (a newline or tab "
+                                          "cannot go into a run's command line): rename it");
+    ReplayRef ref{safeFileStem(file.stem().string()), path};
+    for (const ReplayRef& other : taken)
+        if (other.name == ref.name)
+            throw InputError("--replays", "two replays named '" + ref.name + "' (" +
+                                              printable(other.path) + " and " +
+                                              printable(ref.path) +
+                                              "): run folders and oracle caches are named by "
+                                              "the replay, so rename one");
+    taken.push_back(ref);
+    return ref;
+}
+
 std::vector<ReplayRef> resolveReplays(const std::string& list) {
     std::vector<ReplayRef> out;
     const std::string dir = shippedReplayDir();
@@ -116,8 +142,7 @@ std::vector<ReplayRef> resolveReplays(const std::string& list) {
         for (const auto& e : fs::directory_iterator(dir))
             if (e.path().extension() == ".json") files.push_back(e.path());
         std::sort(files.begin(), files.end());
-        for (const auto& f : files)
-            out.push_back({f.stem().string(), fs::weakly_canonical(f).string()});
+        for (const auto& f : files) replayRef(f, out);
         return out;
     }
     const std::vector<std::string> items = splitList(list);
@@ -127,9 +152,9 @@ std::vector<ReplayRef> resolveReplays(const std::string& list) {
         if (p.extension() != ".json")
             p = fs::path(dir.empty() ? "replays" : dir) / (item + ".json");
         if (!fs::exists(p))
-            throw InputError("--replays",
-                             "no replay '" + item + "' (looked for " + p.string() + ")");
-        out.push_back({p.stem().string(), fs::weakly_canonical(p).string()});
+            throw InputError("--replays", "no replay '" + printable(item) + "' (looked for " +
+                                              printable(p.string()) + ")");
+        replayRef(p, out);
     }
     return out;
 }
@@ -176,6 +201,9 @@ struct Job {
 
 // Runs argv with stdout and stderr into `log`; returns the exit status (or -signal).
 int spawnAndWait(const std::vector<std::string>& args, const std::string& log) {
+    // A link planted at the log's name is replaced, never written through.
+    struct stat st {};
+    if (::lstat(log.c_str(), &st) == 0 && S_ISLNK(st.st_mode)) ::unlink(log.c_str());
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
     posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
@@ -196,16 +224,24 @@ int spawnAndWait(const std::vector<std::string>& args, const std::string& log) {
     return -1;
 }
 
+// The last `count` lines of a run's log, joined by " | " (one line, control characters shown
+// as escapes). Only the log's end is read, and only from a regular file in the run's folder.
 std::string lastLines(const std::string& path, int count) {
-    std::ifstream in(path);
+    std::string text;
+    try {
+        text = readTextFileTail(path, "run log", kLogTailBytes, Links::Refuse);
+    } catch (const InputError& e) {
+        return std::string("(") + e.what() + ")";
+    }
     std::vector<std::string> lines;
+    std::stringstream in(text);
     std::string line;
     while (std::getline(in, line)) {
         // Progress output uses carriage returns; keep the text after the last one.
         const auto cr = line.find_last_of('\r');
         if (cr != std::string::npos) line = line.substr(cr + 1);
         // Progress lines come every few seconds: a log's last lines are read without them.
-        if (!line.empty() && !isProgressLine(line)) lines.push_back(line);
+        if (!line.empty() && !isProgressLine(line)) lines.push_back(printable(line));
     }
     std::string out;
     for (std::size_t i = lines.size() > std::size_t(count) ? lines.size() - count : 0;
@@ -214,43 +250,86 @@ std::string lastLines(const std::string& path, int count) {
     return out;
 }
 
+// True when `path` is a folder itself, not a link to one (lstat).
+bool isRealFolder(const fs::path& path) {
+    struct stat st {};
+    return ::lstat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+// True when anything, a dangling link included, is at `path`.
+bool somethingAt(const fs::path& path) {
+    struct stat st {};
+    return ::lstat(path.c_str(), &st) == 0;
+}
+
 // A run's outcome, read back from its folder alone (kExitStatusFile, report.json, log.txt), the
 // same way whoever ran it: a local bench just after the run, --from-runs and --collect later.
+// The folder may have been in other hands: each file is read as hostile input (BenchCollect.h),
+// and whatever is wrong with one is that run's error, not the bench's.
 void readRun(Job& job, const std::string& out) {
     const fs::path dir = fs::path(out) / job.runDir;
     job.ok = false;
     job.error.clear();
     job.report = json();
     job.wall_s = std::nan("");
-    int status = 0;
+    const fs::path rel = fs::path(job.runDir);
+    if (!somethingAt(dir)) {
+        job.error = "not run: no " + (rel / kExitStatusFile).string();
+        return;
+    }
+    if (!isRealFolder(fs::path(out) / "runs") || !isRealFolder(dir)) {
+        job.error = "not read: " + job.runDir + " is not a folder (a symbolic link is refused)";
+        return;
+    }
+    ExitStatus status;
     bool ended = false;
-    {
-        std::ifstream in(dir / kExitStatusFile);
-        double wall_s = 0.0;
-        if (in >> status) {
-            ended = true;
-            if (in >> wall_s) job.wall_s = wall_s;
+    if (somethingAt(dir / kExitStatusFile)) {
+        try {
+            status = parseExitStatus(readTextFile((dir / kExitStatusFile).string(),
+                                                  "exit status file", kMaxExitStatusBytes,
+                                                  Links::Refuse),
+                                     (rel / kExitStatusFile).string());
+        } catch (const InputError& e) {
+            job.error = std::string("not read: ") + e.what();
+            return;
         }
+        ended = true;
+        if (status.wall_s >= 0.0) job.wall_s = status.wall_s;
     }
     const fs::path report = dir / "report.json";
     // A folder from before the exit status was kept counts as ended when it has its report.
-    if (!ended && !fs::exists(report)) {
-        job.error = "not run: no " + (fs::path(job.runDir) / kExitStatusFile).string();
+    if (!ended && !somethingAt(report)) {
+        job.error = "not run: no " + (rel / kExitStatusFile).string();
         return;
     }
-    if (status != 0 || !fs::exists(report)) {
-        job.error = (status > 128 ? "killed by signal " + std::to_string(status - 128)
-                                  : "exit code " + std::to_string(status)) +
+    if (status.code != 0 || !somethingAt(report)) {
+        job.error = (status.code > 128 ? "killed by signal " + std::to_string(status.code - 128)
+                                       : "exit code " + std::to_string(status.code)) +
                     ": " + lastLines((dir / "log.txt").string(), 2);
         return;
     }
     try {
-        std::ifstream in(report);
-        job.report = json::parse(in);
+        job.report = parseRunReport(
+            readTextFile(report.string(), "run report", kMaxRunReportBytes, Links::Refuse),
+            (rel / "report.json").string());
         job.ok = true;
-    } catch (const json::exception& e) {
+    } catch (const InputError& e) {
         job.error = std::string("unreadable report: ") + e.what();
     }
+}
+
+// Creates `path` (a folder the bench writes into) unless it is one already; a symbolic link or
+// a file there is refused, so that nothing is written outside the bench's folder.
+void makeRealFolder(const fs::path& path) {
+    struct stat st {};
+    if (::lstat(path.c_str(), &st) == 0) {
+        if (S_ISDIR(st.st_mode)) return;
+        throw InputError(path.string(), "is not a folder (a symbolic link or a file): refusing "
+                                        "to write through it");
+    }
+    std::error_code ec;
+    fs::create_directory(path, ec);
+    if (ec) throw InputError(path.string(), "cannot create the folder (" + ec.message() + ")");
 }
 
 struct Runner {
@@ -273,10 +352,14 @@ struct Runner {
     // earlier run there.
     void prepare(const Job& job) const {
         const fs::path dir = dirOf(job);
-        fs::create_directories(dir);
-        std::ofstream(dir / "volume.json") << job.point.volume.dump(2) << "\n";
-        std::ofstream(dir / "baseline.json") << job.point.baseline.dump(2) << "\n";
-        std::ofstream(dir / "command.txt") << shellCommand(args(job)) << "\n";
+        makeRealFolder(fs::path(out) / "runs");
+        makeRealFolder(dir);
+        writeTextFile((dir / "volume.json").string(), job.point.volume.dump(2) + "\n",
+                      "run's settings file");
+        writeTextFile((dir / "baseline.json").string(), job.point.baseline.dump(2) + "\n",
+                      "run's settings file");
+        writeTextFile((dir / "command.txt").string(), shellCommand(args(job)) + "\n",
+                      "run's command line");
         std::error_code ec;
         fs::remove(dir / kExitStatusFile, ec);
         fs::remove(dir / "report.json", ec);
@@ -304,6 +387,8 @@ struct Runner {
             (fs::path(out) / "oracle" / (job.replay.name + ".json")).string(),
             "--stride",
             std::to_string(stride),
+            // An oracle left in the folder by other code or another replay is made again.
+            "--replace-stale-caches",
             "--backend",
             backend,
             "--out",
@@ -336,7 +421,13 @@ struct Runner {
 
     // Runs the job here, records its exit status as an emitted line does, and reads it back.
     void run(Job& job) const {
-        prepare(job);
+        try {
+            prepare(job);
+        } catch (const InputError& e) {
+            job.ok = false;
+            job.error = std::string("not run: ") + e.what();
+            return;
+        }
         const fs::path dir = dirOf(job);
         const auto t0 = std::chrono::steady_clock::now();
         const int status = spawnAndWait(args(job), (dir / "log.txt").string());
@@ -344,12 +435,13 @@ struct Runner {
             std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         // As a shell reports it: 128 + signal for a killed run, 127 for one that did not start.
         const int code = status <= -1000 ? 127 : status < 0 ? 128 - status : status;
-        {
-            std::ofstream s(dir / (std::string(kExitStatusFile) + ".tmp"));
-            s << code << " " << wall_s << "\n";
+        char text[64];
+        std::snprintf(text, sizeof text, "%d %.3f\n", code, wall_s);
+        try {
+            writeTextFile((dir / kExitStatusFile).string(), text, "exit status file");
+        } catch (const InputError&) {
+            // readRun reports the run as not run.
         }
-        std::error_code ec;
-        fs::rename(dir / (std::string(kExitStatusFile) + ".tmp"), dir / kExitStatusFile, ec);
         readRun(job, out);
     }
 };
@@ -428,6 +520,21 @@ void runJobs(std::vector<Job>& jobs, const Runner& runner, int workers, const st
 }
 
 // ---- Results ---------------------------------------------------------------------------------
+
+// The object at `key` of `j`, or an empty object (a report read back may hold anything).
+const json& objectAt(const json& j, const char* key) {
+    static const json empty = json::object();
+    if (!j.is_object()) return empty;
+    const auto it = j.find(key);
+    return it != j.end() && it->is_object() ? *it : empty;
+}
+
+// The string at `key` of `j`, or `fallback`.
+std::string stringAt(const json& j, const char* key, const std::string& fallback) {
+    if (!j.is_object()) return fallback;
+    const auto it = j.find(key);
+    return it != j.end() && it->is_string() ? it->get<std::string>() : fallback;
+}
 
 double number(const json& j, std::initializer_list<const char*> path) {
     const json* at = &j;
@@ -508,6 +615,12 @@ const std::vector<std::string> kColumns = {"replay",
                                            "screen_road_error_mean",
                                            "screen_object_error_mean",
                                            "screen_witnesses",
+                                           "drawn_error_mean",
+                                           "drawn_error_p95",
+                                           "drawn_witnesses",
+                                           "drawn_under_crown_error_mean",
+                                           "drawn_under_crown_witnesses",
+                                           "drawn_hidden_witnesses",
                                            "reference_s",
                                            "wall_s",
                                            "run_dir"};
@@ -531,7 +644,7 @@ std::map<std::string, std::string> resultRow(const Job& job) {
     if (!job.ok) return row;
     const json& r = job.report;
     put("frames", number(r, {"frameCount"}));
-    const json m = r.value("measurement", json::object());
+    const json m = objectAt(r, "measurement");
     put("measured_frames", number(m, {"measuredFrames"}));
     put("error_mean", number(m, {"error", "mean"}));
     put("error_p50", number(m, {"error", "p50"}));
@@ -552,10 +665,10 @@ std::map<std::string, std::string> resultRow(const Job& job) {
     put("pop_move_max", number(m, {"pop_move", "max"}));
     put("mean_speed_mps", number(m, {"meanSpeed_mps"}));
     put("oracle_s", number(m, {"oracle_s"}));
-    row["oracle"] = m.value("oracle", std::string("self"));
+    row["oracle"] = stringAt(m, "oracle", "self");
     if (m.contains("reference")) {
         const json& ref = m["reference"];
-        const json& b = ref.value("budget", json::object());
+        const json& b = objectAt(ref, "budget");
         put("self_error_mean", number(b, {"selfError", "mean"}));
         put("budget_witnesses", number(b, {"count"}));
         put("budget_total_rms", number(b, {"rmsTotal"}));
@@ -564,6 +677,14 @@ std::map<std::string, std::string> resultRow(const Job& job) {
         for (const char* kind : {"car", "tree_base", "tree_crown"})
             put(std::string(kind) + "_error_mean", number(ref, {"objects", kind, "error", "mean"}));
         put("reference_s", number(ref, {"reference_s"}));
+        if (number(ref, {"drawn", "error", "count"}) > 0) {
+            put("drawn_error_mean", number(ref, {"drawn", "error", "mean"}));
+            put("drawn_error_p95", number(ref, {"drawn", "error", "p95"}));
+            put("drawn_witnesses", number(ref, {"drawn", "error", "count"}));
+            put("drawn_under_crown_error_mean", number(ref, {"drawn", "underCrown", "mean"}));
+            put("drawn_under_crown_witnesses", number(ref, {"drawn", "underCrown", "count"}));
+            put("drawn_hidden_witnesses", number(ref, {"drawn", "hidden"}));
+        }
         if (number(ref, {"screen", "error", "count"}) > 0) {
             put("screen_error_mean", number(ref, {"screen", "error", "mean"}));
             put("screen_witnesses", number(ref, {"screen", "error", "count"}));
@@ -595,16 +716,22 @@ std::map<std::string, std::string> resultRow(const Job& job) {
     return row;
 }
 
+// A CSV field on one line: quoted when it holds a comma or a quote, control characters (a
+// newline from a report read back) as spaces.
 std::string csvField(const std::string& s) {
-    if (s.find_first_of(",\"\n") == std::string::npos) return s;
+    if (s.find_first_of(",\"") == std::string::npos && !hasControlCharacter(s)) return s;
     std::string q = "\"";
-    for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c == '\n' ? ' ' : c);
+    for (char c : s) {
+        if (c == '"')
+            q += "\"\"";
+        else
+            q += hasControlCharacter(std::string(1, c)) ? ' ' : c;
+    }
     return q + "\"";
 }
 
 void writeResultsCsv(const std::vector<Job>& jobs, const std::string& path) {
-    std::ofstream out(path);
-    if (!out) throw InputError(path, "cannot write the results");
+    std::ostringstream out;
     for (std::size_t c = 0; c < kColumns.size(); ++c) out << (c ? "," : "") << kColumns[c];
     out << "\n";
     for (const Job& job : jobs) {
@@ -615,6 +742,7 @@ void writeResultsCsv(const std::vector<Job>& jobs, const std::string& path) {
         }
         out << "\n";
     }
+    writeTextFile(path, out.str(), "results");
 }
 
 std::string fmt(double v, const char* format) {
@@ -632,8 +760,15 @@ std::string fmt(double v, const char* format) {
 // per-frame means (every measured frame has the same witnesses). NaN without data.
 double errorUpTo(const std::string& dir, const Job& j, int lastFrame) {
     const bool reference =
-        j.report.value("measurement", json::object()).value("oracle", std::string()) == "reference";
-    std::ifstream in((fs::path(dir) / j.runDir / (reference ? "reference.csv" : "measure.csv")).string());
+        stringAt(objectAt(j.report, "measurement"), "oracle", "") == "reference";
+    std::stringstream in;
+    try {
+        in.str(readTextFile(
+            (fs::path(dir) / j.runDir / (reference ? "reference.csv" : "measure.csv")).string(),
+            "measurement file", kMaxOracleFileBytes, Links::Refuse));
+    } catch (const InputError&) {
+        return std::nan("");
+    }
     std::string line;
     if (!std::getline(in, line)) return std::nan("");
     double sum = 0.0;
@@ -651,6 +786,19 @@ double errorUpTo(const std::string& dir, const Job& j, int lastFrame) {
     return count ? sum / double(count) : std::nan("");
 }
 
+// Our run against another of the same replay: the ratio of mean errors over the frames both
+// measured, with its paired bootstrap 95 % interval (BenchStats.h).
+// With `drawn`, the terrain witnesses' errors at the drawn normal (reference runs only).
+RatioInterval ratioAgainst(const std::string& dir, const Job& ours, const Job& other,
+                           bool drawn = false) {
+    const bool reference =
+        stringAt(objectAt(ours.report, "measurement"), "oracle", "") == "reference";
+    const auto errors = [&](const Job& j) {
+        return readFrameErrors((fs::path(dir) / j.runDir).string(), reference, drawn);
+    };
+    return pairedBootstrapRatio(errors(ours), errors(other));
+}
+
 void writeBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
                         const std::vector<std::string>& replays, int fullLengthBudget,
                         const std::string& dir) {
@@ -665,13 +813,14 @@ void writeBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
     }
     std::sort(budgets.begin(), budgets.end());
     auto errorOf = [](const Job& j) {
-        return number(j.report.value("measurement", json::object()), {"error", "mean"});
+        return number(objectAt(j.report, "measurement"), {"error", "mean"});
     };
     auto msOf = [](const Job& j) { return number(j.report, {"ambience", "ambience_ms", "median"}); };
     out << "## Budget: error against cost\n\n";
     out << "Each cell: mean error / ambience ms per frame (median), default settings at each "
            "capture budget (faces per frame). Ours / best other = our mean error over the "
-           "lowest of the other methods' at that budget. Runs above "
+           "lowest of the other methods' at that budget, over the frames both measured, with "
+           "its paired bootstrap 95 % interval. Runs above "
         << fullLengthBudget
         << " faces per frame play the first (" << fullLengthBudget
         << " / faces) of each replay, every method alike.\n\n";
@@ -683,7 +832,8 @@ void writeBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
         out << "\n";
         for (int b : budgets) {
             out << "| " << b << " |";
-            double ours = std::nan(""), best = std::nan("");
+            double best = std::nan("");
+            const Job *oursJob = nullptr, *bestJob = nullptr;
             for (const auto& m : methods) {
                 const Job* found = nullptr;
                 for (const Job& j : jobs)
@@ -696,10 +846,12 @@ void writeBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
                 }
                 const double e = errorOf(*found);
                 out << " " << fmt(e, "%.4f") << " / " << fmt(msOf(*found), "%.2f") << " |";
-                if (m == "volume") ours = e;
-                else if (std::isfinite(e) && !(e >= best)) best = e;
+                if (m == "volume") oursJob = found;
+                else if (std::isfinite(e) && !(e >= best)) best = e, bestJob = found;
             }
-            out << " **" << fmt(ours / best, "%.3g") << "** |\n";
+            out << " **"
+                << (oursJob && bestJob ? formatRatio(ratioAgainst(dir, *oursJob, *bestJob)) : "—")
+                << "** |\n";
         }
         // Runs above the full-length budget play a share of the replay: every run is also
         // measured over the frames all of them play, and the Pareto front is taken on that.
@@ -753,7 +905,7 @@ void writeErrorBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
                              const std::vector<std::string>& replays, int idealBudget) {
     bool any = false;
     for (const Job& j : jobs)
-        any |= j.ok && j.report.value("measurement", json::object()).contains("reference");
+        any |= j.ok && objectAt(j.report, "measurement").contains("reference");
     if (!any) return;
     out << "## Error budget against the reference oracle\n\n"
            "RMS over the terrain witnesses of the reference frames, each term relative to the "
@@ -781,10 +933,10 @@ void writeErrorBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
             if (!j.point.family.empty() &&
                 (j.point.family != "default" || j.point.facesPerFrame != idealBudget))
                 continue;
-            const json m = j.report.value("measurement", json::object());
+            const json m = objectAt(j.report, "measurement");
             if (!m.contains("reference")) continue;
             const json& ref = m["reference"];
-            const json b = ref.value("budget", json::object());
+            const json b = objectAt(ref, "budget");
             const double terms[4] = {number(b, {"truncation"}), number(b, {"capture"}),
                                      number(b, {"spacing"}), number(b, {"schedule"})};
             const char* names[4] = {"a", "b", "c", "d"};
@@ -818,8 +970,8 @@ void writeErrorBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
 void writeSummary(const std::vector<Job>& jobs, const std::string& path,
                   const std::string& commandLine, const std::string& timing,
                   const std::string& oracle, int idealBudget, int fullLengthBudget) {
-    std::ofstream out(path);
-    if (!out) throw InputError(path, "cannot write the summary");
+    std::ostringstream out;
+    const std::string dir = fs::path(path).parent_path().string();
     out << "# Ambience bench: speed against error\n\n";
     out << "Command: `" << commandLine << "`  \n";
     out << timing << " **Oracle: " << oracle
@@ -843,11 +995,23 @@ void writeSummary(const std::vector<Job>& jobs, const std::string& path,
     // Headline: default point, per replay.
     for (const std::string& replay : replays) {
         out << "## " << replay << "\n\n";
-        out << "| method | point | mean error | p95 error | max error | p99 pop | max pop | "
+        const bool drawn = oracle == "reference";
+        if (drawn && replay == replays.front())
+            out << "Error at the drawn normal: the terrain witnesses as the screen shows them, "
+                   "the ambient the draw applies there (the drawn patch's corners, each at its "
+                   "normal, interpolated across the patch) against the reference irradiance at "
+                   "that surface point and its normal (lighting/Metrics.h ReferenceWitness); "
+                   "witnesses under tree crowns are in the mean and also shown alone; those on "
+                   "ground a bush, rock or trunk hides are left out. Sphere: the same "
+                   "witnesses' error over the whole sphere of normals.\n\n";
+        out << "| method | point | " << (drawn ? "error at the drawn normal (terrain) | " : "")
+            << (drawn ? "sphere " : "")
+            << "mean error | p95 error | max error | p99 pop | max pop | "
                "p99 pop moving | max pop moving | ambience ms (median) | faces/s | "
                "probes (max) | kB (max) |\n";
-        out << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
-        double ours = std::nan(""), grid = std::nan("");
+        out << (drawn ? "|---" : "") << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+        const Job* ours = nullptr;
+        std::vector<const Job*> others;
         for (const Job& j : jobs) {
             if (j.replay.name != replay) continue;
             if (!j.ok) {
@@ -856,12 +1020,22 @@ void writeSummary(const std::vector<Job>& jobs, const std::string& path,
                 continue;
             }
             const json& r = j.report;
-            const json m = r.value("measurement", json::object());
+            const json m = objectAt(r, "measurement");
             const double e = number(m, {"error", "mean"});
-            if (j.point.label == "default" && j.method == "volume") ours = e;
-            if (j.point.label == "default" && j.method == "grid") grid = e;
+            if (j.point.label == "default" && j.method == "volume") ours = &j;
+            if (j.point.label == "default" && j.method != "volume") others.push_back(&j);
             out << "| " << (j.method == "volume" ? "**volume (ours)**" : j.method) << " | "
-                << j.point.label << " | " << fmt(e, "%.4f") << " | "
+                << j.point.label << " | ";
+            if (drawn) {
+                const auto d = [&](const char* a, const char* b) {
+                    return number(m, {"reference", "drawn", a, b});
+                };
+                out << "**" << fmt(d("error", "mean"), "%.4f") << "** (under crowns "
+                    << fmt(d("underCrown", "mean"), "%.3f") << ", "
+                    << fmt(d("underCrown", "count"), "%.0f") << " of "
+                    << fmt(d("error", "count"), "%.0f") << ") | ";
+            }
+            out << fmt(e, "%.4f") << " | "
                 << fmt(number(m, {"error", "p95"}), "%.4f") << " | "
                 << fmt(number(m, {"error", "max"}), "%.3f") << " | "
                 << fmt(number(m, {"pop", "p99"}), "%.5f") << " | "
@@ -873,7 +1047,28 @@ void writeSummary(const std::vector<Job>& jobs, const std::string& path,
                 << fmt(number(r, {"ambience", "anchorsMax"}), "%.0f") << " | "
                 << fmt(number(r, {"ambience", "bytesMax"}) / 1024.0, "%.1f") << " |\n";
         }
-        out << "\nOur mean error / scrolling grid's: **" << fmt(ours / grid, "%.3g") << "**\n\n";
+        if (ours && !others.empty()) {
+            // The drawn normal's ratio first (the headline) with the reference, then the
+            // sphere's.
+            for (const bool atDrawn : drawn ? std::vector<bool>{true, false}
+                                            : std::vector<bool>{false}) {
+                out << "\nOur mean error" << (atDrawn ? " at the drawn normal" : drawn ? " over the sphere of normals" : "")
+                    << " / each other method's (default points), over the frames both "
+                       "measured, with the paired bootstrap 95 % interval (blocks of "
+                       "consecutive measured frames resampled; app/bench/BenchStats.h):";
+                int frames = 0;
+                for (const Job* other : others) {
+                    const RatioInterval r = ratioAgainst(dir, *ours, *other, atDrawn);
+                    frames = std::max(frames, r.frames);
+                    out << (other == others.front() ? " " : "; ") << other->method << " **"
+                        << formatRatio(r) << "**" << (r.excludesOne() ? "" : " (interval holds 1)");
+                }
+                out << " (" << frames << " frames).\n";
+            }
+            out << "\n";
+        } else {
+            out << "\n";
+        }
     }
     // Stress: every replay (the fast flight with its cut, the time-lapse, the far flight), for
     // every method: finite error, memory held, teleports and rejected probes.
@@ -902,6 +1097,7 @@ void writeSummary(const std::vector<Job>& jobs, const std::string& path,
         out << "- `pareto-" << replay << ".png`, `error-over-time-" << replay << ".png`\n";
     out << "- `error-vs-speed.png`, `error-by-ring.png`\n\n";
     out << "Each run's report, measurement CSV, log and exact command line are in `runs/`.\n";
+    writeTextFile(path, out.str(), "summary");
 }
 
 void drawPlots(const std::string& out) {
@@ -987,7 +1183,11 @@ void tune(const BenchOptions& o, const Runner& runner, int workers) {
         double ms = 0.0, mean = 0.0;
     };
     std::vector<Candidate> tried;
-    std::ofstream log((fs::path(o.out) / "tune.csv").string());
+    // Written as the tuning goes; a link planted at its name is replaced, not written through.
+    const std::string tuneCsv = (fs::path(o.out) / "tune.csv").string();
+    struct stat st {};
+    if (::lstat(tuneCsv.c_str(), &st) == 0 && S_ISLNK(st.st_mode)) ::unlink(tuneCsv.c_str());
+    std::ofstream log(tuneCsv);
     log << "round,candidate,params,replay,mean_error,p95_error,pop_p99,ambience_ms_median,status\n";
     auto evaluate = [&](const json& volume, const std::string& label, int round) {
         std::vector<Job> jobs;
@@ -1046,7 +1246,7 @@ void tune(const BenchOptions& o, const Runner& runner, int workers) {
         }
     }
     const std::string file = (fs::path(o.out) / "tuned-volume.json").string();
-    std::ofstream(file) << best.volume.dump(2) << "\n";
+    writeTextFile(file, best.volume.dump(2) + "\n", "tuned settings");
     std::printf(
         "tuned settings %s: mean error %.4f over %s (defaults %.4f), budget %d face(s) "
         "per frame, ambience %.2f ms/frame: %s\n",
@@ -1058,7 +1258,7 @@ void tune(const BenchOptions& o, const Runner& runner, int workers) {
         for (const Candidate& c : tried)
             if (c.errors[r] < b->errors[r]) b = &c;
         const std::string f = (fs::path(o.out) / ("tuned-" + replays[r].name + ".json")).string();
-        std::ofstream(f) << b->volume.dump(2) << "\n";
+        writeTextFile(f, b->volume.dump(2) + "\n", "tuned settings");
         std::printf("  %s: best %s, mean error %.4f (defaults %.4f): %s\n", replays[r].name.c_str(),
                     b->label.c_str(), b->errors[r], tried.front().errors[r], f.c_str());
     }
@@ -1143,12 +1343,12 @@ void emitBench(const BenchOptions& o, const std::vector<Job>& jobs, const Runner
     for (const Job& j : jobs)
         if (j.makesOracle) oracleRun[j.replay.name] = runner.dirOf(j), ++firstStage;
     std::vector<EmittedRun> runs;
-    json manifestRuns = json::array();
+    BenchManifest manifest;
     for (const Job& j : jobs) {
         runner.prepare(j);
         runs.push_back(
             {runner.args(j), runner.dirOf(j), j.makesOracle ? "" : oracleRun[j.replay.name]});
-        manifestRuns.push_back(j.runDir);
+        manifest.runs.push_back(j.runDir);
     }
     const std::string dir = runner.out;
     writeJobFiles(dir, runs, firstStage, runner.exe);
@@ -1156,27 +1356,24 @@ void emitBench(const BenchOptions& o, const std::vector<Job>& jobs, const Runner
     const fs::path sweepCopy = fs::path(dir) / "sweep.json";
     std::error_code ec;
     if (!o.sweep.empty() && !fs::equivalent(o.sweep, sweepCopy, ec))
-        fs::copy_file(o.sweep, sweepCopy, fs::copy_options::overwrite_existing);
-    json replayList = json::array();
-    for (const ReplayRef& r : replays) replayList.push_back({{"name", r.name}, {"path", r.path}});
-    std::string methodList;
-    for (const auto& m : methods) methodList += (methodList.empty() ? "" : ",") + m;
-    const json manifest = {{"command", commandLine},
-                           {"replays", replayList},
-                           {"methods", methodList},
-                           {"sweep", o.sweep.empty() ? "" : "sweep.json"},
-                           {"budgets", o.budgets},
-                           {"oracle", o.oracle},
-                           {"referenceEvery", o.referenceEvery},
-                           {"fullLengthBudget", o.fullLengthBudget},
-                           {"screenWitnesses", o.screenWitnesses},
-                           {"measureEvery", o.measureEvery},
-                           {"maxFrames", o.maxFrames},
-                           {"stride", o.stride},
-                           {"frames", o.frames},
-                           {"backend", o.backend},
-                           {"runs", manifestRuns}};
-    std::ofstream(fs::path(dir) / "bench.json") << manifest.dump(2) << "\n";
+        writeTextFile(sweepCopy.string(),
+                      readTextFile(o.sweep, "sweep file", kMaxSettingsFileBytes), "sweep copy");
+    manifest.command = commandLine;
+    for (const ReplayRef& r : replays) manifest.replays.push_back({r.name, r.path});
+    for (const auto& m : methods) manifest.methods += (manifest.methods.empty() ? "" : ",") + m;
+    manifest.sweep = o.sweep.empty() ? "" : "sweep.json";
+    manifest.budgets = o.budgets;
+    manifest.oracle = o.oracle;
+    manifest.referenceEvery = o.referenceEvery;
+    manifest.fullLengthBudget = o.fullLengthBudget;
+    manifest.screenWitnesses = o.screenWitnesses;
+    manifest.measureEvery = o.measureEvery;
+    manifest.maxFrames = o.maxFrames;
+    manifest.stride = o.stride;
+    manifest.frames = o.frames;
+    manifest.backend = o.backend;
+    writeTextFile((fs::path(dir) / "bench.json").string(),
+                  benchManifestJson(manifest).dump(2) + "\n", "bench.json");
     const auto q = [&](const char* file) { return shellQuote((fs::path(dir) / file).string()); };
     std::printf("bench: %zu runs emitted into %s (the first %d make the oracles)\n", jobs.size(),
                 dir.c_str(), firstStage);
@@ -1192,34 +1389,27 @@ void emitBench(const BenchOptions& o, const std::vector<Job>& jobs, const Runner
 // --collect DIR: the bench options as --emit saved them in DIR/bench.json.
 BenchOptions readManifest(const std::string& dir, std::string& commandLine) {
     const std::string path = (fs::path(dir) / "bench.json").string();
-    if (!fs::exists(path))
-        throw InputError("--collect", "no bench.json in '" + dir + "' (write one with --emit DIR)");
+    if (!somethingAt(path))
+        throw InputError("--collect", "no bench.json in '" + printable(dir) +
+                                          "' (write one with --emit DIR)");
+    const BenchManifest m = parseBenchManifest(
+        readTextFile(path, "bench.json", kMaxBenchManifestBytes, Links::Refuse), path);
     BenchOptions o;
-    try {
-        std::ifstream in(path);
-        const json m = json::parse(in);
-        commandLine = m.at("command").get<std::string>();
-        for (const json& r : m.at("replays"))
-            o.resolved.push_back(
-                {r.at("name").get<std::string>(), r.at("path").get<std::string>()});
-        o.methods = m.at("methods").get<std::string>();
-        const std::string sweep = m.at("sweep").get<std::string>();
-        o.sweep = sweep.empty() ? "" : (fs::path(dir) / sweep).string();
-        o.budgets = m.at("budgets").get<std::string>();
-        o.oracle = m.at("oracle").get<std::string>();
-        o.referenceEvery = m.at("referenceEvery").get<int>();
-        o.fullLengthBudget = m.at("fullLengthBudget").get<int>();
-        o.screenWitnesses = m.at("screenWitnesses").get<int>();
-        o.measureEvery = m.at("measureEvery").get<int>();
-        o.maxFrames = m.at("maxFrames").get<int>();
-        o.stride = m.at("stride").get<int>();
-        o.frames = m.at("frames").get<bool>();
-        o.backend = m.at("backend").get<std::string>();
-        o.emitted = m.at("runs").get<std::vector<std::string>>();
-    } catch (const json::exception& e) {
-        throw InputError(path, std::string("not a bench.json from --emit: ") + e.what());
-    }
-    if (o.resolved.empty()) throw InputError(path, "no replays");
+    commandLine = m.command;
+    for (const auto& r : m.replays) o.resolved.push_back({r.name, r.path});
+    o.methods = m.methods;
+    o.sweep = m.sweep.empty() ? "" : (fs::path(dir) / m.sweep).string();
+    o.budgets = m.budgets;
+    o.oracle = m.oracle;
+    o.referenceEvery = m.referenceEvery;
+    o.fullLengthBudget = m.fullLengthBudget;
+    o.screenWitnesses = m.screenWitnesses;
+    o.measureEvery = m.measureEvery;
+    o.maxFrames = m.maxFrames;
+    o.stride = m.stride;
+    o.frames = m.frames;
+    o.backend = m.backend;
+    o.emitted = m.runs;
     o.out = dir;
     o.fromRuns = true;
     o.collected = true;
@@ -1258,6 +1448,33 @@ void checkOptions(const BenchOptions& o) {
     if (!o.emit.empty() && o.fromRuns) throw InputError("--emit", "conflicts with --from-runs");
 }
 
+// The checks `run` makes of its files, for the bench's own: no output is an input (the sweep, a
+// replay), and each can be written (not a folder; a link at an output's name is replaced by the
+// file, never written through: writeTextFile).
+void checkBenchFiles(const BenchOptions& o, const std::vector<ReplayRef>& replays,
+                     const std::string& folderOption) {
+    FilePlan plan;
+    if (!o.collected) {
+        plan.input("--sweep", o.sweep);
+        for (const ReplayRef& r : replays) plan.input("--replays", r.path);
+    }
+    const auto output = [&](const char* file) {
+        plan.replacedOutput(folderOption + " (" + file + ")",
+                            (fs::path(o.out) / file).string());
+    };
+    if (!o.emit.empty()) {
+        for (const char* file :
+             {"commands.txt", "jobs.txt", "slurm.sh", "README.txt", "bench.json"})
+            output(file);
+        std::error_code ec;
+        if (!o.sweep.empty() && !fs::equivalent(o.sweep, fs::path(o.out) / "sweep.json", ec))
+            output("sweep.json");
+    } else if (!o.tune) {
+        for (const char* file : {"results.csv", "summary.md", "plots.log"}) output(file);
+    }
+    plan.check();
+}
+
 void runBench(const BenchOptions& o, const std::string& commandLine) {
     checkOptions(o);
     std::vector<std::string> methods =
@@ -1266,14 +1483,21 @@ void runBench(const BenchOptions& o, const std::string& commandLine) {
     for (const auto& m : methods) checkAmbienceMethod(m, "--methods");
     if (parseBackend(o.backend, "--backend") == Backend::Glfw)
         throw InputError("--backend", "bench runs headless: auto, egl or osmesa");
-    auto points = readSweep(o.sweep, ambienceMethodNames());
+    // The bench's folder, named by the option that gave it.
+    const std::string folderOption =
+        o.collected ? "--collect" : !o.emit.empty() ? "--emit" : "--out";
+    auto points = readSweep(o.sweep, ambienceMethodNames(),
+                            o.collected ? Links::Refuse : Links::Follow);
     if (!o.budgets.empty())
         points = withBudgets(points, parseBudgets(o.budgets, "--budgets"), "--budgets");
     const int workers = o.jobs > 0 ? o.jobs : std::max(1, int(std::thread::hardware_concurrency()));
     std::error_code ec;
-    fs::create_directories(fs::path(o.out) / "oracle", ec);
-    if (ec || access(o.out.c_str(), W_OK) != 0)
-        throw InputError("--out", "cannot create or write the folder '" + o.out + "'");
+    fs::create_directories(o.out, ec);
+    if (ec || !fs::is_directory(o.out) || access(o.out.c_str(), W_OK | X_OK) != 0)
+        throw InputError(folderOption,
+                         "cannot create or write the folder '" + printable(o.out) + "'");
+    makeRealFolder(fs::path(o.out) / "oracle");
+    makeRealFolder(fs::path(o.out) / "runs");
 
     Runner runner = benchRunner(o, points);
     const auto start = std::chrono::steady_clock::now();
@@ -1282,6 +1506,7 @@ void runBench(const BenchOptions& o, const std::string& commandLine) {
         return;
     }
     const auto replays = o.resolved.empty() ? resolveReplays(o.replays) : o.resolved;
+    checkBenchFiles(o, replays, folderOption);
 
     std::vector<Job> jobs = benchJobs(replays, methods, points);
     if (!o.emit.empty()) {
@@ -1410,6 +1635,19 @@ void addBenchCommand(CLI::App& app) {
         std::string line = "ambience bench";
         for (const auto* opt : cmd->get_options()) {
             if (opt->count() == 0 || opt->get_name() == "--help") continue;
+            // An empty folder or list means nothing sensible (`--collect ''` would otherwise
+            // run the default bench), and every value may end up in an emitted command line.
+            if (opt->get_type_size() != 0) {
+                for (const std::string& value : opt->results()) {
+                    if (value.empty())
+                        throw InputError(opt->get_name(), "an empty value (name what it means)");
+                    if (hasControlCharacter(value))
+                        throw InputError(opt->get_name(),
+                                         "'" + printable(value) +
+                                             "' holds a control character (a newline or tab "
+                                             "cannot go into a command line)");
+                }
+            }
             if (!o->collect.empty() && opt->get_name() != "--collect")
                 throw InputError("--collect",
                                  "takes the sweep from DIR/bench.json: give no "

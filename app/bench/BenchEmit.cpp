@@ -1,12 +1,11 @@
 // BenchEmit.cpp — the command lines and job files of `ambience bench --emit` (see BenchEmit.h).
 #include "app/bench/BenchEmit.h"
 
-#include <sys/stat.h>
-
 #include <filesystem>
-#include <fstream>
 
+#include "app/bench/BenchCollect.h"
 #include "world/Error.h"
+#include "world/TextFile.h"
 
 namespace amb {
 
@@ -18,11 +17,8 @@ std::string inDir(const std::string& dir, const std::string& file) {
     return (fs::path(dir) / file).string();
 }
 
-void writeFile(const std::string& path, const std::string& text) {
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    out << text;
-    out.close();
-    if (!out) throw InputError(path, "cannot write the file");
+void writeFile(const std::string& path, const std::string& text, unsigned mode = 0644) {
+    writeTextFile(path, text, "job file", mode);
 }
 
 // The texts read as they will be printed (clang-format would break them at every "+").
@@ -151,14 +147,20 @@ void writeJobFiles(const std::string& dir, const std::vector<EmittedRun>& runs, 
                    const std::string& exe) {
     std::string commands, jobs;
     for (const EmittedRun& r : runs) {
+        // Each run is one line: a newline in any word would end it and start another command.
+        std::vector<std::string> words = r.args;
+        words.insert(words.end(), {r.dir, r.waitFor, exe});
+        for (const std::string& w : words)
+            if (hasControlCharacter(w))
+                throw InputError(dir, "a run's command line would hold a control character, in '" +
+                                          printable(w) + "': refusing to emit it");
         commands += runLine(r, false) + "\n";
         jobs += runLine(r, true) + "\n";
     }
     writeFile(inDir(dir, "commands.txt"), commands);
     writeFile(inDir(dir, "jobs.txt"), jobs);
     const std::string slurm = inDir(dir, "slurm.sh");
-    writeFile(slurm, slurmScript(dir, runs.size()));
-    chmod(slurm.c_str(), 0755);
+    writeFile(slurm, slurmScript(dir, runs.size()), 0755);
     writeFile(inDir(dir, "README.txt"), readmeText(dir, runs.size(), firstStage, exe));
 }
 

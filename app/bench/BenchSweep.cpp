@@ -6,6 +6,7 @@
 
 #include "lighting/AmbienceMethod.h"
 #include "world/Error.h"
+#include "world/JsonText.h"
 #include "world/TextFile.h"
 
 namespace amb {
@@ -56,8 +57,15 @@ SweepPoint parsePoint(const json& p, const std::string& where,
                                         "' (label, methods, volume, baseline, facesPerFrame)");
         }
     }
-    if (point.label.empty() || point.label.find_first_of("/ _,;") != std::string::npos)
-        throw InputError(where, "label: a short name without '/', ' ', '_', ',' or ';'");
+    // A label names run folders and goes into the emitted command lines (one line each).
+    bool control = false;
+    for (const char c : point.label) control |= static_cast<unsigned char>(c) < 0x20 || c == 0x7f;
+    if (point.label.empty() || point.label.size() > kMaxSweepLabelBytes ||
+        point.label.find_first_of("/ _,;") != std::string::npos || control)
+        throw InputError(where, "label: a short name (at most " +
+                                    std::to_string(kMaxSweepLabelBytes) +
+                                    " bytes) without '/', ' ', '_', ',', ';' or a control "
+                                    "character");
     return point;
 }
 
@@ -68,14 +76,7 @@ std::vector<SweepPoint> parseSweep(const std::string& text, const std::string& w
     std::vector<SweepPoint> points(1);  // the default point always runs
     json j;
     try {
-        // The depth is checked while parsing (the parser itself does not recurse).
-        const json::parser_callback_t limitDepth = [&](int depth, json::parse_event_t, json&) {
-            if (depth > kMaxSweepJsonDepth)
-                throw InputError(where, "nested deeper than " +
-                                            std::to_string(kMaxSweepJsonDepth) + " levels");
-            return true;
-        };
-        j = json::parse(text, limitDepth);
+        j = parseJsonText(text, where, kMaxSweepJsonDepth);
     } catch (const json::exception& e) {
         throw InputError(where, std::string("malformed JSON: ") + e.what());
     }
@@ -137,9 +138,10 @@ std::vector<SweepPoint> withBudgets(const std::vector<SweepPoint>& points,
 }
 
 std::vector<SweepPoint> readSweep(const std::string& path,
-                                  const std::vector<std::string>& methodNames) {
+                                  const std::vector<std::string>& methodNames, Links links) {
     if (path.empty()) return std::vector<SweepPoint>(1);
-    return parseSweep(readTextFile(path, "sweep file", kMaxSettingsFileBytes), path, methodNames);
+    return parseSweep(readTextFile(path, "sweep file", kMaxSettingsFileBytes, links), path,
+                      methodNames);
 }
 
 }  // namespace amb

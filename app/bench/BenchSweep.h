@@ -11,6 +11,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "world/TextFile.h"
+
 namespace amb {
 
 // A parameter point: settings files handed to `run`, and the methods it applies to.
@@ -27,6 +29,8 @@ struct SweepPoint {
 // deep, and a limit keeps a hostile file from exhausting the stack when a point is copied or
 // flattened (both recurse).
 constexpr int kMaxSweepJsonDepth = 32;
+// Longest label (it becomes part of a run folder's name).
+constexpr std::size_t kMaxSweepLabelBytes = 64;
 
 // The points of a sweep file's text, after the default point (always first). `methodNames` are
 // the names "methods" may list. Throws InputError(where, ...) for malformed JSON, unknown keys,
@@ -35,9 +39,11 @@ constexpr int kMaxSweepJsonDepth = 32;
 std::vector<SweepPoint> parseSweep(const std::string& text, const std::string& where,
                                    const std::vector<std::string>& methodNames);
 
-// Reads and parses a sweep file (bounded read); an empty path gives the default point alone.
+// Reads and parses a sweep file (bounded read, world/TextFile.h; `links` Refuse for the copy in
+// a folder --emit wrote); an empty path gives the default point alone.
 std::vector<SweepPoint> readSweep(const std::string& path,
-                                  const std::vector<std::string>& methodNames);
+                                  const std::vector<std::string>& methodNames,
+                                  Links links = Links::Follow);
 
 // The capture budgets of `ambience bench --budgets 1,3,6`: faces per frame, each 1 to
 // kMaxFacesPerFrame, sorted, without repeats. Throws InputError(where, ...) for an empty list,

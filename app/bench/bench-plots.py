@@ -74,6 +74,7 @@ SPARE_COLOURS = ["#17becf", "#bcbd22", "#e377c2", "#393b79", "#637939", "#843c39
 SPARE_MARKERS = ["P", "h", "<", ">", "p", "d"]
 
 FIGURE_SIZE_IN = (8.0, 5.0)
+MAX_MEASURE_BYTES = 256 << 20  # a measure.csv larger than this is not read
 DPI = 110
 DEFAULT_POINT = "default"
 RING_COUNT = 4
@@ -187,6 +188,10 @@ def read_measure(path):
     if not os.path.isfile(path):
         warn(f"{path}: missing, method shown without per-frame data")
         return series
+    # A run folder may have been in other hands (bench --collect): a link could lead anywhere.
+    if os.path.islink(path) or os.path.getsize(path) > MAX_MEASURE_BYTES:
+        warn(f"{path}: a symbolic link or larger than {MAX_MEASURE_BYTES} bytes, not read")
+        return series
     with open(path, newline="", encoding="utf-8") as file:
         for raw in csv.DictReader(file):
             for column in MEASURE_COLUMNS:
@@ -294,6 +299,9 @@ def new_figure():
 
 def save(figure, directory, name, written):
     path = os.path.join(directory, name)
+    # A link planted at a plot's name is replaced, never written through.
+    if os.path.islink(path):
+        os.unlink(path)
     figure.savefig(path, dpi=DPI)
     plt.close(figure)
     written.append(path)

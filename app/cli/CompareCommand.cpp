@@ -53,7 +53,8 @@ struct CompareOptions {
     std::string shaders;
     std::string camera = "chase", exposure = "auto";  // --camera, --exposure (as in run)
     std::string shadows = "on";
-    int frame = -1;  // default: the middle of the replay
+    int frame = 0;            // --frame, read only when given
+    bool frameGiven = false;  // --frame not given: the middle of the replay
     int grid = 16;
     int referenceSize = CubeCaptureGl::kReferenceFaceSize;
     int facesPerFrame = 1;
@@ -121,10 +122,12 @@ CompareInputs checkInputs(const CompareOptions& o) {
     if (o.stride < 1) throw InputError("--stride", "must be at least 1");
     const Size size = parseSize(o.size, "--size");
     const int passFrames = FrameLoop::framesPerPass(replay, o.stride);
-    const int target = o.frame < 0 ? passFrames / 2 : o.frame;
-    if (target >= passFrames)
-        throw InputError("--frame", "the replay has " + std::to_string(passFrames) +
-                                        " frames at stride " + std::to_string(o.stride));
+    if (o.frameGiven && (o.frame < 0 || o.frame >= passFrames))
+        throw InputError("--frame", "expected 0 to " + std::to_string(passFrames - 1) +
+                                        " (the replay has " + std::to_string(passFrames) +
+                                        " frames at stride " + std::to_string(o.stride) +
+                                        "), got " + std::to_string(o.frame));
+    const int target = o.frameGiven ? o.frame : passFrames / 2;
     const std::string stem =
         safeFileStem(replay.name.empty() ? fs::path(replayPath).stem().string() : replay.name);
     const std::string out = o.out.empty() ? "out/compare-" + stem : o.out;
@@ -231,7 +234,7 @@ ReferenceGrid sampleReference(const CompareOptions& o, const Size& size, const W
             const glm::dvec3 probe = at + ErrorMeter::kScreenProbeOffset_m * n;
             const glm::dvec3 ref = referenceIrradianceAt(
                 o.referenceSize, reference.captureAll(probe, frame.rec.timeOfDay_h),
-                kSunThreshold_Wpsrm2, n);
+                reference.sunDirection(frame.rec.timeOfDay_h), n);
             const glm::dvec3 a(applied.rgba[4 * p], applied.rgba[4 * p + 1],
                                applied.rgba[4 * p + 2]);
             GridSample& s = samples[std::size_t(gy) * gw + gx];
@@ -435,7 +438,9 @@ void addCompareCommand(CLI::App& app) {
     cmd->add_option("--replay", o->replay, "replay file (default replays/highway-drive.json)");
     cmd->add_option("--ambient", o->ambient, ambienceMethodHelp());
     cmd->add_option("--config", o->config, "JSON file of ambience volume settings");
-    cmd->add_option("--frame", o->frame, "frame to compare (default: the middle of the replay)");
+    auto* frame = cmd->add_option(
+        "--frame", o->frame,
+        "frame to compare, from 0 to the last at --stride (default: the middle of the replay)");
     cmd->add_option("--grid", o->grid,
                     "a reference sample every N pixels (default 16; each costs a 64 x 64 capture "
                     "of the full scene)");
@@ -456,7 +461,8 @@ void addCompareCommand(CLI::App& app) {
                     "and the reference");
     cmd->add_option("--shaders", o->shaders,
                     "GLSL folder (default <exe>/../shaders or $AMBIENCE_SHADER_DIR)");
-    cmd->callback([o, faces] {
+    cmd->callback([o, frame, faces] {
+        o->frameGiven = frame->count() > 0;
         o->facesPerFrameGiven = faces->count() > 0;
         if (!o->shaders.empty()) setShaderDirectory(o->shaders);
         runCompare(*o);

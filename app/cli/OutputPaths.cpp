@@ -40,16 +40,22 @@ std::string resolvedPath(const std::string& path) {
 namespace {
 
 bool sameFile(const std::string& a, const std::string& resolvedA, const std::string& b,
-              const std::string& resolvedB) {
+              const std::string& resolvedB, bool linkA = false) {
     if (resolvedA == resolvedB) return true;
+    if (linkA) return false;  // the link itself is replaced: what it points to is not written
     struct stat sa {}, sb {};
     return ::stat(a.c_str(), &sa) == 0 && ::stat(b.c_str(), &sb) == 0 && sa.st_dev == sb.st_dev &&
            sa.st_ino == sb.st_ino;
 }
 
-void checkWritable(const std::string& option, const std::string& path) {
+bool isLink(const std::string& path) {
     struct stat st {};
-    if (::stat(path.c_str(), &st) == 0) {
+    return ::lstat(path.c_str(), &st) == 0 && S_ISLNK(st.st_mode);
+}
+
+void checkWritable(const std::string& option, const std::string& path, bool replacesLink) {
+    struct stat st {};
+    if (!(replacesLink && isLink(path)) && ::stat(path.c_str(), &st) == 0) {
         if (!S_ISREG(st.st_mode))
             throw InputError(option, "'" + path + "' exists and is not a regular file");
         if (::access(path.c_str(), W_OK) != 0)
@@ -74,22 +80,32 @@ void FilePlan::output(const std::string& option, const std::string& path) {
     if (!path.empty()) outputs_.push_back({option, path, resolvedPath(path)});
 }
 
+void FilePlan::replacedOutput(const std::string& option, const std::string& path) {
+    if (path.empty()) return;
+    if (!isLink(path)) return output(option, path);
+    const fs::path p(path);
+    const std::string parent = p.parent_path().empty() ? "." : p.parent_path().string();
+    outputs_.push_back(
+        {option, path, (fs::path(resolvedPath(parent)) / p.filename()).string(), true});
+}
+
 void FilePlan::check() const {
     for (std::size_t i = 0; i < outputs_.size(); ++i) {
         const Entry& o = outputs_[i];
         for (const Entry& in : inputs_) {
-            if (sameFile(o.path, o.resolved, in.path, in.resolved))
+            if (sameFile(o.path, o.resolved, in.path, in.resolved, o.replacesLink))
                 throw InputError(o.option, "'" + o.path + "' is also the input " + in.option +
                                                ": refusing to overwrite it");
         }
         for (std::size_t j = 0; j < i; ++j) {
             const Entry& other = outputs_[j];
-            if (sameFile(o.path, o.resolved, other.path, other.resolved))
+            if (sameFile(o.path, o.resolved, other.path, other.resolved,
+                         o.replacesLink || other.replacesLink))
                 throw InputError(o.option,
                                  "'" + o.path + "' is also the output " + other.option);
         }
     }
-    for (const Entry& o : outputs_) checkWritable(o.option, o.path);
+    for (const Entry& o : outputs_) checkWritable(o.option, o.path, o.replacesLink);
 }
 
 }  // namespace amb

@@ -22,6 +22,9 @@ class FilePlan {
     // `option` names the file in messages ("--replay", "--report"). Empty paths are ignored.
     void input(const std::string& option, const std::string& path);
     void output(const std::string& option, const std::string& path);
+    // An output written through world/TextFile.h writeTextFile: a symbolic link at `path` is
+    // replaced by the file, so the link is the output, not what it points to.
+    void replacedOutput(const std::string& option, const std::string& path);
     // Throws InputError naming the option when an output equals an input or another output,
     // or cannot be written.
     void check() const;
@@ -29,6 +32,7 @@ class FilePlan {
   private:
     struct Entry {
         std::string option, path, resolved;
+        bool replacesLink = false;
     };
     std::vector<Entry> inputs_, outputs_;
 };

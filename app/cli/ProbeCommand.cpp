@@ -54,16 +54,19 @@ void runProbe(const ProbeOptions& o) {
     }
     if (o.size < 1 || o.size > 2048) throw InputError("--size", "face size must be in [1, 2048]");
     const CaptureScene scene = parseCaptureScene(o.scene, "--scene");
-    WorldSettings ws;
-    ws.seed = o.seed;
-    if (!o.replay.empty()) ws = readReplay(o.replay).world;
     const Backend backend = parseBackend(o.backend, "--backend");
+    // The output before any work (the replay read, the world built, the capture): a format
+    // OpenImageIO writes, in a writable folder, not the replay.
+    checkCubeMapOutput(o.out, "--out");
     {
         FilePlan files;
         files.input("--replay", o.replay);
         files.output("--out", o.out);
         files.check();
     }
+    WorldSettings ws;
+    ws.seed = o.seed;
+    if (!o.replay.empty()) ws = readReplay(o.replay).world;
 
     const World world(ws);
     auto platform = createOffscreenPlatform(backend, 16, 16);
@@ -101,7 +104,7 @@ void addProbeCommand(CLI::App& app) {
     cmd->add_option("--scene", o->scene,
                     "coarse (what the methods capture) or full (what the main view draws: the "
                     "reference oracle's scene) (default coarse)");
-    cmd->add_option("--out", o->out, "output file (vertical strip, N x 6N; .exr for HDR)")
+    cmd->add_option("--out", o->out, "output image (vertical strip, N x 6N; any format OpenImageIO writes: .exr for HDR)")
         ->required();
     cmd->add_option("--backend", o->backend, "auto, egl or osmesa (default auto)");
     cmd->add_option("--shaders", o->shaders,

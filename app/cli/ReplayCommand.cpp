@@ -11,6 +11,7 @@
 
 #include "app/cli/CliChecks.h"
 #include "app/cli/Commands.h"
+#include "lighting/CaptureCore.h"
 #include "world/CameraPath.h"
 #include "world/Conventions.h"
 #include "world/Error.h"
@@ -215,8 +216,9 @@ void addReplayMakeCommand(CLI::App& cmd) {
         ->check(FiniteRange(0.01, 86400.0))->capture_default_str();
     make->add_option("--step", o.step_s, "Fixed step [s]")
         ->check(FiniteRange(1e-4, 10.0))->capture_default_str();
+    // No faster than the teleport rule believes a camera moves (lighting/CaptureCore.h).
     make->add_option("--speed", o.speed_mps, "Speed [m/s] (default: drive 30, fly 80)")
-        ->check(FiniteRange(0.0, 1.0e4));
+        ->check(FiniteRange(0.0, kMaxCameraSpeed_mps));
     make->add_option("--road", o.road, "drive: road name (highway, mountain)")
         ->capture_default_str();
     make->add_option("--start-distance", o.startDistance_m, "drive: start along the road [m]")

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -19,6 +20,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "SourceHash.h"  // generated: AMBIENCE_SOURCE_HASH
 #include "app/cli/Commands.h"
 #include "app/cli/ContactSheet.h"
 #include "app/render/CubeCaptureGl.h"
@@ -35,6 +37,7 @@
 #include "lighting/Metrics.h"
 #include "world/DataPaths.h"
 #include "world/Error.h"
+#include "world/JsonText.h"
 #include "world/TextFile.h"
 #include "world/World.h"
 
@@ -80,6 +83,7 @@ struct RunOptions {
     std::string oracle;
     std::string oracleKind = "self";
     std::string reference;
+    bool replaceStale = false;  // --replace-stale-caches
     ReferenceSettings referenceSettings;
     bool referenceOn = false;
     bool noIdealVolume = false;
@@ -329,6 +333,32 @@ struct RunMeasurement {
     std::string oracleSignature, referenceSignature;
 };
 
+// FNV-1a over the replay file's bytes, as 16 hex digits.
+std::string replayHash(const std::string& path) {
+    std::uint64_t h = 1469598103934665603ull;
+    for (const char c : readTextFile(path, "replay file", kMaxReplayFileBytes)) {
+        h ^= std::uint64_t(static_cast<unsigned char>(c));
+        h *= 1099511628211ull;
+    }
+    char text[24];
+    std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(h));
+    return text;
+}
+
+// True when the cache at `path` is a well-formed cache of another signature (another replay,
+// code or settings): with --replace-stale-caches it is captured anew and replaced, not read.
+// Anything else (not JSON, no signature) is left to the loader, which names what is wrong.
+bool staleCache(const std::string& path, const std::string& signature) {
+    try {
+        const nlohmann::json j =
+            parseJsonText(readTextFile(path, "cache file", kMaxOracleFileBytes), path);
+        return j.is_object() && j.contains("signature") && j["signature"].is_string() &&
+               j["signature"].get<std::string>() != signature;
+    } catch (const std::exception&) {
+        return false;
+    }
+}
+
 // The meter for --measure-every (none without it), its caches loaded, attached to `stages`.
 RunMeasurement startMeasurement(const RunOptions& o, const RunPlan& plan, const World& world,
                                 MethodAmbienceStages& stages) {
@@ -336,18 +366,22 @@ RunMeasurement startMeasurement(const RunOptions& o, const RunPlan& plan, const 
     // The error measurement: the oracle's captures use the same capture as the method.
     MeasureSettings measureSettings;
     measureSettings.every = o.measureEvery;
-    measureSettings.sunThreshold = plan.volumeSettings.capture.sunThreshold;
-    // The oracle depends on the replay, the frames measured and the capture settings only.
+    // The oracle depends on the replay (its world and path: the file's bytes), the frames
+    // measured, the capture settings and the code that captures and projects (the sources'
+    // hash, cmake/SourceHash.cmake): a cache made by other code or of another world is stale.
+    // The sun's texel is left out by its direction ("sun=texel").
     m.oracleSignature =
-        fs::path(o.replay).filename().string() + " stride=" + std::to_string(o.stride) +
+        fs::path(o.replay).filename().string() + " replay=" + replayHash(o.replay) +
+        " code=" + AMBIENCE_SOURCE_HASH + " stride=" + std::to_string(o.stride) +
         " every=" + std::to_string(o.measureEvery) + " face=" + std::to_string(o.faceSize) +
-        " sunThreshold=" + std::to_string(measureSettings.sunThreshold) +
-        " frames=" + std::to_string(o.maxFrames) + " shadows=" + describeShadows(plan.shadows) +
+        " sun=texel frames=" + std::to_string(o.maxFrames) +
+        " shadows=" + describeShadows(plan.shadows) +
         (o.loops > 1 ? " loops=" + std::to_string(o.loops) : std::string());
     if (o.measureEvery > 0) {
         m.meter = std::make_unique<ErrorMeter>(stages.cubeCapture(), stages.environment(),
                                                measureSettings);
-        if (!o.oracle.empty() && fs::exists(o.oracle))
+        if (!o.oracle.empty() && fs::exists(o.oracle) &&
+            !(o.replaceStale && staleCache(o.oracle, m.oracleSignature)))
             m.meter->loadOracle(o.oracle, m.oracleSignature);
     }
     // The reference oracle: the full scene at 64 x 64 (lighting/ReferenceOracle.h).
@@ -361,7 +395,8 @@ RunMeasurement startMeasurement(const RunOptions& o, const RunPlan& plan, const 
             std::make_unique<CubeCaptureGl>(world, ref.faceSize, CaptureScene::Full, plan.shadows);
         m.meter->attachReference(*m.referenceCapture, ref,
                                  plan.oracleKind == OracleKind::Reference);
-        if (!o.reference.empty() && fs::exists(o.reference))
+        if (!o.reference.empty() && fs::exists(o.reference) &&
+            !(o.replaceStale && staleCache(o.reference, m.referenceSignature)))
             m.meter->loadReference(o.reference, m.referenceSignature);
     }
     if (m.meter) stages.attachMeter(m.meter.get());
@@ -638,6 +673,9 @@ void addRunCommand(CLI::App& app) {
     cmd->add_option("--reference", o->reference,
                     "reference cache (JSON): read if it exists and matches, else written; also "
                     "turns on the reference and the error budget with --oracle-kind self");
+    cmd->add_flag("--replace-stale-caches", o->replaceStale,
+                  "an --oracle or --reference cache made for another replay, other code or other "
+                  "capture settings is captured anew and replaced (default: refused)");
     cmd->add_option("--reference-every", o->referenceSettings.every,
                     "take the reference on every K-th measured frame (default 3)");
     cmd->add_option("--reference-size", o->referenceSettings.faceSize,

@@ -627,6 +627,15 @@ std::string measurementJson(const ErrorMeter& meter) {
             screenJson[toString(SurfaceKind(k))] = summaryJson(summarize(meter.screenErrors(k)));
         json rings = json::array();
         for (int r = 0; r < ms.rings(); ++r) rings.push_back(budgetJson(meter.terrainBudget(r)));
+        // The terrain witnesses as the screen shows them (ReferenceWitness::drawnError).
+        json drawnJson = {{"error", summaryJson(summarize(meter.drawnErrors()))},
+                          {"open", summaryJson(summarize(meter.drawnErrors(-1, 0)))},
+                          {"underCrown", summaryJson(summarize(meter.drawnErrors(-1, 1)))},
+                          {"hidden", meter.hiddenWitnesses()}};
+        json drawnRings = json::array();
+        for (int r = 0; r < ms.rings(); ++r)
+            drawnRings.push_back(summaryJson(summarize(meter.drawnErrors(r))));
+        drawnJson["byRing"] = drawnRings;
         json objects = json::object();
         for (int k = 0; k < kObjectKinds; ++k)
             objects[toString(ObjectKind(k))] = budgetJson(meter.objectBudget(ObjectKind(k)));
@@ -638,6 +647,7 @@ std::string measurementJson(const ErrorMeter& meter) {
                           {"budgetByRing", rings},
                           {"objects", objects},
                           {"screen", screenJson},
+                          {"drawn", drawnJson},
                           {"reference_s", meter.referenceSeconds()},
                           {"referenceCaptures", meter.referenceCaptures()},
                           {"referenceCacheHits", meter.referenceCacheHits()}};
@@ -669,7 +679,7 @@ void writeMeasureCsv(const ErrorMeter& meter, const std::string& path) {
 void writeReferenceCsv(const ErrorMeter& meter, const std::string& path) {
     std::ofstream out(path);
     if (!out) throw InputError(path, "cannot write the reference CSV");
-    out << "frame,witness,x,y,z,total,truncation,capture,spacing,schedule,self\n";
+    out << "frame,witness,x,y,z,total,truncation,capture,spacing,schedule,self,drawn,cover\n";
     out.precision(9);
     for (const ReferenceWitness& r : meter.referenceWitnesses()) {
         out << r.frame << ','
@@ -677,7 +687,14 @@ void writeReferenceCsv(const ErrorMeter& meter, const std::string& path) {
             << ',' << r.position_m.x << ',' << r.position_m.y << ',' << r.position_m.z << ','
             << r.terms.total << ',' << r.terms.truncation << ',' << r.terms.capture << ',';
         if (std::isfinite(r.terms.spacing)) out << r.terms.spacing;
-        out << ',' << r.terms.schedule << ',' << r.terms.self << "\n";
+        out << ',' << r.terms.schedule << ',' << r.terms.self << ',';
+        if (std::isfinite(r.drawnError)) out << r.drawnError;
+        out << ','
+            << (r.ring < 0                                ? ""
+                : r.cover == GroundCover::UnderCrown ? "crown"
+                : r.cover == GroundCover::Hidden     ? "hidden"
+                                                     : "open")
+            << "\n";
     }
     if (!out) throw InputError(path, "cannot write the reference CSV");
 }

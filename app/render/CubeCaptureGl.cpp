@@ -5,7 +5,8 @@
 // (2) each requested face into its rows of the N x 6N target; (3) one read-back; (4) the sun
 // disc, far smaller than a 16-texel face's texels, added to the texel holding the sun direction
 // with its whole energy when that texel sees sky (alpha = 1), so the projection keeps the sun's
-// irradiance exactly instead of missing it or hitting it by chance.
+// irradiance exactly instead of missing it or hitting it by chance (lighting/SunTexel.h: the
+// texel by the one rule every consumer uses, told the direction by sunDirection()).
 #include "app/render/CubeCaptureGl.h"
 
 #include <chrono>
@@ -18,6 +19,7 @@
 #include "app/frame/MethodStages.h"
 #include "app/render/Renderer.h"
 #include "lighting/CubeMapProjector.h"
+#include "lighting/SunTexel.h"
 #include "world/Conventions.h"
 #include "world/Error.h"
 #include "world/World.h"
@@ -283,9 +285,6 @@ CubeCaptureStats CubeCaptureGl::captureFar(const glm::dvec3& position_m, double 
     readFramebuffer(fbo_.id(), 0, lo * n_, n_, rows, GL_RGBA, GL_FLOAT, 4, rgba_.data());
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
 
-    const glm::vec3 sunDir = glm::vec3(scene_->world().sky().sunDirection(timeOfDay_h));
-    const double sunRadius = scene_->world().sky().sunAngularRadius_rad();
-    const double sunSolidAngle = 2.0 * kPi * (1.0 - std::cos(sunRadius));
     for (int f = lo; f <= hi; ++f) {
         if (!(faces & cubeFaceBit(f))) continue;
         const float* src = &rgba_[size_t(f - lo) * n_ * n_ * 4];
@@ -295,22 +294,34 @@ CubeCaptureStats CubeCaptureGl::captureFar(const glm::dvec3& position_m, double 
             dst[3 * t + 1] = src[4 * t + 1];
             dst[3 * t + 2] = src[4 * t + 2];
         }
-        // Step 4: the sun disc's energy into the texel that holds its direction.
-        const FaceBasis b = faceBasis(f);
-        const float along = glm::dot(sunDir, b.forward);
-        if (along <= 0.0f) continue;
-        const float u = glm::dot(sunDir, b.u) / along, v = glm::dot(sunDir, b.v) / along;
-        if (std::abs(u) > 1.0f || std::abs(v) > 1.0f) continue;
-        const int i = std::min(n_ - 1, int((u + 1.0f) * 0.5f * n_));
-        const int j = std::min(n_ - 1, int((v + 1.0f) * 0.5f * n_));
-        const size_t t = size_t(j) * n_ + i;
-        if (src[4 * t + 3] < 0.5f) continue;  // hidden by terrain or a tree
-        const float scale = float(sunSolidAngle / cubeTexelSolidAngle(i, j, n_));
-        for (int c = 0; c < 3; ++c) dst[3 * t + c] += sky_.sunDiscRadiance[c] * scale;
+    }
+    // Step 4: the sun disc's energy into the texel that holds its direction (sunTexel), when
+    // that texel sees sky; the texel whoever leaves the sun out is told of (sunDirection).
+    if (const std::optional<glm::dvec3> sunDir = sunDirection(timeOfDay_h)) {
+        const CubeTexel s = sunTexel(*sunDir, n_);
+        const size_t t = size_t(s.j) * n_ + s.i;
+        const auto seesSky = [&] {
+            return rgba_[(size_t(s.face - lo) * n_ * n_ + t) * 4 + 3] >= 0.5f;
+        };
+        if ((faces & cubeFaceBit(s.face)) && seesSky()) {  // else hidden by terrain or a tree
+            const double sunRadius = scene_->world().sky().sunAngularRadius_rad();
+            const glm::vec3 add = sunTexelRadiance(sky_.sunDiscRadiance,
+                                                   2.0 * kPi * (1.0 - std::cos(sunRadius)), s, n_);
+            float* dst = &cube[size_t(s.face) * faceFloats + 3 * t];
+            for (int c = 0; c < 3; ++c) dst[c] += add[c];
+        }
     }
     stats.wall_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     lastStats_ = stats;
     return stats;
+}
+
+std::optional<glm::dvec3> CubeCaptureGl::sunDirection(double timeOfDay_h) const {
+    // The disc is added with the sun's radiance, zero below the horizon: then nothing is added.
+    const Sky& sky = scene_->world().sky();
+    const glm::vec3 radiance = sky.sunRadiance(timeOfDay_h);
+    if (!(radiance.r > 0.0f || radiance.g > 0.0f || radiance.b > 0.0f)) return std::nullopt;
+    return sky.sunDirection(timeOfDay_h);
 }
 
 std::unique_ptr<MethodAmbienceStages> makeMethodStages(Renderer& renderer,

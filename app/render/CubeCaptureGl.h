@@ -78,6 +78,9 @@ class CubeCaptureGl final : public CubeCapture {
                                 CubeFaceMask faces, std::vector<float>& cube,
                                 double nearRadius_m) override;
 
+    // The sun's direction while it is above the horizon (its disc has radiance then).
+    std::optional<glm::dvec3> sunDirection(double timeOfDay_h) const override;
+
     // Statistics of the last capture() call that rendered faces (triangles per face, time).
     const CubeCaptureStats& lastStats() const { return lastStats_; }
     std::size_t lastTriangles() const override { return lastStats_.triangles; }

@@ -89,12 +89,19 @@ class GlProgram {
 // depth with format GL_DEPTH_COMPONENT, into `out` as `format` and `type`, rows bottom-up as GL
 // gives them, each row aligned to `packAlignment` bytes; leaves `framebuffer` bound for reading.
 // Every read-back of a rendered image goes through here: it waits for all GL commands issued so
-// far (glFinish) before it reads. glReadPixels alone should, but Mesa's llvmpipe (seen with 22.3)
-// rasterizes a frame on its own threads while the caller goes on, and its read-back does not
-// always wait for them once the image is no longer bound for drawing: after a shaded render
-// (whose tone mapping samples the HDR target), the next screen-witness render read back this way
-// came back in part, whole 64 x 64 tiles of it, as the target held before (the last render's
-// pixels or only the clear), more often when other load slowed the rasterizer threads.
+// far (glFinish) before it reads. glReadPixels alone should, but Mesa's llvmpipe (seen with
+// 22.3.6) rasterizes a frame on its own threads while the caller goes on, and its read-back does
+// not always wait for them once the image is no longer bound for drawing. After two tone-mapped
+// renders (Ambient, then Shaded, each read back), a screen-witness render read back at once came
+// back in part or whole as the target held before (the last render's pixels or only the clear:
+// alpha 0, so drawn terrain and trees were read as sky), in 26 of 28 processes here
+// (Renderer.ReadBacksWaitForTheRenderTheyRead), more often when other load slowed the
+// rasterizer threads; through OSMesa (llvmpipe too) just the same. The image itself was right:
+// the same target read again after glFinish is whole, and rasterizing on the calling thread
+// (LP_NUM_THREADS=0) never showed it; it was no GL state left between passes (unbinding the HDR
+// target from the tone mapping's texture unit changed nothing). Keeping the framebuffer bound
+// for drawing while reading also made llvmpipe wait, but that leans on how it tracks its work;
+// glFinish says what is meant.
 void readFramebuffer(GLuint framebuffer, int x, int y, int width, int height, GLenum format,
                      GLenum type, int packAlignment, void* out);
 // Reads the RGBA8 colour attachment 0 of `framebuffer` (rows bottom-up in GL) into top-down RGB.

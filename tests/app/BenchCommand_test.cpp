@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <set>
@@ -93,6 +94,99 @@ TEST(RunMeasure, OracleIsSavedReusedAndTheResultDeterministic) {
     EXPECT_EQ(c.errLines(), 1) << c.err;
 }
 
+// A cache is keyed by what made it: the replay file's bytes (its world and path, not only its
+// name) and the hash of the sources that capture and project (cmake/SourceHash.cmake). A replay
+// changed under the same name no longer reads the old oracle back as its own.
+TEST(RunMeasure, OracleCacheIsKeyedByTheReplaysBytesAndTheCode) {
+    const fs::path dir = scratchDir("run-oracle-key");
+    fs::copy_file(sourcePath("replays/highway-drive.json"), dir / "r.json");
+    const std::string common = "run --no-frames --max-frames 21 --measure-every 20 --replay " +
+                               (dir / "r.json").string() + " --oracle " +
+                               (dir / "oracle.json").string();
+    const auto a = runAmbience(common + " --out " + (dir / "a").string());
+    ASSERT_EQ(a.exitCode, 0) << a.err;
+    const std::string signature = readJson(dir / "oracle.json")["signature"].get<std::string>();
+    const auto code = signature.find(" code=");
+    ASSERT_NE(code, std::string::npos) << signature;
+    EXPECT_EQ(signature.substr(code + 6, 16).find_first_not_of("0123456789abcdef"),
+              std::string::npos)
+        << signature;
+    EXPECT_NE(signature.find(" replay="), std::string::npos) << signature;
+    // The same file name, one more space in it: another replay as far as the cache knows.
+    std::ofstream(dir / "r.json", std::ios::app) << " ";
+    const auto b = runAmbience(common + " --out " + (dir / "b").string());
+    EXPECT_EQ(b.exitCode, 2) << b.err;
+    EXPECT_NE(b.err.find("replay="), std::string::npos) << b.err;
+    // Asked to, the run captures it anew and replaces the cache (as each bench run does).
+    const auto c = runAmbience(common + " --replace-stale-caches --out " + (dir / "c").string());
+    ASSERT_EQ(c.exitCode, 0) << c.err;
+    EXPECT_GT(readJson(dir / "c" / "report.json")["measurement"]["oracleCaptures"].get<int>(), 0);
+    EXPECT_NE(readJson(dir / "oracle.json")["signature"].get<std::string>(), signature);
+}
+
+// With the reference, every terrain witness is also graded as the screen shows it: the drawn
+// patch's corners at their normals against the reference at the surface and its normal. Each
+// ring witness gets a finite error unless the ground it stands on is hidden (a bush, a rock,
+// a trunk); those under crowns are counted apart; reference.csv carries the per-witness value.
+TEST(RunMeasure, ReferenceGradesTheDrawnNormal) {
+    const fs::path dir = scratchDir("run-drawn");
+    const auto r = runAmbience(
+        "run --no-frames --max-frames 21 --measure-every 10 --oracle-kind reference "
+        "--reference-every 1 --no-ideal-volume --out " + (dir / "a").string());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const auto ref = readJson(dir / "a" / "report.json")["measurement"]["reference"];
+    const auto drawn = ref["drawn"];
+    const int graded = drawn["error"]["count"].get<int>();
+    const int hidden = drawn["hidden"].get<int>();
+    EXPECT_GT(graded, 0);
+    EXPECT_LE(drawn["underCrown"]["count"].get<int>(), graded);
+    EXPECT_EQ(drawn["open"]["count"].get<int>() + drawn["underCrown"]["count"].get<int>(), graded);
+    const double mean = drawn["error"]["mean"].get<double>();
+    EXPECT_TRUE(std::isfinite(mean) && mean > 0.0 && mean < 5.0) << mean;
+    // reference.csv: one row per witness; the terrain rows' drawn column filled unless hidden.
+    std::ifstream csv(dir / "a" / "reference.csv");
+    std::string line;
+    std::getline(csv, line);
+    EXPECT_EQ(line.substr(line.size() - 12), ",drawn,cover");
+    int terrain = 0, filled = 0, hiddenRows = 0;
+    while (std::getline(csv, line)) {
+        if (line.find(",ring_") == std::string::npos) continue;
+        ++terrain;
+        const std::string cover = line.substr(line.rfind(',') + 1);
+        const std::string rest = line.substr(0, line.rfind(','));
+        const std::string value = rest.substr(rest.rfind(',') + 1);
+        if (cover == "hidden") {
+            ++hiddenRows;
+            EXPECT_TRUE(value.empty()) << line;
+        } else {
+            EXPECT_TRUE(cover == "open" || cover == "crown") << line;
+            filled += !value.empty();
+        }
+    }
+    EXPECT_EQ(filled, graded);
+    EXPECT_EQ(hiddenRows, hidden);
+    EXPECT_EQ(terrain, graded + hidden);  // every terrain witness has a drawn patch
+}
+
+// A settings file's facesPerFrame (the tuning panel's Save writes it) was reset to 1 by the
+// command line's default: --faces-per-frame now applies only when given.
+TEST(RunMeasure, ConfigFacesPerFrameStandsUnlessTheFlagIsGiven) {
+    const fs::path dir = scratchDir("run-faces");
+    std::ofstream(dir / "v.json") << R"({"facesPerFrame": 6})";
+    const std::string common = "run --no-frames --max-frames 31 --config " +
+                               (dir / "v.json").string();
+    const auto a = runAmbience(common + " --out " + (dir / "a").string());
+    ASSERT_EQ(a.exitCode, 0) << a.err;
+    const auto b = runAmbience(common + " --faces-per-frame 2 --out " + (dir / "b").string());
+    ASSERT_EQ(b.exitCode, 0) << b.err;
+    const auto facesOf = [&](const char* run) {
+        return readJson(dir / run / "report.json")["ambience"]["facesCaptured"].get<double>();
+    };
+    // 31 frames: the config's 6 faces a frame capture about 3 times what the flag's 2 do.
+    EXPECT_GT(facesOf("a"), 2.5 * facesOf("b")) << facesOf("a") << " vs " << facesOf("b");
+    EXPECT_GT(facesOf("b"), 31.0);  // more than one face a frame
+}
+
 // Stress, a million metres from the origin: the volume captures, stores anchors and measures a
 // finite error; nothing is rejected (float positions would have collapsed the lattice there).
 TEST(RunMeasure, FarFromTheOriginStaysFinite) {
@@ -150,7 +244,9 @@ TEST(BenchCommand, SweepRecordsAFailureAndGoesOn) {
     EXPECT_EQ(failed, 1);
     const std::string summary = slurp((dir / "out" / "summary.md").string());
     EXPECT_NE(summary.find("volume (ours)"), std::string::npos);
-    EXPECT_NE(summary.find("scrolling grid"), std::string::npos);
+    // Our error against each other method's, the grid's among them, with its interval.
+    EXPECT_NE(summary.find("/ each other method's"), std::string::npos);
+    EXPECT_NE(summary.find("grid **"), std::string::npos);
     EXPECT_TRUE(fs::exists(dir / "out" / "oracle" / "highway-drive.json"));
 }
 
@@ -175,6 +271,17 @@ TEST(BenchCommand, BudgetsAddPointsAndTheirSection) {
     EXPECT_NE(summary.find("## Budget: error against cost"), std::string::npos);
     EXPECT_NE(summary.find("| 2 |"), std::string::npos);
     EXPECT_NE(summary.find("Pareto front"), std::string::npos);
+    // Every ours-against-other ratio carries its paired bootstrap interval: "r [lo, hi]", with
+    // lo <= r <= hi (app/bench/BenchStats.h).
+    const auto ratio = summary.find("constant **");
+    ASSERT_NE(ratio, std::string::npos) << summary;
+    double r0 = 0, lo = 0, hi = 0;
+    ASSERT_EQ(std::sscanf(summary.c_str() + ratio, "constant **%lf [%lf, %lf]", &r0, &lo, &hi), 3)
+        << summary.substr(ratio, 60);
+    EXPECT_LE(lo, r0);
+    EXPECT_LE(r0, hi);
+    EXPECT_LT(hi, 1.0);  // the volume is far better than a constant ambient
+    EXPECT_NE(summary.find("paired bootstrap 95 % interval"), std::string::npos);
 }
 
 TEST(BenchCommand, BadInputIsOneLineAndExitCode2) {

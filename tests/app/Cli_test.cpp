@@ -157,6 +157,19 @@ TEST(Cli, CompareWritesTheFrameTheReferenceAndTheHeatMap) {
     expectInputError("compare --ambient magic --out " + out, {"--ambient"});
 }
 
+// `compare --frame` outside the replay is refused naming --frame: -1 is not "the middle" (that
+// is --frame left out), and neither is any other negative frame; one past the last is refused.
+TEST(Cli, CompareRefusesAFrameOutsideTheReplay) {
+    const std::string args = "compare --replay " + sourcePath("replays/highway-drive.json") +
+                             " --size 32x18 --grid 16 --reference-size 4 --out " +
+                             testing::TempDir() + "compare-frame";
+    // 90 s at 60 Hz and stride 2: frames 0 to 2700.
+    expectInputError(args + " --frame -1", {"--frame", "0 to 2700", "got -1"});
+    expectInputError(args + " --frame -2000", {"--frame", "got -2000"});
+    expectInputError(args + " --frame 2701", {"--frame", "0 to 2700", "got 2701"});
+    expectInputError(args + " --stride 3 --frame 1801", {"--frame", "0 to 1800", "stride 3"});
+}
+
 // The shadow options: anything but on or off, and absurd cascades, sizes or taps, are one clear
 // error naming the option, before any work.
 TEST(Cli, ShadowBadOptions) {

@@ -276,5 +276,22 @@ TEST(Hostile, FarFlightCutsJumpTheirDistance) {
     EXPECT_EQ(cuts, flagged);
 }
 
+// A NUL byte ends the input for the JSON library: a settings file "{}<NUL>anything" was read
+// as "{}" and the rest ignored. Every JSON reader now refuses it (world/JsonText.h).
+TEST(Hostile, JsonFilesWithANulByteAreRefused) {
+    const fs::path dir = scratchDir("hostile-nul");
+    std::ofstream(dir / "settings.json", std::ios::binary)
+        << std::string("{\"store\": {}}\0{\"store\": {\"levels\": 99}}", 43);
+    expectInputError("run --no-frames --max-frames 1 --config " +
+                         quoted((dir / "settings.json").string()),
+                     {"settings.json", "NUL byte at offset 13"});
+    std::string replay = slurp(sourcePath("replays/highway-drive.json"));
+    replay += std::string("\0junk", 5);
+    std::ofstream(dir / "replay.json", std::ios::binary) << replay;
+    expectInputError("run --no-frames --max-frames 1 --replay " +
+                         quoted((dir / "replay.json").string()),
+                     {"replay.json", "NUL byte"});
+}
+
 }  // namespace
 }  // namespace amb

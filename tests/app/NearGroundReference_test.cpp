@@ -21,10 +21,9 @@
 namespace amb {
 namespace {
 
-ShRgb project(int n, const std::vector<float>& cube) {
-    CubeMapProjector::Options o;
-    o.sunThreshold = kSunThreshold_Wpsrm2;
-    return toFloat(projectCubeMap(n, cube, o).sh);
+// As the methods and the oracles project: the sun's texel left out by its direction.
+ShRgb project(const CubeCapture& capture, double time_h, const std::vector<float>& cube) {
+    return toFloat(projectCubeMap(capture.faceSize(), cube, {}, capture.sunDirection(time_h)).sh);
 }
 
 // At 12 ground points of the drive, 2 m up: mean relative irradiance error against the
@@ -50,7 +49,7 @@ TEST(NearGroundReference, TheGroundTermTakesMostOfTheErrorOnARoad) {
         const double time_h = replay.timeOfDayAt_h(t);
         withGround.setTimeOfDay(time_h), withoutGround.setTimeOfDay(time_h);
         const glm::dvec3 p = environment.placeProbe(cam.position_m.x, cam.position_m.z, maxAside_m);
-        const ShRgb reference = project(64, full.captureAll(p, time_h));
+        const ShRgb reference = project(full, time_h, full.captureAll(p, time_h));
         const double gx = std::floor(p.x / cell_m) * cell_m, gz = std::floor(p.z / cell_m) * cell_m;
         const double fx = (p.x - gx) / cell_m, fz = (p.z - gz) / cell_m;
         ShRgb far{};
@@ -60,7 +59,7 @@ TEST(NearGroundReference, TheGroundTermTakesMostOfTheErrorOnARoad) {
             std::vector<float> cube;
             coarse.captureFar(q, time_h, kAllCubeFaces, cube, on.captureRadius_m);
             const double w = ((k & 1) ? fx : 1.0 - fx) * ((k >> 1) ? fz : 1.0 - fz);
-            far += project(16, cube) * float(w);
+            far += project(coarse, time_h, cube) * float(w);
         }
         errorOn += relativeIrradianceError(withGround.apply(far, p), reference) / points;
         errorOff += relativeIrradianceError(withoutGround.apply(far, p), reference) / points;

@@ -345,9 +345,11 @@ CameraSample treeView(const World& world) {
 // an object pixel equals the SH irradiance at its normal (read from the normal output) over pi,
 // within 2e-3 relative; every surface pixel equals the screen witnesses' ambient output over pi
 // (the same corner and vertex colours) within 1.5e-3 (the HDR target is half float: 2^-11 a
-// rounding, two roundings); the sky stays the shaded view's. The surface output is read back
-// right after the two tone-mapped views, where a read-back that did not wait for the rasterizer
-// (app/render/Gl.h, readFramebuffer) once returned tiles of the shaded render as sky.
+// rounding, two roundings); the sky stays the shaded view's. The tree view shows no sky: a pixel
+// its surface output calls sky is a surface read back before it was drawn (the read-back right
+// after the two tone-mapped views did that until it waited for the rasterizer: app/render/Gl.h,
+// readFramebuffer), and the views differ there. A second view, looking up from open ground, has
+// sky in its top rows: there the ambient view is the shaded view, value for value.
 TEST(Renderer, TheAmbientViewIsTheShIrradianceOverPi) {
     AMB_REQUIRE_PLATFORM(platform, Backend::Auto, kW, kH);
     const World world(WorldSettings{});
@@ -390,6 +392,57 @@ TEST(Renderer, TheAmbientViewIsTheShIrradianceOverPi) {
     ::testing::Test::RecordProperty("skyPixels", sky0);
     // The hemisphere ambient varies with the normal: the test sees more than one value.
     EXPECT_GT(spread, 1.2f * least);
+
+    const CameraSample up = viewAt(world, 0.2);
+    renderer.render(up, ambient, RenderOutput::Ambient);
+    const std::vector<float> upView = renderer.readHdr();
+    renderer.render(up, ambient, RenderOutput::Shaded);
+    const std::vector<float> upShaded = renderer.readHdr();
+    renderer.render(up, ambient, RenderOutput::AmbientIrradiance);
+    const SurfaceImage upApplied = renderer.readSurface(up);
+    int sky = 0, skyDiffers = 0;
+    for (std::size_t p = 0; p < std::size_t(kW) * kH; ++p) {
+        if (upApplied.rgba[4 * p + 3] != 0.0f) continue;
+        ++sky;
+        for (int c = 0; c < 3; ++c) skyDiffers += upView[3 * p + c] != upShaded[3 * p + c];
+    }
+    EXPECT_GT(sky, kW * kH / 8);
+    EXPECT_EQ(skyDiffers, 0);
+}
+
+// A read-back is the image its render drew, whole: right after two tone-mapped renders of the
+// same camera, the screen witnesses' render read back at once equals the same target read again
+// after glFinish, pixel for pixel, and so do the HDR and tone-mapped images of a shaded render
+// after it. Without the wait in readFramebuffer (app/render/Gl.h) llvmpipe returned tiles of
+// the surface output its rasterizer threads had not yet drawn (alpha 0: terrain read as sky).
+TEST(Renderer, ReadBacksWaitForTheRenderTheyRead) {
+    AMB_REQUIRE_PLATFORM(platform, Backend::Auto, kW, kH);
+    const World world(WorldSettings{});
+    Renderer renderer(world, testSettings());
+    const FixedAmbient ambient(AmbientMode::Hemisphere, renderer.setTimeOfDay(10.0));
+    const CameraSample cam = treeView(world);
+    // Values that differ, and any the longer vector has beyond the shorter.
+    const auto differing = [](const auto& a, const auto& b) {
+        const std::size_t n = std::min(a.size(), b.size());
+        int count = int(std::max(a.size(), b.size()) - n);
+        for (std::size_t i = 0; i < n; ++i) count += !(a[i] == b[i]);
+        return count;
+    };
+    // The sequence of TheAmbientViewIsTheShIrradianceOverPi.
+    renderer.render(cam, ambient, RenderOutput::Ambient);
+    (void)renderer.readHdr();
+    renderer.render(cam, ambient, RenderOutput::Shaded);
+    (void)renderer.readHdr();
+    renderer.render(cam, ambient, RenderOutput::AmbientIrradiance);
+    const SurfaceImage first = renderer.readSurface(cam);
+    glFinish();
+    EXPECT_EQ(differing(first.rgba, renderer.readSurface(cam).rgba), 0) << "surface output";
+    renderer.render(cam, ambient, RenderOutput::Shaded);
+    const std::vector<float> hdr = renderer.readHdr();
+    const std::vector<unsigned char> ldr = renderer.readRgb8();
+    glFinish();
+    EXPECT_EQ(differing(hdr, renderer.readHdr()), 0) << "HDR image";
+    EXPECT_EQ(differing(ldr, renderer.readRgb8()), 0) << "tone-mapped image";
 }
 
 // The ambient view is not shadowed: it shows the ambient alone, and the ambient is what lights

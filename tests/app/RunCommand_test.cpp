@@ -113,5 +113,29 @@ TEST(ProbeCommand, WritesAVerticalStripExr) {
     EXPECT_GT(up, down);
 }
 
+// An --out no image format writes is refused before any work: with an empty shader folder, the
+// capture (or the GL context before it) would fail first with another error.
+TEST(ProbeCommand, OutputFormatIsCheckedBeforeAnyWork) {
+    const fs::path dir = test::scratchDir("probe-out");
+    fs::create_directories(dir / "no-shaders");
+    const std::string shaders = " --shaders " + (dir / "no-shaders").string();
+    const auto r = test::runAmbience("probe --at 1,2 --size 4" + shaders + " --out " +
+                                     (dir / "p.txt").string());
+    EXPECT_EQ(r.exitCode, 2) << r.err;
+    EXPECT_EQ(test::lineCount(r.err), 1) << r.err;
+    EXPECT_EQ(r.err.rfind("ambience: error: --out: ", 0), 0u) << r.err;
+    EXPECT_NE(r.err.find("'.txt'"), std::string::npos) << r.err;
+    expectInputError("probe --at 1,2 --size 4" + shaders + " --out " + (dir / "probe").string(),
+                     "--out");
+    // A missing folder, and a replay that cannot be read: the output is named first.
+    expectInputError("probe --at 1,2" + shaders + " --out " + (dir / "none" / "p.exr").string(),
+                     "--out");
+    expectInputError("probe --at 1,2 --replay " + (dir / "missing.json").string() + shaders +
+                         " --out " + (dir / "p.txt").string(),
+                     "--out");
+    EXPECT_FALSE(fs::exists(dir / "p.txt"));
+    EXPECT_FALSE(fs::exists(dir / "probe"));
+}
+
 }  // namespace
 }  // namespace amb

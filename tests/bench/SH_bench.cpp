@@ -48,6 +48,21 @@ void BM_CubeMapProjectionOneFace(benchmark::State& state) {
 }
 BENCHMARK(BM_CubeMapProjectionOneFace)->Arg(16);
 
+// One face holding the sun's texel, left out by its direction (a copy of the face, its texel
+// filled from its neighbours): what the face with the sun costs over the others.
+void BM_CubeMapProjectionSunFace(benchmark::State& state) {
+    const int n = int(state.range(0));
+    const auto rgb = randomMap(n);
+    amb::CubeMapProjector projector(n);
+    const glm::dvec3 sun = amb::cubeTexelDirection(0, n / 3, n / 2, n);
+    for (auto _ : state) {
+        projector.addFace(0, rgb.data(), sun);
+        benchmark::ClobberMemory();
+    }
+}
+BENCHMARK(BM_CubeMapProjectionSunFace)->Arg(16)->Arg(64);
+BENCHMARK(BM_CubeMapProjectionOneFace)->Arg(64);
+
 // Batch irradiance for many unit normals (structure of arrays, float).
 void BM_ShIrradianceBatch(benchmark::State& state) {
     const std::size_t count = std::size_t(state.range(0));

@@ -12,6 +12,9 @@
 #                           behind the byte that selects the checksum handling in the target
 #   fuzz_cubemap            4 x 4 cube maps from `ambience probe` as .png, .exr and .hdr, each
 #                           behind the byte that selects its extension in the target
+#   fuzz_bench_manifest     bench.json of an emitted two-method bench (paths made neutral)
+#   fuzz_run_report         the report.json of a 30-frame measured run, on one line
+#   fuzz_exit_status        exit statuses as runs write them (ok, failed, killed, old form)
 #
 #   tests/fuzz/make-corpus.sh [ambience executable, default build/bin/ambience]
 set -euo pipefail
@@ -22,6 +25,7 @@ tmp="$(mktemp -d "${TMPDIR:-/tmp}/ambience-corpus.XXXXXX")"
 trap 'rm -rf "$tmp"' EXIT
 
 mkdir -p "$corpus"/{fuzz_replay,fuzz_volume_settings,fuzz_baseline_settings,fuzz_sweep,fuzz_oracle,fuzz_reference,fuzz_anchor_store,fuzz_cubemap}
+mkdir -p "$corpus"/{fuzz_bench_manifest,fuzz_run_report,fuzz_exit_status}
 
 # Replays: the header lines as written and a window of sample lines (the writer puts one sample
 # per line), so numbers keep their exact text.
@@ -62,6 +66,14 @@ cat >"$s/two-points.json" <<'JSON'
              "volume": {"scheduler": {"maxLevel": 4}}}]}
 JSON
 
+# Exit statuses as a local bench (seconds with decimals) and an emitted line (whole seconds)
+# write them, and without the seconds.
+e="$corpus/fuzz_exit_status"
+printf '0 12.345\n' >"$e/ok.txt"
+printf '2 3\n' >"$e/failed.txt"
+printf '137 41\n' >"$e/killed.txt"
+printf '0\n' >"$e/no-seconds.txt"
+
 # Files the program writes: settings files of every key, a short run, measured, saving its
 # anchors; a probe.
 if [[ ! -x "$ambience" ]]; then
@@ -84,6 +96,30 @@ done
 # one frame has no anchor yet but every grid, the metadata and the checksum, in 19 kB.
 "$ambience" run --replay replays/highway-drive.json --max-frames 1 --no-frames --no-video \
   --save-anchors "$tmp/anchors.vdb" --out "$tmp/run1" >/dev/null
+# An emitted bench (nothing run): its bench.json with the folder and replay paths made neutral.
+"$ambience" bench --replays highway-drive,low-flight --methods volume,constant --max-frames 30 \
+  --sweep "$s/two-points.json" --emit "$tmp/emit" >/dev/null
+python3 - "$tmp/emit/bench.json" "$corpus/fuzz_bench_manifest/two-replays.json" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+d['command'] = 'ambience bench --replays highway-drive,low-flight --methods volume,constant'
+for r in d['replays']:
+    r['path'] = '/data/ambience/replays/' + r['name'] + '.json'
+json.dump(d, open(sys.argv[2], 'w'), indent=1)
+PY
+# The report with every list cut to its first two items (it stays under the 8 kB the JSON
+# targets' inputs may grow to), on one line.
+python3 - "$tmp/run/report.json" "$corpus/fuzz_run_report/highway-30.json" <<'PY'
+import json, sys
+def cut(v):
+    if isinstance(v, list):
+        return [cut(x) for x in v[:2]]
+    if isinstance(v, dict):
+        return {k: cut(x) for k, x in v.items()}
+    return v
+d = cut(json.load(open(sys.argv[1])))
+open(sys.argv[2], 'w').write(json.dumps(d, separators=(',', ':')) + '\n')
+PY
 # The fuzz target asks for the signature "fuzz"; keep the first 6 entries.
 python3 - "$tmp/oracle.json" "$corpus/fuzz_oracle/highway-30.json" <<'PY'
 import json, sys

@@ -15,8 +15,9 @@ cd "$(dirname "$0")/../.."
 seconds="${1:-60}"
 build="${2:-build-fuzz}"
 targets=(fuzz_replay fuzz_sweep fuzz_volume_settings fuzz_baseline_settings fuzz_oracle fuzz_reference
-         fuzz_anchor_store fuzz_cubemap)
-json_targets=" fuzz_replay fuzz_sweep fuzz_volume_settings fuzz_baseline_settings fuzz_oracle fuzz_reference "
+         fuzz_anchor_store fuzz_cubemap fuzz_bench_manifest fuzz_run_report fuzz_exit_status)
+json_targets=" fuzz_replay fuzz_sweep fuzz_volume_settings fuzz_baseline_settings fuzz_oracle"
+json_targets+=" fuzz_reference fuzz_bench_manifest fuzz_run_report "
 if [[ -n "${3:-}" ]]; then
   IFS=, read -r -a targets <<<"$3"
 fi

@@ -55,10 +55,8 @@ bool identical(const ShRgb& a, const ShRgb& b) {
 // The projection of the fake's whole cube at a probe over ground point (x, z).
 ShRgb captureAt(double x_m, double z_m, double timeOfDay_h = 12.0) {
     FakeCubeCapture reference(kFace);
-    CubeMapProjector::Options options;
-    options.sunThreshold = BaselineSettings{}.capture.sunThreshold;
     const std::vector<float> cube = reference.captureAll({x_m, kProbeHeight, z_m}, timeOfDay_h);
-    return toFloat(projectCubeMap(kFace, cube, options).sh);
+    return toFloat(projectCubeMap(kFace, cube, {}, reference.sunDirection(timeOfDay_h)).sh);
 }
 
 // sum_j w_j v_j / sum_j w_j, in double.

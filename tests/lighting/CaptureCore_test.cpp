@@ -10,6 +10,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -18,6 +19,7 @@
 #include "lighting/AmbienceVolume.h"
 #include "lighting/Baselines.h"
 #include "lighting/CubeMapProjector.h"
+#include "world/Replay.h"
 
 namespace amb {
 namespace {
@@ -101,6 +103,92 @@ TEST(CaptureCore, TeleportIsAStepTheSpeedCannotExplainAndDropsTheProbe) {
     const double nan = std::nan("");
     EXPECT_FALSE(core.beginFrame({nan, nan, nan}, v, 12.0, kDt).teleport);
     EXPECT_EQ(core.statistics().teleports, 1);
+}
+
+// The camera's velocity as the frame loop reports it (app/frame/MethodStages.cpp): measured from
+// the step itself, zero on the first frame and across a cut. Such a velocity explains any step,
+// however long: the detector may not take it at its word.
+struct StepVelocity {
+    bool have = false;
+    glm::dvec3 previous{0.0};
+    glm::dvec3 operator()(const glm::dvec3& p, double dt, bool cut = false) {
+        const glm::dvec3 v = have && dt > 0.0 && !cut ? (p - previous) / dt : glm::dvec3(0.0);
+        have = true;
+        previous = p;
+        return v;
+    }
+};
+
+// An unflagged jump of 9.9e7 m (a replay's coordinates reach 1e8 m) is a teleport, whether it
+// reports its own step as the speed (as the frame loop does) or nothing; so is the way back, and
+// a 5 km jump from a car at 30 m/s. The car's own steps before and after are motion.
+TEST(CaptureCore, AHugeUnflaggedStepIsATeleportWhateverSpeedItReports) {
+    for (const bool reportsStep : {true, false}) {
+        SCOPED_TRACE(reportsStep ? "velocity from the step" : "no velocity");
+        FakeCubeCapture capture(4);
+        FlatProbeEnvironment environment;
+        CaptureCore core(capture, environment, CaptureSettings{});
+        StepVelocity velocity;
+        glm::dvec3 p(0.0, 1.5, 0.0);
+        const glm::dvec3 drive(30.0, 0.0, 0.0);
+        int teleports = 0;
+        auto frame = [&](const glm::dvec3& at) {
+            const glm::dvec3 v = velocity(at, kDt);
+            const bool t = core.beginFrame(at, reportsStep ? v : glm::dvec3(0.0), 12.0, kDt).teleport;
+            teleports += t;
+            return t;
+        };
+        for (int f = 0; f < 10; ++f, p += drive * kDt) EXPECT_FALSE(frame(p)) << f;
+        const glm::dvec3 far = p + glm::dvec3(9.9e7, 0.0, 0.0);
+        EXPECT_TRUE(frame(far));
+        EXPECT_EQ(core.statistics().teleports, 1);
+        EXPECT_TRUE(frame(p));  // and back
+        for (int f = 0; f < 10; ++f) EXPECT_FALSE(frame(p += drive * kDt)) << f;
+        EXPECT_TRUE(frame(p + glm::dvec3(3000.0, 0.0, -4000.0)));
+        EXPECT_EQ(teleports, 3);
+        EXPECT_EQ(core.statistics().teleports, 3);
+    }
+    // The fastest camera the rule believes in, its speed measured from its steps, only moves.
+    FakeCubeCapture capture(4);
+    FlatProbeEnvironment environment;
+    CaptureCore core(capture, environment, CaptureSettings{});
+    StepVelocity velocity;
+    glm::dvec3 p(0.0, 500.0, 0.0);
+    const glm::dvec3 v = kMaxCameraSpeed_mps * glm::normalize(glm::dvec3(3.0, 0.0, -4.0));
+    for (int f = 0; f < 30; ++f, p += v * kDt) core.beginFrame(p, velocity(p, kDt), 12.0, kDt);
+    EXPECT_EQ(core.statistics().teleports, 0);
+}
+
+// The steps of every shipped replay, at the strides runs use, reported as the frame loop reports
+// them: the driving and flying is motion, and the stress flight's one cut is the one teleport.
+TEST(CaptureCore, ShippedReplaysMoveWithoutTeleportsButAtTheirCuts) {
+    const std::string dir = std::string(AMBIENCE_SOURCE_DIR) + "/replays/";
+    for (const char* name : {"highway-drive", "mountain-drive", "low-flight", "stress-flight",
+                             "far-flight", "day-timelapse", "ravine-dusk"}) {
+        const Replay replay = readReplay(dir + name + ".json");
+        for (const int stride : {1, 2, 30}) {
+            SCOPED_TRACE(std::string(name) + " at stride " + std::to_string(stride));
+            FakeCubeCapture capture(4);
+            FlatProbeEnvironment environment;
+            CaptureCore core(capture, environment, CaptureSettings{});
+            StepVelocity velocity;
+            const double dt = replay.step_s * stride;
+            int cuts = 0;
+            for (std::size_t i = 0; i < replay.samples.size(); i += std::size_t(stride)) {
+                bool cut = false;  // a cut since the previous frame
+                for (std::size_t j = i >= std::size_t(stride) ? i - stride + 1 : i; j <= i; ++j)
+                    cut = cut || (i > 0 && replay.samples[j].cut);
+                cuts += cut;
+                const glm::dvec3& at = replay.samples[i].position_m;
+                const double timeOfDay_h = replay.timeOfDayAt_h(replay.samples[i].time_s);
+                const bool teleport =
+                    core.beginFrame(at, velocity(at, dt, cut), timeOfDay_h, i ? dt : 0.0).teleport;
+                EXPECT_EQ(teleport, cut) << "sample " << i;
+            }
+            EXPECT_EQ(cuts, std::string(name) == "stress-flight" ? 1 : 0);
+            EXPECT_EQ(core.statistics().teleports, cuts);
+        }
+    }
 }
 
 TEST(CaptureCore, BudgetSpreadsAProbeOverFramesOrFillsAFrameWithProbes) {

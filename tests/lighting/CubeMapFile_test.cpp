@@ -153,6 +153,35 @@ TEST(CubeMapFile, BadFilesNameFileAndProblem) {
     EXPECT_THROW(writeCubeMap(unwritable, 1, std::vector<float>(18, 1.0f)), InputError);
 }
 
+// The output check a command makes before any work: a file no image format writes is refused
+// naming the option and the extension; what writeCubeMap can write passes. Nothing is created.
+TEST(CubeMapFile, OutputWithoutAWriterIsRefusedBeforeAnyWork) {
+    auto expectRefused = [](const std::string& path, const std::string& problem) {
+        try {
+            checkCubeMapOutput(path, "--out");
+            ADD_FAILURE() << "no error for " << path;
+        } catch (const InputError& e) {
+            const std::string what = e.what();
+            EXPECT_EQ(what.rfind("--out: ", 0), 0u) << what;
+            EXPECT_NE(what.find(path), std::string::npos) << what;
+            EXPECT_NE(what.find(problem), std::string::npos) << what;
+        }
+        EXPECT_FALSE(std::filesystem::exists(path)) << path;
+    };
+    expectRefused(tempPath("probe.txt"), "'.txt'");
+    expectRefused(tempPath("probe.no-such-format"), "'.no-such-format'");
+    expectRefused(tempPath("probe"), "no file extension");
+    for (const char* name : {"probe.exr", "probe.png", "probe.tif", "probe.hdr"}) {
+        const std::string path = tempPath(name);
+        EXPECT_NO_THROW(checkCubeMapOutput(path, "--out")) << name;
+        EXPECT_FALSE(std::filesystem::exists(path)) << name;
+        // What passes the check, writeCubeMap writes.
+        writeCubeMap(path, 2, distinctMap(2));
+        EXPECT_EQ(readCubeMap(path).n, 2) << name;
+        std::filesystem::remove(path);
+    }
+}
+
 // A PNG of `width` x `height` 8-bit RGB whose only image data is an empty deflate stream: the
 // header (IHDR, with its CRC) is valid, the pixels are not there.
 std::string pngHeaderOnly(std::uint32_t width, std::uint32_t height) {

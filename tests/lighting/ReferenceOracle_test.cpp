@@ -59,12 +59,13 @@ double band4(const glm::dvec3& n) {
 }  // namespace
 
 // A constant environment L gives E = pi L at every direction of the rule, whatever the face
-// size, and its P2 is the exact constant (truncation 0).
+// size, and its P2 is the exact constant (truncation 0); the sun's texel, filled from its
+// neighbours, stays L.
 TEST(ReferenceOracle, ConstantEnvironmentIsExact) {
     const SphereRule rule = sphereProductRule(5);
     for (int n : {4, 16, 64}) {
-        const ReferenceSample s =
-            referenceSample(n, constantCube(n, {1.0f, 0.5f, 2.0f}), kSunThreshold_Wpsrm2, rule);
+        const ReferenceSample s = referenceSample(n, constantCube(n, {1.0f, 0.5f, 2.0f}),
+                                                  glm::dvec3(0.3, 0.2, -1.0), rule);
         ASSERT_EQ(s.irradiance.size(), rule.directions.size());
         for (const glm::vec3& e : s.irradiance) {
             EXPECT_NEAR(e.x, kPi * 1.0, 1e-5);
@@ -75,22 +76,24 @@ TEST(ReferenceOracle, ConstantEnvironmentIsExact) {
     }
 }
 
-// A texel above the sun threshold is left out of both the irradiance and the SH, exactly as the
-// methods' projection leaves it out: the sample equals that of the cube without it.
+// The texel holding the sun direction is left out of both the irradiance and the SH, exactly as
+// the methods' projection leaves it out: filled from its neighbours, the sample equals that of
+// the cube without the sun. Without the direction the sun is kept: far brighter.
 TEST(ReferenceOracle, SunTexelsAreLeftOutAsTheMethodsLeaveThemOut) {
     const SphereRule rule = sphereProductRule(5);
     const int n = 16;
     std::vector<float> cube = constantCube(n, {1.0f, 1.0f, 1.0f}), withoutSun = cube;
     const std::size_t sunTexel = (std::size_t(2) * n + 5) * n + 7;  // on +Y
     for (int c = 0; c < 3; ++c) cube[3 * sunTexel + c] = 1.0e6f;
-    for (int c = 0; c < 3; ++c) withoutSun[3 * sunTexel + c] = 0.0f;
-    const ReferenceSample a = referenceSample(n, cube, kSunThreshold_Wpsrm2, rule);
-    const ReferenceSample b = referenceSample(n, withoutSun, kSunThreshold_Wpsrm2, rule);
+    const glm::dvec3 sun = cubeTexelDirection(2, 7, 5, n);
+    const ReferenceSample a = referenceSample(n, cube, sun, rule);
+    const ReferenceSample b = referenceSample(n, withoutSun, std::nullopt, rule);
     for (std::size_t k = 0; k < a.irradiance.size(); ++k)
         for (int c = 0; c < 3; ++c) EXPECT_NEAR(a.irradiance[k][c], b.irradiance[k][c], 1e-5);
     EXPECT_LT(irradianceDistance(a.sh, b.sh), 1e-5 * irradianceNorm(b.sh));
-    // Without a threshold the sun is kept: far brighter.
-    const ReferenceSample kept = referenceSample(n, cube, 1e30, rule);
+    for (const glm::dvec3& d : {glm::dvec3(0, 1, 0), sun, glm::dvec3(1, 0, 0)})
+        EXPECT_NEAR(referenceIrradianceAt(n, cube, sun, d).x, kPi, 1e-5);
+    const ReferenceSample kept = referenceSample(n, cube, std::nullopt, rule);
     EXPECT_GT(referenceNorm(kept, rule), 10.0 * referenceNorm(b, rule));
 }
 
