@@ -63,9 +63,9 @@ inline constexpr double kMaxCameraSpeed_mps = 1.0e4;
 // Shared by every capturing method (the JSON keys of both settings files, at the top level).
 struct CaptureSettings {
     int facesPerFrame = 1;  // capture budget (the thesis' one face per frame, 9.1)
-    // Retired: the sun is left out of the SH by its direction (lighting/SunTexel.h), not by a
-    // luminance threshold (no capture texel but the sun's comes near one). Still read (JSON key
-    // "sunThreshold") so that settings files naming it stay valid; no projection uses it.
+    // No projection uses it: the sun is left out of the SH by its direction (lighting/SunTexel.h),
+    // not by a luminance threshold. Only AmbienceVolume::skyLevel clamps texels at it (the disc
+    // must not count in the level of the sky).
     double sunThreshold = kSunThreshold_Wpsrm2;
     double maxAside_m = 4.0;  // how far ProbeEnvironment::placeProbe may move a probe [m]
     double defaultTimeRate_hPerS = 1.0 / 3600.0;  // before the rate is measured (real time)

@@ -223,7 +223,8 @@ Keys<CaptureSettings> captureKeys() {
         [](T& t) -> int& { return t.facesPerFrame; }, kCostHigh);
     k.number(
         "sunThreshold", "W sr^-1 m^-2", 0.0, 1e12,
-        "texels brighter than this are the sun disc, left out of the SH (1e12: none)",
+        "the sky level that rescales an anchor captured at another time clamps texels at this "
+        "luminance (the disc); the SH leave the sun out by its direction, not by this",
         [](T& t) -> double& { return t.sunThreshold; }, rebuilding(kLog));
     k.number(
         "maxAside_m", "m", 0.0, 100.0, "how far a probe may move out of solids",
