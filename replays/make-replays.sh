@@ -34,3 +34,14 @@ amb="${1:-../build/bin/ambience}"
   --duration 12 --time 19.3 --name ravine-dusk \
   --description "Stationary camera 28 m above a gully in ravine country, looking down, at dusk" \
   --out ravine-dusk.json
+# Held out: no setting is tuned on these two (docs/TUNING.md "Held-out replays"); the bench and
+# `ambience tune` evaluate on them.
+"$amb" replay make --mode drive --road mountain --seed 7 --speed 16 --duration 60 --time 16.6 \
+  --latitude 52 --day 290 --max-lateral-accel 3 --name dusk-mountain-held-out \
+  --description "Held out of tuning: a dusk drive on the mountain road of another world (seed 7), sun 5 degrees up" \
+  --out dusk-mountain-held-out.json
+"$amb" replay make --mode fly --speed 70 --altitude 35 --clearance 20 --turn-radius 250 \
+  --flight-seed 23 --start 3000000,2000000 --heading 300 --duration 50 --time 10.5 \
+  --name hairpin-flight-held-out \
+  --description "Held out of tuning: a low flight in tight turns 3.6 million metres from the origin, 70 m/s" \
+  --out hairpin-flight-held-out.json

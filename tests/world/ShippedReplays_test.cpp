@@ -101,7 +101,9 @@ INSTANTIATE_TEST_SUITE_P(
                     Expect{"stress-flight", ReplayMode::Fly, 250.0, 250.0, 60.0, 1},
                     Expect{"day-timelapse", ReplayMode::Static, 0.0, 0.0, 144.0, 0},
                     Expect{"far-flight", ReplayMode::Fly, 120.0, 120.0, 40.0, 0},
-                    Expect{"ravine-dusk", ReplayMode::Static, 0.0, 0.0, 12.0, 0, 28.0, true}),
+                    Expect{"ravine-dusk", ReplayMode::Static, 0.0, 0.0, 12.0, 0, 28.0, true},
+                    Expect{"dusk-mountain-held-out", ReplayMode::Drive, 5.0, 16.0, 60.0, 0},
+                    Expect{"hairpin-flight-held-out", ReplayMode::Fly, 70.0, 70.0, 50.0, 0}),
     [](const testing::TestParamInfo<Expect>& info) {
         std::string n = info.param.name;
         for (char& c : n)
