@@ -7,8 +7,9 @@
 #
 #   (no option)  the full setting: the frames at 640x360 and full reference resolution, the
 #                viewer's panel after 150 frames, the one-hour soak, and a reference bench of
-#                every method on three replays; writes docs/*.png|jpg, docs/RESULTS.md and the
-#                table between the results markers of README.md
+#                every method on the first 900 frames of three replays; writes
+#                docs/*.png|jpg, docs/RESULTS.md and the table between the results markers
+#                of README.md
 #   --short      the same steps in a few frames at a quarter of the pixels, and a 60-frame bench
 #                on the highway alone (for CI: checks that every step runs, in a few minutes); no
 #                soak; writes into out/figures-short/ unless --out or --docs says otherwise
@@ -48,7 +49,7 @@ while [[ $# -gt 0 ]]; do
     --docs) docs=1; shift ;;
     --no-soak) soak=0; shift ;;
     --resume) resume=1; shift ;;
-    -h|--help) sed -n '2,29p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '2,30p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) usage "unknown argument '$1'" ;;
   esac
 done
@@ -121,7 +122,8 @@ if ((short)); then
   bench_args=(--replays highway-drive --max-frames 60 --reference-every 3 --screen-witnesses 2)
 else
   size=640x360 grid=16 refsize=64 drive_frame=600 static_frame=300 view_frames=150
-  bench_args=(--replays highway-drive,mountain-drive,low-flight --screen-witnesses 2)
+  bench_args=(--replays highway-drive,mountain-drive,low-flight --max-frames 900
+              --screen-witnesses 2)
 fi
 bench_args+=(--oracle reference --out "$work/bench")
 
