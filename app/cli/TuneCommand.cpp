@@ -24,6 +24,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "app/cli/CliChecks.h"
 #include "app/cli/Commands.h"
 #include "app/platform/Platform.h"
 #include "lighting/JsonFields.h"
@@ -62,18 +63,6 @@ struct TuneOptions {
     int seed = -1;           // default: none (each worker draws its own)
     bool noEval = false;
 };
-
-std::vector<std::string> splitList(const std::string& text) {
-    std::vector<std::string> out;
-    std::stringstream in(text);
-    std::string item;
-    while (std::getline(in, item, ',')) {
-        item.erase(0, item.find_first_not_of(" \t"));
-        item.erase(item.find_last_not_of(" \t") + 1);
-        if (!item.empty()) out.push_back(item);
-    }
-    return out;
-}
 
 bool heldOut(const std::string& replay) {
     const std::string stem = fs::path(replay).stem().string();
