@@ -248,20 +248,33 @@ if ((soak)); then
   step "soak: $((SECONDS - t)) s"
 fi
 
+# resumed NAME RESULT CMD...: true (and the step said kept) when --resume keeps what CMD made last
+# time in the work folder: RESULT newer than the executable, from the same command line.
+resumed() {
+  local name="$1" result="$2"; shift 2
+  if ((resume)) && [[ $result -nt $bin && -f $work/$name.cmd ]] &&
+     [[ $(cat "$work/$name.cmd") == "$*" ]]; then
+    step "$name: kept (--resume)"
+    kept+=("$name")
+    return 0
+  fi
+  return 1
+}
+# fresh NAME CMD...: CMD run into work/NAME.log, its command line kept for a later --resume.
+fresh() {
+  local name="$1" t=$SECONDS; shift
+  run "$work/$name.log" "$@"
+  echo "$*" >"$work/$name.cmd"
+  step "$name: $((SECONDS - t)) s"
+}
+
 # The tune study's front (docs/TUNING.md "Tuning with Optuna"). A study folder is resumed by
 # the same command, so a fresh one is started unless --resume keeps it.
 step "tune: $(show "$bin" tune "${tune_args[@]}")"
-t=$SECONDS
 tune_cmd=("$bin" tune "${tune_args[@]}")
-if ((resume)) && [[ $work/tune/summary.md -nt $bin && -f $work/tune.cmd ]] &&
-   [[ $(cat "$work/tune.cmd") == "${tune_cmd[*]}" ]]; then
-  step "tune: kept (--resume)"
-  kept+=(tune)
-else
+if ! resumed tune "$work/tune/summary.md" "${tune_cmd[@]}"; then
   rm -rf "$work/tune"
-  run "$work/tune.log" "${tune_cmd[@]}"
-  echo "${tune_cmd[*]}" >"$work/tune.cmd"
-  step "tune: $((SECONDS - t)) s"
+  fresh tune "${tune_cmd[@]}"
 fi
 cp "$work/tune/front.png" "$dest/tune-front.png"
 printf '%s\t%s\t%s\t%s\n' tune-front.png "the tune study's front" "-" "$(show "${tune_cmd[@]}")" \
@@ -272,15 +285,9 @@ step "bench: $(show "$bin" bench "${bench_args[@]}")"
 t=$SECONDS
 bench_cmd=("$bin" bench "${bench_args[@]}")
 timing=()
-if ((resume)) && [[ $work/bench/results.csv -nt $bin && -f $work/bench.cmd ]] &&
-   [[ $(cat "$work/bench.cmd") == "${bench_cmd[*]}" ]]; then
-  step "bench: kept (--resume)"
-  kept+=(bench)
-else
+if ! resumed bench "$work/bench/results.csv" "${bench_cmd[@]}"; then
   rm -f "$work/bench/results.csv"
-  run "$work/bench.log" "${bench_cmd[@]}"
-  echo "${bench_cmd[*]}" >"$work/bench.cmd"
-  step "bench: $((SECONDS - t)) s"
+  fresh bench "${bench_cmd[@]}"
   timing=(--bench-seconds "$((SECONDS - t))")
 fi
 
