@@ -18,7 +18,7 @@ packages=(
   libboost-iostreams-dev libtbb-dev libgtest-dev libbenchmark-dev libcli11-dev
   nlohmann-json3-dev xvfb xauth ffmpeg python3-matplotlib libtsl-hopscotch-map-dev
   ccache clang libfuzzer-14-dev libclang-rt-14-dev fonts-dejavu-core
-  libimgui-dev parallel python3-openvdb python3-imath dpkg-dev
+  libimgui-dev parallel python3-openvdb python3-imath dpkg-dev python3-optuna python3-sklearn
 )
 
 missing=()

@@ -8,8 +8,10 @@
 #   fonts-dejavu-core   the contact sheet's labels
 #   libegl-mesa0        Mesa's EGL driver (libEGL only dispatches to it)
 #   libgl1-mesa-dri     Mesa's software rasteriser (llvmpipe) behind EGL surfaceless
-#   python3             bench's plot script; python3-matplotlib is recommended (without it
-#                       bench writes its tables and skips the plots)
+#   python3             bench's plot script and tune's study; python3-matplotlib is
+#                       recommended (without it bench writes its tables and skips the plots),
+#                       python3-optuna and python3-sklearn too (`ambience tune` and its
+#                       parameter importances)
 
 set(CPACK_PACKAGE_NAME ambience)
 set(CPACK_PACKAGE_VENDOR "Ambience")
@@ -37,7 +39,7 @@ set(CPACK_DEBIAN_PACKAGE_SECTION graphics)
 set(CPACK_DEBIAN_PACKAGE_PRIORITY optional)
 set(CPACK_DEBIAN_PACKAGE_DEPENDS
     "ffmpeg, fonts-dejavu-core, libegl-mesa0, libgl1-mesa-dri, python3")
-set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "python3-matplotlib")
+set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "python3-matplotlib, python3-optuna, python3-sklearn")
 find_program(AMBIENCE_DPKG_SHLIBDEPS dpkg-shlibdeps)
 if(AMBIENCE_DPKG_SHLIBDEPS)
   set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)

@@ -6,12 +6,15 @@
 #                           [--resume]
 #
 #   (no option)  the full setting: the frames at 640x360 and full reference resolution, the
-#                viewer's panel after 150 frames, the one-hour soak, and a reference bench of
-#                every method on the first 900 frames of three replays; writes
+#                viewer's panel after 150 frames, the one-hour soak, a 40-trial `ambience tune`
+#                study (docs/TUNING.md "Tuning with Optuna"; about half an hour on an idle
+#                2-core machine), and a reference bench of every method on the first 900
+#                frames of three replays; writes
 #                docs/*.png|jpg, docs/RESULTS.md and the table between the results markers
 #                of README.md
-#   --short      the same steps in a few frames at a quarter of the pixels, and a 60-frame bench
-#                on the highway alone (for CI: checks that every step runs, in a few minutes); no
+#   --short      the same steps in a few frames at a quarter of the pixels, a 2-trial tune of
+#                30-frame runs, and a 60-frame bench on the highway alone (for CI: checks that
+#                every step runs, in a few minutes); no
 #                soak; writes into out/figures-short/ unless --out or --docs says otherwise
 #   --out DIR    write the pictures, RESULTS.md and a copy of README.md with its table rewritten
 #                into DIR instead (docs/ and README.md are left alone)
@@ -19,9 +22,9 @@
 #   --work DIR   where the runs go (default out/figures or out/figures-short; DIR/work with --out)
 #   --bin FILE   the ambience executable (default build/bin/ambience)
 #   --no-soak    leave docs/soak-memory.png as it is (the soak alone takes about 10 minutes)
-#   --resume     keep the compare runs and the bench already in the work folder that ran with
-#                the same options and are newer than the executable (a run stopped half way goes
-#                on where it was; RESULTS.md says what was kept)
+#   --resume     keep the compare runs, the tune study and the bench already in the work folder
+#                that ran with the same options and are newer than the executable (a run stopped
+#                half way goes on where it was; RESULTS.md says what was kept)
 #
 # Needs what setup.sh installs: oiiotool (openimageio-tools) for the mosaics, xvfb-run for the
 # viewer, python3 for RESULTS.md. Runs kept in the work folder are reused where ambience reuses
@@ -120,11 +123,18 @@ fi
 if ((short)); then
   size=320x180 grid=96 refsize=32 drive_frame=30 static_frame=30 view_frames=20
   bench_args=(--replays highway-drive --max-frames 60 --reference-every 3 --screen-witnesses 2)
+  tune_args=(--params scheduler.horizon_s=1:6,store.reachCells --replays highway-drive
+             --eval-replays hairpin-flight-held-out --oracle self --max-frames 30 --trials 2)
 else
   size=640x360 grid=16 refsize=64 drive_frame=600 static_frame=300 view_frames=150
   bench_args=(--replays highway-drive,mountain-drive,low-flight --max-frames 900
               --screen-witnesses 2)
+  # The study of docs/TUNING.md "Tuning with Optuna": the keys bench --tune descends over, in
+  # the region its three rounds reach (clipped to the schema's ranges).
+  tune_args=(--params "scheduler.horizon_s=0.375:10,scheduler.corridorCells=0.5:32,store.blendTime_s=0.125:8,scheduler.finestRingCells=0.125:8,scheduler.coarseRingCells=0.25:8,store.reachCells=1:4,nearField.captureRadius_m=5:40,nearField.radius_m=8:60"
+             --max-frames 450 --trials 40 --jobs 2)
 fi
+tune_args+=(--seed 1 --out "$work/tune")
 bench_args+=(--oracle reference --out "$work/bench")
 
 kept=()
@@ -238,20 +248,46 @@ if ((soak)); then
   step "soak: $((SECONDS - t)) s"
 fi
 
+# resumed NAME RESULT CMD...: true (and the step said kept) when --resume keeps what CMD made last
+# time in the work folder: RESULT newer than the executable, from the same command line.
+resumed() {
+  local name="$1" result="$2"; shift 2
+  if ((resume)) && [[ $result -nt $bin && -f $work/$name.cmd ]] &&
+     [[ $(cat "$work/$name.cmd") == "$*" ]]; then
+    step "$name: kept (--resume)"
+    kept+=("$name")
+    return 0
+  fi
+  return 1
+}
+# fresh NAME CMD...: CMD run into work/NAME.log, its command line kept for a later --resume.
+fresh() {
+  local name="$1" t=$SECONDS; shift
+  run "$work/$name.log" "$@"
+  echo "$*" >"$work/$name.cmd"
+  step "$name: $((SECONDS - t)) s"
+}
+
+# The tune study's front (docs/TUNING.md "Tuning with Optuna"). A study folder is resumed by
+# the same command, so a fresh one is started unless --resume keeps it.
+step "tune: $(show "$bin" tune "${tune_args[@]}")"
+tune_cmd=("$bin" tune "${tune_args[@]}")
+if ! resumed tune "$work/tune/summary.md" "${tune_cmd[@]}"; then
+  rm -rf "$work/tune"
+  fresh tune "${tune_cmd[@]}"
+fi
+cp "$work/tune/front.png" "$dest/tune-front.png"
+printf '%s\t%s\t%s\t%s\n' tune-front.png "the tune study's front" "-" "$(show "${tune_cmd[@]}")" \
+  >>"$frames_tsv"
+
 # The bench behind docs/RESULTS.md and the README's table.
 step "bench: $(show "$bin" bench "${bench_args[@]}")"
 t=$SECONDS
 bench_cmd=("$bin" bench "${bench_args[@]}")
 timing=()
-if ((resume)) && [[ $work/bench/results.csv -nt $bin && -f $work/bench.cmd ]] &&
-   [[ $(cat "$work/bench.cmd") == "${bench_cmd[*]}" ]]; then
-  step "bench: kept (--resume)"
-  kept+=(bench)
-else
+if ! resumed bench "$work/bench/results.csv" "${bench_cmd[@]}"; then
   rm -f "$work/bench/results.csv"
-  run "$work/bench.log" "${bench_cmd[@]}"
-  echo "${bench_cmd[*]}" >"$work/bench.cmd"
-  step "bench: $((SECONDS - t)) s"
+  fresh bench "${bench_cmd[@]}"
   timing=(--bench-seconds "$((SECONDS - t))")
 fi
 

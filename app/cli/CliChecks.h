@@ -1,10 +1,12 @@
 // CliChecks.h — CLI11 validators shared by the subcommands. CLI11's Range lets NaN through
-// (every comparison with NaN is false), so numeric options use FiniteRange instead.
+// (every comparison with NaN is false), so numeric options use FiniteRange instead. Also the
+// items of a comma-separated option (splitList).
 #pragma once
 
 #include <cmath>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -45,5 +47,19 @@ public:
         };
     }
 };
+
+// The items of a comma-separated list ("a, b,,c" -> a, b, c): blanks around each trimmed,
+// empty ones dropped.
+inline std::vector<std::string> splitList(const std::string& text) {
+    std::vector<std::string> out;
+    std::stringstream in(text);
+    std::string item;
+    while (std::getline(in, item, ',')) {
+        item.erase(0, item.find_first_not_of(" \t"));
+        item.erase(item.find_last_not_of(" \t") + 1);
+        if (!item.empty()) out.push_back(item);
+    }
+    return out;
+}
 
 }  // namespace amb

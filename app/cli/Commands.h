@@ -19,6 +19,7 @@ void addShCommand(CLI::App& app);      // SH tools: project
 void addBenchCommand(CLI::App& app);   // replays x methods x parameter points: speed vs error
 void addCompareCommand(CLI::App& app);  // one frame: method, reference and ambient error
 void addSettingsCommand(CLI::App& app);  // the keys of the settings files
+void addTuneCommand(CLI::App& app);      // a multi-objective Optuna study of the settings
 
 // The folder of the shipped replays (beside the executable's tree, or ./replays); "" if none.
 std::string shippedReplayDir();

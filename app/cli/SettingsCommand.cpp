@@ -3,6 +3,7 @@
 //
 //   ambience settings                      every key: its file, kind, default, range, unit, help
 //   ambience settings --markdown           the key tables of docs/TUNING.md
+//   ambience settings --json               every key as JSON, for scripts (ambience tune)
 //   ambience settings --fuzz-dictionary    the settings part of tests/fuzz/json.dict
 //   ambience settings --defaults FILE      a settings file (volume or baseline) of every key at
 //                                          its default
@@ -12,6 +13,7 @@
 #include <string>
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include "app/cli/Commands.h"
 #include "lighting/JsonFields.h"
@@ -24,6 +26,7 @@ namespace {
 
 struct SettingsOptions {
     bool markdown = false;
+    bool json = false;
     bool fuzzDictionary = false;
     std::string defaults, worstCase;  // "volume" or "baseline"
 };
@@ -57,6 +60,47 @@ void listKeys(const char* title, const SettingsSchema<S>& schema) {
     }
 }
 
+const char* costName(SettingSpec::Cost cost) {
+    switch (cost) {
+        case SettingSpec::Cost::AtHigh:
+            return "high";
+        case SettingSpec::Cost::AtLow:
+            return "low";
+        case SettingSpec::Cost::None:
+            break;
+    }
+    return "";
+}
+
+// One settings file's keys as JSON: for each, what the schema says and the default.
+template <typename S>
+nlohmann::json keysJson(const SettingsSchema<S>& schema) {
+    nlohmann::json keys = nlohmann::json::array();
+    const S defaults{};
+    for (const auto& f : schema.fields()) {
+        const double v = schema.value(defaults, f);
+        nlohmann::json k = {{"key", f.key},
+                            {"kind", kindName(f.kind)},
+                            {"unit", f.unit},
+                            {"help", f.help},
+                            {"rebuilds", f.rebuilds},
+                            {"logarithmic", f.logarithmic},
+                            {"costlyEnd", costName(f.cost)}};
+        if (f.kind == SettingSpec::Kind::Boolean) {
+            k["default"] = v != 0.0;
+        } else {
+            k["min"] = f.lo;
+            k["max"] = f.hi;
+            if (f.kind == SettingSpec::Kind::Integer)
+                k["default"] = static_cast<long long>(v);
+            else
+                k["default"] = v;
+        }
+        keys.push_back(std::move(k));
+    }
+    return keys;
+}
+
 // "volume" or "baseline": the file's text, from `volume` or `baseline` of the schema.
 template <typename Volume, typename Baseline>
 std::string fileText(const std::string& file, const char* option, Volume volume,
@@ -67,16 +111,19 @@ std::string fileText(const std::string& file, const char* option, Volume volume,
 }
 
 void runSettings(const SettingsOptions& o) {
-    const int outputs = int(o.markdown) + int(o.fuzzDictionary) + int(!o.defaults.empty()) +
+    const int outputs = int(o.markdown) + int(o.json) + int(o.fuzzDictionary) + int(!o.defaults.empty()) +
                         int(!o.worstCase.empty());
     if (outputs > 1)
         throw InputError("settings",
-                         "one of --markdown, --fuzz-dictionary, --defaults, --worst-case");
+                         "one of --markdown, --json, --fuzz-dictionary, --defaults, --worst-case");
     const auto& volume = volumeSettingsSchema();
     const auto& baseline = baselineSettingsSchema();
     std::string text;
     if (o.markdown) {
         text = settingsMarkdown();
+    } else if (o.json) {
+        const nlohmann::json all = {{"volume", keysJson(volume)}, {"baseline", keysJson(baseline)}};
+        text = all.dump(2) + "\n";
     } else if (o.fuzzDictionary) {
         text = settingsFuzzDictionary();
     } else if (!o.defaults.empty()) {
@@ -106,6 +153,9 @@ void addSettingsCommand(CLI::App& app) {
     auto o = std::make_shared<SettingsOptions>();
     cmd->add_flag("--markdown", o->markdown,
                   "print the key tables of docs/TUNING.md (Markdown) instead");
+    cmd->add_flag("--json", o->json,
+                  "print every key as JSON: {\"volume\": [...], \"baseline\": [...]}, each with "
+                  "key, kind, unit, min, max, default, logarithmic, help, rebuilds, costlyEnd");
     cmd->add_flag("--fuzz-dictionary", o->fuzzDictionary,
                   "print the settings names of the fuzz dictionary (tests/fuzz/json.dict)");
     cmd->add_option("--defaults", o->defaults,

@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
     amb::addBenchCommand(app);
     amb::addCompareCommand(app);
     amb::addSettingsCommand(app);
+    amb::addTuneCommand(app);
 
     // An unknown subcommand is an error even with --help (CLI11 would print the parent's help
     // and exit 0): walk the leading words down the subcommand tree first.

@@ -63,7 +63,59 @@ TEST(SettingsCommand, PrintsWhatTheSchemaSays) {
     expectInputError("settings --defaults lamp",
                      "--defaults: expected volume or baseline, got 'lamp'");
     expectInputError("settings --markdown --fuzz-dictionary",
-                     "settings: one of --markdown, --fuzz-dictionary, --defaults, --worst-case");
+                     "settings: one of --markdown, --json, --fuzz-dictionary, --defaults, "
+                     "--worst-case");
+}
+
+// `settings --json` (what `ambience tune` takes its ranges from) lists every key of both files
+// in the schema's order, with the schema's kind, unit, range, default, help and flags.
+template <typename S>
+void expectJsonAgrees(const nlohmann::json& keys, const SettingsSchema<S>& schema) {
+    const auto& fields = schema.fields();
+    ASSERT_TRUE(keys.is_array());
+    ASSERT_EQ(keys.size(), fields.size());
+    const S defaults{};
+    for (std::size_t i = 0; i < fields.size(); ++i) {
+        const auto& f = fields[i];
+        const nlohmann::json& k = keys[i];
+        EXPECT_EQ(k.at("key"), f.key);
+        EXPECT_EQ(k.at("unit"), f.unit) << f.key;
+        EXPECT_EQ(k.at("help"), f.help) << f.key;
+        EXPECT_EQ(k.at("rebuilds"), f.rebuilds) << f.key;
+        EXPECT_EQ(k.at("logarithmic"), f.logarithmic) << f.key;
+        EXPECT_EQ(k.at("costlyEnd"), f.cost == SettingSpec::Cost::AtHigh  ? "high"
+                                     : f.cost == SettingSpec::Cost::AtLow ? "low"
+                                                                          : "")
+            << f.key;
+        const double v = schema.value(defaults, f);
+        if (f.kind == SettingSpec::Kind::Boolean) {
+            EXPECT_EQ(k.at("kind"), "switch") << f.key;
+            EXPECT_EQ(k.at("default"), v != 0.0) << f.key;
+            EXPECT_FALSE(k.contains("min")) << f.key;
+        } else {
+            EXPECT_EQ(k.at("kind"), f.kind == SettingSpec::Kind::Integer ? "integer" : "number")
+                << f.key;
+            // Exact: the JSON carries the doubles at full precision.
+            EXPECT_EQ(k.at("min").get<double>(), f.lo) << f.key;
+            EXPECT_EQ(k.at("max").get<double>(), f.hi) << f.key;
+            EXPECT_EQ(k.at("default").get<double>(), v) << f.key;
+            if (f.kind == SettingSpec::Kind::Integer)
+                EXPECT_TRUE(k.at("default").is_number_integer()) << f.key;
+        }
+    }
+}
+
+TEST(SettingsCommand, JsonListsEveryKeyAsTheSchemaHasIt) {
+    const auto r = runAmbience("settings --json");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const nlohmann::json all = nlohmann::json::parse(r.out);
+    ASSERT_TRUE(all.is_object());
+    EXPECT_EQ(all.size(), 2u);
+    expectJsonAgrees(all.at("volume"), volumeSettingsSchema());
+    expectJsonAgrees(all.at("baseline"), baselineSettingsSchema());
+    expectInputError("settings --json --markdown",
+                     "settings: one of --markdown, --json, --fuzz-dictionary, --defaults, "
+                     "--worst-case");
 }
 
 TEST(SettingsCommand, BadSetsAreOneLineNamingTheKey) {

@@ -4,9 +4,10 @@
 #   deb-test.sh CPACK BUILD_DIR VERSION
 #
 # Runs `cpack -G DEB` on BUILD_DIR's CPackConfig.cmake into a scratch folder and checks the
-# package with dpkg-deb: its name and VERSION, the program, shaders, replays and plot script
-# under /usr, nothing of the build tree, and the dependencies (the run-time programs and data
-# always; the libraries when dpkg-shlibdeps was there to find them).
+# package with dpkg-deb: its name and VERSION, the program, shaders, replays, plot script and
+# tune's study script under /usr, nothing of the build tree, and the dependencies (the run-time
+# programs and data always, the Python modules recommended; the libraries when dpkg-shlibdeps
+# was there to find them).
 # Exit 0: passed; 1: failed; 77: no dpkg-deb (ctest counts it as skipped).
 set -euo pipefail
 
@@ -33,7 +34,7 @@ done
 dpkg-deb --contents "$deb" | awk '{print $NF}' >"$scratch/contents"
 for f in ./usr/bin/ambience ./usr/share/ambience/shaders/terrain.frag \
          ./usr/share/ambience/shaders/conventions.glsl ./usr/share/ambience/replays/highway-drive.json \
-         ./usr/share/ambience/bench-plots.py; do
+         ./usr/share/ambience/bench-plots.py ./usr/share/ambience/ambience-tune.py; do
   grep -qxF "$f" "$scratch/contents" || fail "$f is not in the package"
 done
 if grep -E '\.a$|_test$|\.ok$|/glad/' "$scratch/contents"; then fail "build-tree files packaged"; fi
@@ -41,6 +42,10 @@ if grep -E '\.a$|_test$|\.ok$|/glad/' "$scratch/contents"; then fail "build-tree
 depends=$(dpkg-deb --field "$deb" Depends)
 for p in ffmpeg fonts-dejavu-core libegl-mesa0 libgl1-mesa-dri; do
   grep -qE "(^|, )$p( |,|$)" <<<"$depends" || fail "Depends lacks $p: $depends"
+done
+recommends=$(dpkg-deb --field "$deb" Recommends)
+for p in python3-matplotlib python3-optuna python3-sklearn; do
+  grep -qE "(^|, )$p( |,|$)" <<<"$recommends" || fail "Recommends lacks $p: $recommends"
 done
 if grep -q "CPACK_DEBIAN_PACKAGE_SHLIBDEPS \"ON\"" "$build/CPackConfig.cmake"; then
   for p in libopenvdb libopenimageio libosmesa6 libegl1 libglfw3; do

@@ -8,7 +8,8 @@
 # `P/BINDIR/ambience run --max-frames 30` with no --replay from a scratch folder (no source or
 # build tree around it, AMBIENCE_SHADER_DIR unset) and checks its report: the installed default
 # replay, 30 frames, anchors captured. Last, with the installed shaders moved away, the same run must
-# fail naming a shader file: the shaders it drew with were the installed ones.
+# fail naming a shader file: the shaders it drew with were the installed ones. In between,
+# `P/BINDIR/ambience tune` must find its installed study script.
 # Exit 0: passed; 1: failed; 77: no offscreen GL platform (ctest counts it as skipped).
 set -euo pipefail
 
@@ -22,7 +23,7 @@ fail() { echo "install-test: $*" >&2; exit 1; }
 "$cmake" --install "$build" --prefix "$prefix" >"$scratch/install.log"
 for f in "$bindir/ambience" "$datadir/shaders/terrain.vert" "$datadir/shaders/terrain.frag" \
          "$datadir/shaders/conventions.glsl" "$datadir/replays/highway-drive.json" \
-         "$datadir/bench-plots.py"; do
+         "$datadir/bench-plots.py" "$datadir/ambience-tune.py"; do
   [[ -e "$prefix/$f" ]] || fail "$f not installed"
 done
 [[ -x "$prefix/$bindir/ambience" ]] || fail "$bindir/ambience is not executable"
@@ -67,7 +68,18 @@ for p in problems:
 sys.exit(1 if problems else 0)
 PY
 
-# (3) without the installed shaders the installed program cannot draw: it used no other copy
+# (3) the installed tune finds its study script and the installed replays (its wiring only:
+# AMBIENCE_TUNE_FAKE stands in for the runs, which (2) has shown)
+if /usr/bin/python3 -c "import optuna" 2>/dev/null; then
+  AMBIENCE_TUNE_FAKE=1 "$bin" tune --oracle self --trials 2 --max-frames 10 --out tune \
+    >"$work/tune.log" 2>&1 || fail "tune failed: $(tail -n 3 "$work/tune.log")"
+  [[ -s tune/front/00.json && -s tune/summary.md && -s tune/trials.csv ]] ||
+    fail "tune wrote no front/00.json, summary.md or trials.csv"
+else
+  echo "install-test: tune not checked, python3-optuna is missing"
+fi
+
+# (4) without the installed shaders the installed program cannot draw: it used no other copy
 mv "$prefix/$datadir/shaders" "$scratch/shaders-away"
 set +e
 "$bin" run --max-frames 1 --frames none --no-video --out run-noshaders >"$work/noshaders.log" 2>&1
