@@ -328,6 +328,9 @@ RunPlan planRun(RunOptions& o) {
         if (o.referenceOn)
             files.output("--report (reference.csv)",
                          (fs::path(o.report).parent_path() / "reference.csv").string());
+        if (o.referenceOn && o.screenWitnesses > 0)
+            files.output("--report (screen.csv)",
+                         (fs::path(o.report).parent_path() / "screen.csv").string());
         files.check();
     }
 
@@ -501,6 +504,8 @@ void finishMeasurement(const RunOptions& o, RunMeasurement& m, RunReport& report
             meter->saveOracle(o.oracle, m.oracleSignature);
         if (meter->hasReference()) {
             writeReferenceCsv(*meter, (fs::path(o.report).parent_path() / "reference.csv").string());
+            if (o.screenWitnesses > 0)
+                writeScreenCsv(*meter, (fs::path(o.report).parent_path() / "screen.csv").string());
             if (!o.reference.empty() && meter->referenceCaptures() > 0)
                 meter->saveReference(o.reference, m.referenceSignature);
         }

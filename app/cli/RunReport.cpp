@@ -679,6 +679,16 @@ void writeMeasureCsv(const ErrorMeter& meter, const std::string& path) {
     if (!out) throw InputError(path, "cannot write the measurement CSV");
 }
 
+void writeScreenCsv(const ErrorMeter& meter, const std::string& path) {
+    std::ofstream out(path);
+    if (!out) throw InputError(path, "cannot write the screen CSV");
+    out << "frame,kind,error\n";
+    out.precision(9);
+    for (const ScreenResult& r : meter.screenResults())
+        out << r.frame << ',' << toString(r.kind) << ',' << r.error << "\n";
+    if (!out) throw InputError(path, "cannot write the screen CSV");
+}
+
 void writeReferenceCsv(const ErrorMeter& meter, const std::string& path) {
     std::ofstream out(path);
     if (!out) throw InputError(path, "cannot write the reference CSV");
