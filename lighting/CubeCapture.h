@@ -15,7 +15,18 @@
 
 #include <glm/vec3.hpp>
 
+#include "lighting/SH.h"
+
 namespace amb {
+
+// What lights the surfaces a capture draws besides the main light: an irradiance field, read as
+// order-2 SH at a surface's position (lighting/BounceField.h). A capture without one uses its
+// own fixed ambient (the GL capture: the sky/ground hemisphere, app/frame/SkyLighting.h).
+class SurfaceLight {
+  public:
+    virtual ~SurfaceLight() = default;
+    virtual ShRgb shAt(const glm::dvec3& position_m) const = 0;
+};
 
 // Which faces a call renders: bit f is face f (0 = +X ... 5 = -Z).
 using CubeFaceMask = unsigned;
@@ -66,6 +77,10 @@ class CubeCapture {
         (void)timeOfDay_h;
         return std::nullopt;
     }
+
+    // Lights the surfaces of later captures with `light` (null: the capture's own fixed
+    // ambient); it must outlive its use. A capture that draws no lit surfaces ignores it.
+    virtual void setSurfaceLight(const SurfaceLight* light) { (void)light; }
 
     // Triangles per face of the latest capture (the capture scene's size; 0 if not known).
     virtual std::size_t lastTriangles() const { return 0; }

@@ -276,6 +276,7 @@ void ErrorMeter::referenceFrame(int index, double timeOfDay_h, const glm::dvec3&
         r.frame = index;
         r.ring = w.ring;
         r.position_m = environment_.placeProbe(w.x_m, w.z_m, settings_.maxAside_m);
+        r.placement = environment_.placement(w.x_m, w.z_m, settings_.maxAside_m);
         const ReferenceSample& ref = reference(index, r.position_m, timeOfDay_h);
         r.terms = budgetTerms(ref, oracles[i], ideal(w.x_m, w.z_m),
                               appliedAt(method, w, r.position_m), rule_);
@@ -356,6 +357,13 @@ std::size_t ErrorMeter::hiddenWitnesses() const {
     std::size_t n = 0;
     for (const ReferenceWitness& r : referenceWitnesses_)
         n += r.ring >= 0 && r.cover == GroundCover::Hidden;
+    return n;
+}
+
+std::size_t ErrorMeter::placedWitnesses(ProbePlacement placement) const {
+    std::size_t n = 0;
+    for (const ReferenceWitness& r : referenceWitnesses_)
+        n += r.ring >= 0 && r.placement == placement;
     return n;
 }
 

@@ -145,6 +145,10 @@ struct ReferenceWitness {
     // A witness on ground a bush, a rock or a trunk stands on is not seen: it gets none.
     double drawnError = std::numeric_limits<double>::quiet_NaN();
     GroundCover cover = GroundCover::Open;  // at the witness' ground point
+    // How the sphere figure's capture point (position_m) was placed: a terrain witness in a
+    // plant's footprint is moved aside or lifted, as probes are (the drawn-normal figure reads
+    // the witness at its own ground point, under a crown or not). Objects: AtPoint.
+    ProbePlacement placement = ProbePlacement::AtPoint;
 };
 
 // A screen witness (opt-in, on reference frames): a random pixel of the rendered main view, its
@@ -220,6 +224,8 @@ class ErrorMeter {
     std::vector<double> drawnErrors(int ring = -1, int underCrown = -1) const;
     // Terrain witnesses on hidden ground (GroundCover::Hidden), left out of drawnErrors.
     std::size_t hiddenWitnesses() const;
+    // Terrain witnesses whose sphere-figure capture was placed so (ReferenceWitness::placement).
+    std::size_t placedWitnesses(ProbePlacement placement) const;
     static constexpr double kScreenProbeOffset_m = 0.25;
     double referenceSeconds() const { return reference_s_; }
     std::int64_t referenceCaptures() const { return referenceCaptures_; }

@@ -80,6 +80,32 @@ glm::dvec3 WorldProbeEnvironment::placeProbe(double x_m, double z_m, double maxA
     return p;
 }
 
+const char* toString(ProbePlacement placement) {
+    switch (placement) {
+        case ProbePlacement::AtPoint:
+            return "point";
+        case ProbePlacement::MovedAside:
+            return "aside";
+        case ProbePlacement::Lifted:
+            return "lifted";
+    }
+    return "?";
+}
+
+ProbePlacement ProbeEnvironment::placement(double x_m, double z_m, double maxAside_m) const {
+    const glm::dvec3 p = placeProbe(x_m, z_m, maxAside_m);
+    return std::hypot(p.x - x_m, p.z - z_m) > 1e-9 ? ProbePlacement::MovedAside
+                                                   : ProbePlacement::AtPoint;
+}
+
+ProbePlacement WorldProbeEnvironment::placement(double x_m, double z_m, double maxAside_m) const {
+    const glm::dvec3 p = placeProbe(x_m, z_m, maxAside_m);
+    if (std::hypot(p.x - x_m, p.z - z_m) > 1e-9) return ProbePlacement::MovedAside;
+    const double ground =
+        std::max(world_.height(x_m, z_m), world_.settings().waterLevel_m) + settings_.probeHeight_m;
+    return p.y > ground + 1e-9 ? ProbePlacement::Lifted : ProbePlacement::AtPoint;
+}
+
 double WorldProbeEnvironment::sunAngularSpeed_radPerHour() const {
     return world_.sky().sunAngularSpeed_radPerHour();
 }

@@ -52,6 +52,11 @@ struct ObjectWitness {
 // under the crown), or a bush, a rock or a trunk on it (the ground there is not seen at all).
 enum class GroundCover { Open, UnderCrown, Hidden };
 
+// How placeProbe placed the probe of a lattice point: at the point, moved aside out of a plant's
+// footprint, or lifted above the plant (no free spot within maxAside_m).
+enum class ProbePlacement { AtPoint, MovedAside, Lifted };
+const char* toString(ProbePlacement placement);
+
 struct DrawnPatch {
     double x0_m = 0.0, z0_m = 0.0, size_m = 0.0;  // the leaf covers [x0, x0 + size) x [z0, ...)
     std::array<glm::dvec3, 4> corner_m{};        // ground points (x0,z0), (x1,z0), (x0,z1), (x1,z1)
@@ -66,6 +71,9 @@ class ProbeEnvironment {
     virtual ~ProbeEnvironment() = default;
     // Where to capture the probe of lattice point (x, z) [m]; maxAside_m bounds the sideways move.
     virtual glm::dvec3 placeProbe(double x_m, double z_m, double maxAside_m) const = 0;
+    // How placeProbe places it. By default from its position alone: moved aside when it left the
+    // point, never lifted.
+    virtual ProbePlacement placement(double x_m, double z_m, double maxAside_m) const;
     // The sun's angular speed across the sky [rad per hour of day].
     virtual double sunAngularSpeed_radPerHour() const = 0;
     // Fallback radiance as a cube map: 6 n^2 texels x RGB, face-major, row-major
@@ -98,6 +106,7 @@ class WorldProbeEnvironment : public ProbeEnvironment {
     // `world` must outlive this object.
     explicit WorldProbeEnvironment(const World& world, const WorldProbeEnvironmentSettings& s = {});
     glm::dvec3 placeProbe(double x_m, double z_m, double maxAside_m) const override;
+    ProbePlacement placement(double x_m, double z_m, double maxAside_m) const override;
     double sunAngularSpeed_radPerHour() const override;
     void fallbackCubeMap(double timeOfDay_h, int n, std::vector<float>& rgb) const override;
     std::vector<ObjectWitness> objectWitnesses(double cameraX_m, double cameraZ_m, int trees,

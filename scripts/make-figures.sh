@@ -120,22 +120,27 @@ if ! why=$("$bin" probe --at 0,0 --size 4 --out "$work/platform-check.exr" 2>&1 
 fi
 
 # --- the setting -----------------------------------------------------------------------------
+# The reference is lit by its own bounce field (lighting/BounceField.h): the full setting with
+# the commands' own lattices (bench 256 m within 500 m, compare 128 m within 600 m), the short
+# one with a lattice of a point or two, small faces.
 if ((short)); then
   size=320x180 grid=96 refsize=32 drive_frame=30 static_frame=30 view_frames=20
+  light_args=(--bounce-spacing 256 --bounce-reach 128 --bounce-face 8)
   bench_args=(--replays highway-drive --max-frames 60 --reference-every 3 --screen-witnesses 2)
   tune_args=(--params scheduler.horizon_s=1:6,store.reachCells --replays highway-drive
              --eval-replays hairpin-flight-held-out --oracle self --max-frames 30 --trials 2)
 else
   size=640x360 grid=16 refsize=64 drive_frame=600 static_frame=300 view_frames=150
-  bench_args=(--replays highway-drive,mountain-drive,low-flight --max-frames 900
-              --screen-witnesses 2)
+  light_args=()
+  # Screen witnesses at the bench's default (32 a reference frame).
+  bench_args=(--replays highway-drive,mountain-drive,low-flight --max-frames 900)
   # The study of docs/TUNING.md "Tuning with Optuna": the keys bench --tune descends over, in
   # the region its three rounds reach (clipped to the schema's ranges).
   tune_args=(--params "scheduler.horizon_s=0.375:10,scheduler.corridorCells=0.5:32,store.blendTime_s=0.125:8,scheduler.finestRingCells=0.125:8,scheduler.coarseRingCells=0.25:8,store.reachCells=1:4,nearField.captureRadius_m=5:40,nearField.radius_m=8:60"
              --max-frames 450 --trials 40 --jobs 2)
 fi
 tune_args+=(--seed 1 --out "$work/tune")
-bench_args+=(--oracle reference --out "$work/bench")
+bench_args+=(--oracle reference "${light_args[@]}" --out "$work/bench")
 
 kept=()
 frames_tsv="$work/frames.tsv"
@@ -166,7 +171,7 @@ compare() {
   local dir="$work/compare/$name"
   mkdir -p "$dir"
   local cmd=("$bin" compare "$@" --size "$size" --grid "$grid" --reference-size "$refsize"
-             --out "$dir")
+             "${light_args[@]}" --out "$dir")
   local t=$SECONDS
   # The run's own command line beside it, so that --resume keeps only a run of these options.
   if ((resume)) && [[ $dir/compare.json -nt $bin && -f $dir.cmd ]] &&

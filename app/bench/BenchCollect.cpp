@@ -193,6 +193,14 @@ BenchManifest parseBenchManifest(const std::string& text, const std::string& whe
     m.stride = f.integer("stride", 1, 1000000);
     m.frames = f.boolean("frames");
     m.backend = f.text("backend");
+    if (j.contains("referenceLight")) {
+        m.referenceLight = f.text("referenceLight");
+        if (m.referenceLight != "bounce" && m.referenceLight != "hemisphere")
+            f.fail("referenceLight", "expected bounce or hemisphere");
+        m.bounceSpacing_m = f.integer("bounceSpacing_m", 8, 4096);
+        m.bounceReach_m = f.integer("bounceReach_m", 0, 20000);
+        m.bounceFace = f.integer("bounceFace", 4, 256);
+    }
     const json& runs = f.at("runs");
     if (!runs.is_array()) f.fail("runs", "expected a list of run folders");
     for (const json& r : runs) {
@@ -225,6 +233,10 @@ nlohmann::json benchManifestJson(const BenchManifest& m) {
             {"stride", m.stride},
             {"frames", m.frames},
             {"backend", m.backend},
+            {"referenceLight", m.referenceLight},
+            {"bounceSpacing_m", int(std::lround(m.bounceSpacing_m))},
+            {"bounceReach_m", int(std::lround(m.bounceReach_m))},
+            {"bounceFace", m.bounceFace},
             {"runs", m.runs}};
 }
 

@@ -69,6 +69,10 @@ struct BenchManifest {
     int referenceEvery = 6, fullLengthBudget = 3, screenWitnesses = 0, measureEvery = 10;
     int maxFrames = 0, stride = 2;
     bool frames = false;
+    // The reference's light (absent in a bench.json of older code: hemisphere, the only one then).
+    std::string referenceLight = "hemisphere";
+    double bounceSpacing_m = 256.0, bounceReach_m = 500.0;
+    int bounceFace = 32;
     std::vector<std::string> runs;  // the run folders, relative: runs/<plain name>
 };
 

@@ -38,6 +38,7 @@
 #include "app/bench/BenchTune.h"
 #include "app/cli/Commands.h"
 #include "app/cli/OutputPaths.h"
+#include "app/cli/ReferenceLightFlags.h"
 #include "app/frame/MethodStages.h"
 #include "app/platform/Platform.h"
 #include "world/Error.h"
@@ -86,7 +87,11 @@ void emitBench(const BenchOptions& o, const std::vector<Job>& jobs, const Runner
     manifest.oracle = o.oracle;
     manifest.referenceEvery = o.referenceEvery;
     manifest.fullLengthBudget = o.fullLengthBudget;
-    manifest.screenWitnesses = o.screenWitnesses;
+    manifest.screenWitnesses = runner.screenWitnesses;
+    manifest.referenceLight = o.referenceLight;
+    manifest.bounceSpacing_m = o.bounce.spacing_m;
+    manifest.bounceReach_m = o.bounce.reach_m;
+    manifest.bounceFace = o.bounce.faceSize;
     manifest.measureEvery = o.measureEvery;
     manifest.maxFrames = o.maxFrames;
     manifest.stride = o.stride;
@@ -124,6 +129,10 @@ BenchOptions readManifest(const std::string& dir, std::string& commandLine) {
     o.referenceEvery = m.referenceEvery;
     o.fullLengthBudget = m.fullLengthBudget;
     o.screenWitnesses = m.screenWitnesses;
+    o.referenceLight = m.referenceLight;
+    o.bounce.spacing_m = m.bounceSpacing_m;
+    o.bounce.reach_m = m.bounceReach_m;
+    o.bounce.faceSize = m.bounceFace;
     o.measureEvery = m.measureEvery;
     o.maxFrames = m.maxFrames;
     o.stride = m.stride;
@@ -315,8 +324,12 @@ void addBenchCommand(CLI::App& app) {
                     "methods alike (their cost grows with the budget) (default 3)");
     cmd->add_option("--screen-witnesses", o->screenWitnesses,
                     "with --oracle reference: random pixels of the main view per reference frame "
-                    "compared with the reference, in the runs at the lowest budget (opt-in, "
-                    "slow; default 0)");
+                    "compared with the reference, in the runs at the lowest budget (default " +
+                        std::to_string(kDefaultScreenWitnesses) +
+                        " with the reference, 0 to leave them out)");
+    // With --oracle reference: what lights the reference's surfaces (as `run`'s options; the
+    // bench's lattice is 256 m within 500 m of each run's path, BounceSettings' defaults).
+    addReferenceLightOptions(*cmd, o->referenceLight, o->bounce);
     cmd->add_option("--jobs", o->jobs, "runs side by side (default: the number of cores)");
     cmd->add_option("--out", o->out, "output folder (default out/bench)");
     cmd->add_option("--measure-every", o->measureEvery,

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/bench/BenchSweep.h"
+#include "lighting/BounceField.h"
 
 namespace amb::bench {
 
@@ -25,7 +26,13 @@ struct BenchOptions {
     std::string oracle = "self";
     int referenceEvery = 6;
     int fullLengthBudget = 3;
-    int screenWitnesses = 0;
+    // Screen witnesses per reference frame; -1: kDefaultScreenWitnesses with the reference
+    // oracle, none with the self-oracle.
+    int screenWitnesses = -1;
+    // What lights the reference's surfaces (lighting/BounceField.h; `run --reference-light`):
+    // the bounce field over a lattice of 256 m within 500 m of each run's path by default.
+    std::string referenceLight = "bounce";
+    BounceSettings bounce;
     int jobs = 0;
     int measureEvery = 10;
     int maxFrames = 0;
@@ -49,6 +56,13 @@ struct BenchOptions {
 };
 
 using Point = SweepPoint;  // app/bench/BenchSweep.h
+
+// Screen witnesses per reference frame of a reference bench unless --screen-witnesses says
+// otherwise: 32 random pixels a frame, so a bench of 600 frames (10 reference frames a replay at
+// the defaults) grades 320 pixels a run, and the screen figure's standard error is about 1/18 of
+// the pixels' own spread; each pixel's reference is captured once per replay (the reference
+// cache) and read back by every other method's run.
+inline constexpr int kDefaultScreenWitnesses = 32;
 
 struct Job {
     ReplayRef replay;

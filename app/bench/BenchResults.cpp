@@ -469,6 +469,64 @@ void writeResultsCsv(const std::vector<Job>& jobs, const std::string& path) {
     writeTextFile(path, out.str(), "results");
 }
 
+// With the reference: what lit its surfaces (lighting/BounceField.h) and how its witnesses were
+// placed, from the replay's first run that measured them (every run of a replay shares its
+// reference).
+std::string referenceLightLine(const std::vector<Job>& jobs, const std::string& replay) {
+    for (const Job& j : jobs) {
+        if (!j.ok || j.replay.name != replay) continue;
+        const json m = objectAt(j.report, "measurement");
+        if (!m.contains("reference") || !m["reference"].is_object()) continue;
+        const json& ref = m["reference"];
+        std::ostringstream out;
+        const std::string light = stringAt(ref, "light", "hemisphere");
+        out << "Reference light: **" << light << "**";
+        const json solves =
+            ref.contains("bounce") && ref["bounce"].is_object() && ref["bounce"].contains("solves")
+                ? ref["bounce"]["solves"]
+                : json::array();
+        if (light == "bounce" && solves.is_array() && !solves.empty() && solves[0].is_object()) {
+            const json& s = solves[0];
+            const json changes = s.contains("changes") ? s["changes"] : json::array();
+            out << " (its own bounce field: " << fmt(number(s, {"points"}), "%.0f")
+                << " lattice points " << fmt(number(ref, {"bounce", "spacing_m"}), "%.0f")
+                << " m apart within " << fmt(number(ref, {"bounce", "reach_m"}), "%.0f")
+                << " m of the path, " << fmt(number(s, {"bounces"}), "%.0f") << " bounces to a "
+                << "change below 1 % (";
+            bool first = true;
+            for (const json& c : changes)
+                if (c.is_number()) {
+                    char text[32];
+                    std::snprintf(text, sizeof text, "%.4f", c.get<double>());
+                    out << (first ? "" : ", ") << text;
+                    first = false;
+                }
+            out << "), solved in " << fmt(number(s, {"seconds"}), "%.0f") << " s"
+                << (solves.size() > 1 ? ", the first of " + std::to_string(solves.size()) +
+                                            " light epochs"
+                                      : std::string())
+                << ")";
+        } else if (light == "hemisphere") {
+            out << " (the fixed sky/ground hemisphere ambient)";
+        }
+        const double terrain = number(ref, {"drawn", "terrainWitnesses"});
+        if (std::isfinite(terrain) && terrain > 0) {
+            out << ". Terrain witnesses: " << fmt(terrain, "%.0f") << "; under a crown "
+                << fmt(number(ref, {"drawn", "underCrown", "count"}), "%.0f")
+                << " (in the drawn-normal mean, shown alone too), on hidden ground "
+                << fmt(number(ref, {"drawn", "hidden"}), "%.0f")
+                << " (left out); for the sphere figure's capture, moved aside out of a plant's "
+                   "footprint "
+                << fmt(number(ref, {"drawn", "movedAside"}), "%.0f") << ", lifted over a plant "
+                << fmt(number(ref, {"drawn", "lifted"}), "%.0f")
+                << " (the drawn-normal figure reads every witness at its own ground point)";
+        }
+        out << ".\n\n";
+        return out.str();
+    }
+    return "";
+}
+
 void writeSummary(const std::vector<Job>& jobs, const std::string& path,
                   const std::string& commandLine, const std::string& timing,
                   const std::string& oracle, int idealBudget, int fullLengthBudget) {
@@ -498,6 +556,7 @@ void writeSummary(const std::vector<Job>& jobs, const std::string& path,
     for (const std::string& replay : replays) {
         out << "## " << replay << "\n\n";
         const bool drawn = oracle == "reference";
+        if (drawn) out << referenceLightLine(jobs, replay);
         if (drawn && replay == replays.front())
             out << "Error at the drawn normal: the terrain witnesses as the screen shows them, "
                    "the ambient the draw applies there (the drawn patch's corners, each at its "

@@ -20,6 +20,7 @@
 #include "app/bench/BenchRunner.h"
 #include "app/cli/RunReport.h"
 #include "app/frame/MethodStages.h"
+#include "lighting/BounceField.h"
 #include "lighting/Metrics.h"
 #include "world/Error.h"
 #include "world/TextFile.h"
@@ -117,7 +118,15 @@ std::vector<std::string> Runner::args(const Job& job) const {
         a.insert(a.end(),
                  {"--oracle-kind", "reference", "--reference",
                   (fs::path(out) / "oracle" / (job.replay.name + "-reference.json")).string(),
-                  "--reference-every", std::to_string(referenceEvery)});
+                  "--reference-every", std::to_string(referenceEvery), "--reference-light",
+                  referenceLight});
+        if (referenceLight == "bounce") {
+            char spacing[32], reach[32];
+            std::snprintf(spacing, sizeof spacing, "%g", bounceSpacing_m);
+            std::snprintf(reach, sizeof reach, "%g", bounceReach_m);
+            a.insert(a.end(), {"--bounce-spacing", spacing, "--bounce-reach", reach,
+                               "--bounce-face", std::to_string(bounceFace)});
+        }
         if (job.point.facesPerFrame != idealBudget) {
             a.push_back("--no-ideal-volume");
         } else if (screenWitnesses > 0) {
@@ -183,11 +192,18 @@ Runner benchRunner(const BenchOptions& o, const std::vector<Point>& points) {
         throw InputError("--full-length-budget",
                          "expected 1 to " + std::to_string(kMaxFacesPerFrame));
     runner.fullLengthBudget = o.fullLengthBudget;
-    if (o.screenWitnesses < 0 || o.screenWitnesses > 4096)
+    if (o.screenWitnesses < -1 || o.screenWitnesses > 4096)
         throw InputError("--screen-witnesses", "expected 0 to 4096");
     if (o.screenWitnesses > 0 && !runner.reference)
         throw InputError("--screen-witnesses", "needs --oracle reference");
-    runner.screenWitnesses = o.screenWitnesses;
+    runner.screenWitnesses =
+        o.screenWitnesses >= 0 ? o.screenWitnesses : (runner.reference ? kDefaultScreenWitnesses : 0);
+    parseReferenceLight(o.referenceLight, "--reference-light");
+    runner.referenceLight = o.referenceLight;
+    checkBounceSettings(o.bounce);
+    runner.bounceSpacing_m = o.bounce.spacing_m;
+    runner.bounceReach_m = o.bounce.reach_m;
+    runner.bounceFace = o.bounce.faceSize;
     runner.idealBudget = points.empty() ? 1 : points.front().facesPerFrame;
     for (const Point& p : points) runner.idealBudget = std::min(runner.idealBudget, p.facesPerFrame);
     return runner;

@@ -21,6 +21,10 @@ struct Runner {
     int referenceEvery = 6;
     int idealBudget = 1;
     int screenWitnesses = 0;  // per reference frame, in the runs at idealBudget
+    // `run --reference-light` and, for bounce, the lattice (--bounce-spacing, -reach, -face).
+    std::string referenceLight = "bounce";
+    double bounceSpacing_m = 256.0, bounceReach_m = 500.0;
+    int bounceFace = 32;
     // Runs above this many faces per frame play the first fullLengthBudget / faces of the replay.
     int fullLengthBudget = 64;
 

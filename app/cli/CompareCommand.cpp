@@ -21,6 +21,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -30,12 +32,15 @@
 #include "app/render/CubeCaptureGl.h"
 #include "app/frame/FrameLoop.h"
 #include "app/cli/OutputPaths.h"
+#include "app/cli/ReferenceLightFlags.h"
 #include "app/platform/Platform.h"
 #include "app/render/Renderer.h"
 #include "app/cli/RunReport.h"
 #include "app/cli/SettingsFlags.h"
 #include "app/frame/MethodStages.h"
 #include "lighting/Baselines.h"
+#include "lighting/Metrics.h"
+#include "lighting/BounceField.h"
 #include "lighting/Metrics.h"
 #include "lighting/ReferenceOracle.h"
 #include "world/Error.h"
@@ -61,6 +66,9 @@ struct CompareOptions {
     bool facesPerFrameGiven = false;              // --faces-per-frame was on the command line
     std::vector<std::string> settingAssignments;  // --set KEY=VALUE
     int stride = 2;
+    // What lights the reference's surfaces (as in run: lighting/BounceField.h).
+    std::string referenceLight = "bounce";
+    BounceSettings bounce = runBounceSettings();
 };
 
 // A heat colour for an error in [0, 0.5]: black, red, orange, yellow, white.
@@ -120,6 +128,8 @@ CompareInputs checkInputs(const CompareOptions& o) {
     if (o.referenceSize < 4 || o.referenceSize > 256)
         throw InputError("--reference-size", "expected 4 to 256");
     if (o.stride < 1) throw InputError("--stride", "must be at least 1");
+    parseReferenceLight(o.referenceLight, "--reference-light");
+    checkBounceSettings(o.bounce);
     const Size size = parseSize(o.size, "--size");
     const int passFrames = FrameLoop::framesPerPass(replay, o.stride);
     if (o.frameGiven && (o.frame < 0 || o.frame >= passFrames))
@@ -208,7 +218,7 @@ struct ReferenceGrid {
 
 // (3) a reference capture of the full scene above the surface at the centre of every grid cell.
 ReferenceGrid sampleReference(const CompareOptions& o, const Size& size, const World& world,
-                              CubeCaptureGl& reference, const TargetFrame& frame,
+                              CubeCapture& reference, const TargetFrame& frame,
                               const FrameImages& images) {
     const CameraSample& camera = frame.camera;
     const SurfaceImage& applied = images.applied;
@@ -343,7 +353,7 @@ ComposedImages composeImages(const CompareOptions& o, const Size& size, Renderer
 // summary on stdout.
 void writeOutputs(const CompareOptions& o, const CompareInputs& in, const TargetFrame& frame,
                   const FrameImages& images, const ReferenceGrid& grid,
-                  const ComposedImages& composed) {
+                  const ComposedImages& composed, const std::vector<BounceSolve>& bounce) {
     const std::string& out = in.out;
     const std::string& stem = in.stem;
     const int target = in.target;
@@ -376,12 +386,14 @@ void writeOutputs(const CompareOptions& o, const CompareInputs& in, const Target
                      {"timeOfDay_h", rec.timeOfDay_h},
                      {"gridPixels", g},
                      {"referenceFaceSize", o.referenceSize},
+                     {"referenceLight", o.referenceLight},
                      {"samples", count},
                      {"screenMeanError", count ? sum / count : 0.0}};
     for (int k = 1; k <= kSurfaceKinds; ++k)
         j[std::string(toString(SurfaceKind(k))) + "MeanError"] =
             kindCount[std::size_t(k)] > 0 ? kindSum[std::size_t(k)] / kindCount[std::size_t(k)]
                                           : 0.0;
+    if (!bounce.empty()) j["bounce"] = bounceJson(o.bounce, bounce);
     std::ofstream((fs::path(out) / "compare.json").string()) << j.dump(1) << "\n";
     std::printf("compare: %s, frame %d (%.2f h), %s: screen-weighted mean ambient error %.4f over "
                 "%d reference samples (terrain %.3f, road %.3f, objects %.3f)\n",
@@ -422,9 +434,27 @@ void runCompare(const CompareOptions& o) {
 
     const FrameImages images = renderFrame(renderer, frame.camera, stages.ambient());
     CubeCaptureGl reference(world, o.referenceSize, CaptureScene::Full, rs.shadows);
-    const ReferenceGrid grid = sampleReference(o, in.size, world, reference, frame, images);
+    // The reference's surfaces lit by the bounce field of a lattice around this frame's camera
+    // (or by the hemisphere ambient, --reference-light hemisphere).
+    std::unique_ptr<CubeCaptureGl> lattice;
+    std::unique_ptr<BounceLitCapture> bounceLit;
+    CubeCapture* referenceCapture = &reference;
+    if (parseReferenceLight(o.referenceLight, "--reference-light") == ReferenceLight::Bounce) {
+        lattice = std::make_unique<CubeCaptureGl>(world, o.bounce.faceSize, CaptureScene::Full,
+                                                  rs.shadows);
+        const ProbeEnvironment& env = stages.environment();
+        const double maxAside_m = MeasureSettings{}.maxAside_m;
+        bounceLit = std::make_unique<BounceLitCapture>(
+            reference, *lattice, o.bounce,
+            std::vector<glm::dvec2>{{frame.camera.position_m.x, frame.camera.position_m.z}},
+            [&env, maxAside_m](double x, double z) { return env.placeProbe(x, z, maxAside_m); },
+            frame.rec.timeOfDay_h);
+        referenceCapture = bounceLit.get();
+    }
+    const ReferenceGrid grid = sampleReference(o, in.size, world, *referenceCapture, frame, images);
     const ComposedImages composed = composeImages(o, in.size, renderer, images, grid);
-    writeOutputs(o, in, frame, images, grid, composed);
+    writeOutputs(o, in, frame, images, grid, composed,
+                 bounceLit ? bounceLit->solves() : std::vector<BounceSolve>{});
 }
 
 }  // namespace
@@ -445,6 +475,7 @@ void addCompareCommand(CLI::App& app) {
                     "a reference sample every N pixels (default 16; each costs a 64 x 64 capture "
                     "of the full scene)");
     cmd->add_option("--reference-size", o->referenceSize, "reference face size (default 64)");
+    addReferenceLightOptions(*cmd, o->referenceLight, o->bounce);
     auto* faces = cmd->add_option("--faces-per-frame", o->facesPerFrame,
                                   "capture budget (default: the settings file's, 1)");
     addSetOption(*cmd, o->settingAssignments);

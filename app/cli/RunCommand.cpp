@@ -29,11 +29,13 @@
 #include "app/render/Gl.h"
 #include "app/platform/Platform.h"
 #include "app/cli/OutputPaths.h"
+#include "app/cli/ReferenceLightFlags.h"
 #include "app/render/Renderer.h"
 #include "app/cli/RunReport.h"
 #include "app/cli/SettingsFlags.h"
 #include "app/frame/MethodStages.h"
 #include "lighting/Baselines.h"
+#include "lighting/BounceField.h"
 #include "lighting/Metrics.h"
 #include "world/DataPaths.h"
 #include "world/Error.h"
@@ -89,6 +91,10 @@ struct RunOptions {
     bool noIdealVolume = false;
     int screenWitnesses = 0;
     int loops = 1;
+    // What lights the reference's surfaces (lighting/BounceField.h): its own bounce field over
+    // a lattice of spacing_m within reach_m of the path (run's default: 128 m within 600 m).
+    std::string referenceLight = "bounce";
+    BounceSettings bounce = runBounceSettings();
 };
 
 // Passes over the replay for --loop, and a bound on the run's length: the report keeps a row
@@ -207,6 +213,7 @@ struct RunPlan {
     CarView carView = CarView::None;  // the car on drive replays (--camera, --no-vehicle)
     bool autoExposure = true;
     ShadowSettings shadows;  // --shadows: the main view's, the captures' and the reference's
+    ReferenceLight referenceLight = ReferenceLight::Bounce;  // --reference-light
 };
 
 // Stage (1) of a run: reads the replay and the settings files, checks every option, completes
@@ -261,6 +268,8 @@ RunPlan planRun(RunOptions& o) {
         throw InputError(o.reference.empty() ? "--oracle-kind" : "--reference",
                          "needs --measure-every K");
     o.referenceSettings.idealVolume = !o.noIdealVolume;
+    plan.referenceLight = parseReferenceLight(o.referenceLight, "--reference-light");
+    checkBounceSettings(o.bounce);
     if (o.referenceSettings.every < 1 || o.referenceSettings.every > 1000000)
         throw InputError("--reference-every", "expected 1 to 1000000");
     if (o.referenceSettings.faceSize < 1 || o.referenceSettings.faceSize > 256)
@@ -319,6 +328,9 @@ RunPlan planRun(RunOptions& o) {
         if (o.referenceOn)
             files.output("--report (reference.csv)",
                          (fs::path(o.report).parent_path() / "reference.csv").string());
+        if (o.referenceOn && o.screenWitnesses > 0)
+            files.output("--report (screen.csv)",
+                         (fs::path(o.report).parent_path() / "screen.csv").string());
         files.check();
     }
 
@@ -330,6 +342,9 @@ RunPlan planRun(RunOptions& o) {
 struct RunMeasurement {
     std::unique_ptr<ErrorMeter> meter;
     std::unique_ptr<CubeCaptureGl> referenceCapture;
+    // With --reference-light bounce: the lattice's captures and the reference lit by its field.
+    std::unique_ptr<CubeCaptureGl> latticeCapture;
+    std::unique_ptr<BounceLitCapture> bounceLit;
     std::string oracleSignature, referenceSignature;
 };
 
@@ -357,6 +372,18 @@ bool staleCache(const std::string& path, const std::string& signature) {
     } catch (const std::exception&) {
         return false;
     }
+}
+
+// The ground points (x, z) of the frames a run plays: where the reference's bounce lattice is
+// laid (lighting/BounceField.h). Every stride-th sample up to the run's last frame.
+std::vector<glm::dvec2> runPath(const Replay& replay, const RunOptions& o) {
+    std::vector<glm::dvec2> path;
+    const std::size_t n = replay.samples.size();
+    std::size_t last = n;
+    if (o.maxFrames > 0) last = std::min(n, std::size_t(o.maxFrames) * std::size_t(o.stride));
+    for (std::size_t i = 0; i < last; i += std::size_t(o.stride))
+        path.emplace_back(replay.samples[i].position_m.x, replay.samples[i].position_m.z);
+    return path;
 }
 
 // The meter for --measure-every (none without it), its caches loaded, attached to `stages`.
@@ -389,11 +416,28 @@ RunMeasurement startMeasurement(const RunOptions& o, const RunPlan& plan, const 
     m.referenceSignature =
         m.oracleSignature + " reference: face=" + std::to_string(ref.faceSize) +
         " scene=full rule=" + std::to_string(ref.legendreNodes) +
-        " every=" + std::to_string(ref.every) + " trees=" + std::to_string(ref.objectTrees);
+        " every=" + std::to_string(ref.every) + " trees=" + std::to_string(ref.objectTrees) +
+        " light=" + toString(plan.referenceLight) +
+        (plan.referenceLight == ReferenceLight::Bounce ? " " + describeBounceSettings(o.bounce)
+                                                       : std::string());
     if (m.meter && o.referenceOn) {
         m.referenceCapture =
             std::make_unique<CubeCaptureGl>(world, ref.faceSize, CaptureScene::Full, plan.shadows);
-        m.meter->attachReference(*m.referenceCapture, ref,
+        CubeCapture* referenceCapture = m.referenceCapture.get();
+        if (plan.referenceLight == ReferenceLight::Bounce) {
+            // The lattice around the frames this run plays; solved on the first reference
+            // capture (none when the cache holds every reference).
+            m.latticeCapture = std::make_unique<CubeCaptureGl>(world, o.bounce.faceSize,
+                                                               CaptureScene::Full, plan.shadows);
+            const ProbeEnvironment& env = stages.environment();
+            const double maxAside_m = MeasureSettings{}.maxAside_m;
+            m.bounceLit = std::make_unique<BounceLitCapture>(
+                *m.referenceCapture, *m.latticeCapture, o.bounce, runPath(plan.replay, o),
+                [&env, maxAside_m](double x, double z) { return env.placeProbe(x, z, maxAside_m); },
+                plan.replay.timeOfDayStart_h);
+            referenceCapture = m.bounceLit.get();
+        }
+        m.meter->attachReference(*referenceCapture, ref,
                                  plan.oracleKind == OracleKind::Reference);
         if (!o.reference.empty() && fs::exists(o.reference) &&
             !(o.replaceStale && staleCache(o.reference, m.referenceSignature)))
@@ -440,11 +484,28 @@ void finishMeasurement(const RunOptions& o, RunMeasurement& m, RunReport& report
     if (!meter) return;
     {
         report.measurementJson = measurementJson(*meter);
+        if (meter->hasReference()) {
+            // What lit the reference's surfaces, and how its bounce field converged.
+            nlohmann::json j = nlohmann::json::parse(report.measurementJson);
+            j["reference"]["light"] = m.bounceLit ? "bounce" : "hemisphere";
+            if (m.bounceLit) j["reference"]["bounce"] = bounceJson(o.bounce, m.bounceLit->solves());
+            report.measurementJson = j.dump();
+            if (m.bounceLit)
+                for (const BounceSolve& b : m.bounceLit->solves()) {
+                    std::printf("reference light: bounce field at %.3f h, %zu points, %d bounces "
+                                "(%s; last change %.4f), %.1f s\n",
+                                b.timeOfDay_h, b.points, b.bounces,
+                                b.converged ? "converged" : "NOT converged",
+                                b.changes.empty() ? 0.0 : b.changes.back(), b.seconds);
+                }
+        }
         writeMeasureCsv(*meter, (fs::path(o.report).parent_path() / "measure.csv").string());
         if (!o.oracle.empty() && meter->oracleCaptures() > 0)
             meter->saveOracle(o.oracle, m.oracleSignature);
         if (meter->hasReference()) {
             writeReferenceCsv(*meter, (fs::path(o.report).parent_path() / "reference.csv").string());
+            if (o.screenWitnesses > 0)
+                writeScreenCsv(*meter, (fs::path(o.report).parent_path() / "screen.csv").string());
             if (!o.reference.empty() && meter->referenceCaptures() > 0)
                 meter->saveReference(o.reference, m.referenceSignature);
         }
@@ -685,6 +746,7 @@ void addRunCommand(CLI::App& app) {
     cmd->add_option("--screen-witnesses", o->screenWitnesses,
                     "on each reference frame, compare the ambient irradiance the draw applies at "
                     "N random pixels of the main view with the reference there (slow; default 0)");
+    addReferenceLightOptions(*cmd, o->referenceLight, o->bounce);
     cmd->add_flag("--no-ideal-volume", o->noIdealVolume,
                   "error budget without the ideal volume (no extra captures; spacing and "
                   "schedule reported as one term)");

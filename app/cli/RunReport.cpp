@@ -631,7 +631,10 @@ std::string measurementJson(const ErrorMeter& meter) {
         json drawnJson = {{"error", summaryJson(summarize(meter.drawnErrors()))},
                           {"open", summaryJson(summarize(meter.drawnErrors(-1, 0)))},
                           {"underCrown", summaryJson(summarize(meter.drawnErrors(-1, 1)))},
-                          {"hidden", meter.hiddenWitnesses()}};
+                          {"hidden", meter.hiddenWitnesses()},
+                          {"terrainWitnesses", meter.terrainBudget().size()},
+                          {"movedAside", meter.placedWitnesses(ProbePlacement::MovedAside)},
+                          {"lifted", meter.placedWitnesses(ProbePlacement::Lifted)}};
         json drawnRings = json::array();
         for (int r = 0; r < ms.rings(); ++r)
             drawnRings.push_back(summaryJson(summarize(meter.drawnErrors(r))));
@@ -676,10 +679,21 @@ void writeMeasureCsv(const ErrorMeter& meter, const std::string& path) {
     if (!out) throw InputError(path, "cannot write the measurement CSV");
 }
 
+void writeScreenCsv(const ErrorMeter& meter, const std::string& path) {
+    std::ofstream out(path);
+    if (!out) throw InputError(path, "cannot write the screen CSV");
+    out << "frame,kind,error\n";
+    out.precision(9);
+    for (const ScreenResult& r : meter.screenResults())
+        out << r.frame << ',' << toString(r.kind) << ',' << r.error << "\n";
+    if (!out) throw InputError(path, "cannot write the screen CSV");
+}
+
 void writeReferenceCsv(const ErrorMeter& meter, const std::string& path) {
     std::ofstream out(path);
     if (!out) throw InputError(path, "cannot write the reference CSV");
-    out << "frame,witness,x,y,z,total,truncation,capture,spacing,schedule,self,drawn,cover\n";
+    out << "frame,witness,x,y,z,total,truncation,capture,spacing,schedule,self,drawn,cover,"
+           "placed\n";
     out.precision(9);
     for (const ReferenceWitness& r : meter.referenceWitnesses()) {
         out << r.frame << ','
@@ -694,7 +708,7 @@ void writeReferenceCsv(const ErrorMeter& meter, const std::string& path) {
                 : r.cover == GroundCover::UnderCrown ? "crown"
                 : r.cover == GroundCover::Hidden     ? "hidden"
                                                      : "open")
-            << "\n";
+            << ',' << (r.ring < 0 ? "" : toString(r.placement)) << "\n";
     }
     if (!out) throw InputError(path, "cannot write the reference CSV");
 }

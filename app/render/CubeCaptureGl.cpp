@@ -14,6 +14,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
 #include "app/frame/MethodStages.h"
@@ -65,6 +66,28 @@ void cullObjectsToFace(const DrawList& list, int face, DrawList& out) {
 }
 
 }  // namespace
+
+// The ambient of a surface light (lighting/CubeCapture.h SurfaceLight): its SH at the surface
+// point, as the draw applies any ambient (irradiance for the normal, floored at zero; objects
+// through R&H's matrices at their ground point).
+class FieldAmbient final : public AmbientSource {
+  public:
+    explicit FieldAmbient(const SurfaceLight* light) : light_(light) {}
+    glm::vec3 cornerIrradiance(const glm::dvec3& position_m,
+                               const glm::dvec3& normal) const override {
+        return glm::max(shIrradiance(light_->shAt(position_m), glm::vec3(normal)),
+                        glm::vec3(0.0f));
+    }
+    std::uint32_t objectSet(const glm::dvec3& position_m,
+                            std::vector<AmbientSet>& sets) const override {
+        const ShIrradianceMatrices m = shIrradianceMatrices(light_->shAt(position_m));
+        sets.push_back(AmbientSet{m.r, m.g, m.b});
+        return std::uint32_t(sets.size() - 1);
+    }
+
+  private:
+    const SurfaceLight* light_;
+};
 
 glm::mat4 CubeCaptureGl::faceViewProj(int face, float near_m) {
     const FaceBasis b = faceBasis(face);
@@ -236,9 +259,12 @@ CubeCaptureStats CubeCaptureGl::captureFar(const glm::dvec3& position_m, double 
         sky_ = evaluateSky(scene_->world().sky(), timeOfDay_h);
         drawer_->setSky(sky_);
     }
-    // Static coarse scene, first bounce only: surfaces lit by the main light and the
-    // sky/ground hemisphere ambient.
-    const FixedAmbient ambient(AmbientMode::Hemisphere, sky_);
+    // Surfaces lit by the main light and an ambient: the surface light when one is set (the
+    // reference's bounce field, lighting/BounceField.h), else the sky/ground hemisphere.
+    const FixedAmbient hemisphere(AmbientMode::Hemisphere, sky_);
+    const FieldAmbient field(surfaceLight_);
+    const AmbientSource& ambient =
+        surfaceLight_ ? static_cast<const AmbientSource&>(field) : hemisphere;
     if (kind_ == CaptureScene::Coarse) scene_->buildCapture(position_m, ambient, list_, nearRadius_m);
 
     glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);

@@ -78,6 +78,11 @@ class CubeCaptureGl final : public CubeCapture {
                                 CubeFaceMask faces, std::vector<float>& cube,
                                 double nearRadius_m) override;
 
+    // Lights the surfaces with `light` (lighting/BounceField.h) instead of the sky/ground
+    // hemisphere ambient; null: the hemisphere again.
+    void setSurfaceLight(const SurfaceLight* light) override { surfaceLight_ = light; }
+    const SurfaceLight* surfaceLight() const { return surfaceLight_; }
+
     // The sun's direction while it is above the horizon (its disc has radiance then).
     std::optional<glm::dvec3> sunDirection(double timeOfDay_h) const override;
 
@@ -109,6 +114,7 @@ class CubeCaptureGl final : public CubeCapture {
     RendererScene* scene_;
     int n_;
     CaptureScene kind_ = CaptureScene::Coarse;
+    const SurfaceLight* surfaceLight_ = nullptr;
     std::unique_ptr<SceneDrawer> drawer_;
     SkyLighting sky_;
     GlTexture colour_, depth_;

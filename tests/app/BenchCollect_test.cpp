@@ -74,6 +74,25 @@ TEST(BenchCollect, ManifestRoundTrips) {
     EXPECT_EQ(benchManifestJson(back), benchManifestJson(m));
 }
 
+// bench.json records what lit the reference (lighting/BounceField.h); one written before the
+// bounce field has no such key and reads as the hemisphere, the only light then; any other
+// light is refused.
+TEST(BenchCollect, ManifestRecordsTheReferenceLight) {
+    BenchManifest m = sampleManifest();
+    m.oracle = "reference";
+    m.referenceLight = "bounce";
+    m.bounceSpacing_m = 128.0;
+    nlohmann::json j = benchManifestJson(m);
+    EXPECT_EQ(j["referenceLight"], "bounce");
+    const BenchManifest back = parseBenchManifest(j.dump(), "bench.json");
+    EXPECT_EQ(back.referenceLight, "bounce");
+    EXPECT_DOUBLE_EQ(back.bounceSpacing_m, 128.0);
+    j.erase("referenceLight");
+    EXPECT_EQ(parseBenchManifest(j.dump(), "bench.json").referenceLight, "hemisphere");
+    j["referenceLight"] = "sky";
+    EXPECT_THROW(parseBenchManifest(j.dump(), "bench.json"), InputError);
+}
+
 TEST(BenchCollect, ManifestCannotLeadOutsideItsFolder) {
     const auto withChange = [](const std::function<void(nlohmann::json&)>& change) {
         nlohmann::json j = benchManifestJson(sampleManifest());

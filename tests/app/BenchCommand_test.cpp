@@ -132,7 +132,8 @@ TEST(RunMeasure, ReferenceGradesTheDrawnNormal) {
     const fs::path dir = scratchDir("run-drawn");
     const auto r = runAmbience(
         "run --no-frames --max-frames 21 --measure-every 10 --oracle-kind reference "
-        "--reference-every 1 --no-ideal-volume --out " + (dir / "a").string());
+        "--reference-every 1 --no-ideal-volume --reference-light hemisphere --out " +
+        (dir / "a").string());
     ASSERT_EQ(r.exitCode, 0) << r.err;
     const auto ref = readJson(dir / "a" / "report.json")["measurement"]["reference"];
     const auto drawn = ref["drawn"];
@@ -147,11 +148,15 @@ TEST(RunMeasure, ReferenceGradesTheDrawnNormal) {
     std::ifstream csv(dir / "a" / "reference.csv");
     std::string line;
     std::getline(csv, line);
-    EXPECT_EQ(line.substr(line.size() - 12), ",drawn,cover");
-    int terrain = 0, filled = 0, hiddenRows = 0;
+    EXPECT_EQ(line.substr(line.size() - 19), ",drawn,cover,placed");
+    int terrain = 0, filled = 0, hiddenRows = 0, aside = 0, lifted = 0;
     while (std::getline(csv, line)) {
         if (line.find(",ring_") == std::string::npos) continue;
         ++terrain;
+        const std::string placed = line.substr(line.rfind(',') + 1);
+        EXPECT_TRUE(placed == "point" || placed == "aside" || placed == "lifted") << line;
+        aside += placed == "aside", lifted += placed == "lifted";
+        line = line.substr(0, line.rfind(','));
         const std::string cover = line.substr(line.rfind(',') + 1);
         const std::string rest = line.substr(0, line.rfind(','));
         const std::string value = rest.substr(rest.rfind(',') + 1);
@@ -166,6 +171,51 @@ TEST(RunMeasure, ReferenceGradesTheDrawnNormal) {
     EXPECT_EQ(filled, graded);
     EXPECT_EQ(hiddenRows, hidden);
     EXPECT_EQ(terrain, graded + hidden);  // every terrain witness has a drawn patch
+    EXPECT_EQ(drawn["movedAside"].get<int>(), aside);
+    EXPECT_EQ(drawn["lifted"].get<int>(), lifted);
+    EXPECT_EQ(drawn["terrainWitnesses"].get<int>(), terrain);
+    EXPECT_EQ(ref["light"], "hemisphere");
+    EXPECT_FALSE(ref.contains("bounce"));
+}
+
+// The reference lit by its own bounce field (the default): the report names the light and how
+// the field converged, and the reference cache's key names it, so a cache lit by the bounce
+// field is refused for a hemisphere run (and made again with --replace-stale-caches).
+TEST(RunMeasure, ReferenceLightIsReportedAndKeysTheCache) {
+    const fs::path dir = scratchDir("run-light");
+    const std::string base =
+        "run --no-frames --max-frames 11 --measure-every 10 --oracle-kind reference "
+        "--reference-every 1 --no-ideal-volume --reference-trees 0 --reference-size 16 "
+        "--bounce-spacing 256 --bounce-reach 100 --bounce-face 8 --reference " +
+        (dir / "ref.json").string();
+    const auto r = runAmbience(base + " --out " + (dir / "a").string());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const auto ref = readJson(dir / "a" / "report.json")["measurement"]["reference"];
+    EXPECT_EQ(ref["light"], "bounce");
+    ASSERT_EQ(ref["bounce"]["solves"].size(), 1u);
+    const auto solve = ref["bounce"]["solves"][0];
+    EXPECT_TRUE(solve["converged"].get<bool>());
+    EXPECT_GE(solve["bounces"].get<int>(), 2);
+    EXPECT_LT(solve["changes"].back().get<double>(), 0.01);
+    EXPECT_DOUBLE_EQ(ref["bounce"]["spacing_m"].get<double>(), 256.0);
+    // Read back with the same light: no capture, no solve.
+    const auto again = runAmbience(base + " --out " + (dir / "b").string());
+    ASSERT_EQ(again.exitCode, 0) << again.err;
+    const auto refB = readJson(dir / "b" / "report.json")["measurement"]["reference"];
+    EXPECT_EQ(refB["referenceCaptures"].get<int>(), 0);
+    EXPECT_EQ(refB["bounce"]["solves"].size(), 0u);
+    // The hemisphere is another reference: refused, or made again when asked.
+    const auto other =
+        runAmbience(base + " --reference-light hemisphere --out " + (dir / "c").string());
+    EXPECT_EQ(other.exitCode, 2);
+    EXPECT_NE(other.err.find("light=bounce"), std::string::npos) << other.err;
+    const auto replaced = runAmbience(base + " --reference-light hemisphere "
+                                             "--replace-stale-caches --out " +
+                                      (dir / "d").string());
+    ASSERT_EQ(replaced.exitCode, 0) << replaced.err;
+    EXPECT_GT(readJson(dir / "d" / "report.json")["measurement"]["reference"]["referenceCaptures"]
+                  .get<int>(),
+              0);
 }
 
 // A settings file's facesPerFrame (the tuning panel's Save writes it) was reset to 1 by the

@@ -141,7 +141,8 @@ TEST(Cli, CompareWritesTheFrameTheReferenceAndTheHeatMap) {
     const std::string out = testing::TempDir() + "compare-test";
     const test::CommandResult r = runAmbience(
         "compare --replay " + sourcePath("replays/highway-drive.json") +
-        " --frame 20 --size 96x54 --grid 12 --reference-size 16 --out " + out);
+        " --frame 20 --size 96x54 --grid 12 --reference-size 16 --bounce-spacing 256 "
+        "--bounce-reach 100 --bounce-face 8 --out " + out);
     ASSERT_EQ(r.exitCode, 0) << r.err;
     for (const char* f : {"method.png", "reference.png", "error.png", "compare.png"})
         EXPECT_TRUE(std::filesystem::exists(out + "/" + f)) << f;
@@ -152,6 +153,13 @@ TEST(Cli, CompareWritesTheFrameTheReferenceAndTheHeatMap) {
     EXPECT_TRUE(std::isfinite(e));
     EXPECT_GT(e, 0.0);
     EXPECT_LT(e, 2.0);
+    // The reference lit by its own bounce field (the default), which converged.
+    EXPECT_EQ(j["referenceLight"], "bounce");
+    ASSERT_EQ(j["bounce"]["solves"].size(), 1u);
+    EXPECT_TRUE(j["bounce"]["solves"][0]["converged"].get<bool>());
+    EXPECT_GE(j["bounce"]["solves"][0]["points"].get<int>(), 1);
+    expectInputError("compare --reference-light sky --out " + out, {"--reference-light", "sky"});
+    expectInputError("compare --bounce-spacing 1 --out " + out, {"--bounce-spacing"});
     expectInputError("compare --grid 1 --out " + out, {"--grid"});
     expectInputError("compare --frame 999999 --out " + out, {"--frame"});
     expectInputError("compare --ambient magic --out " + out, {"--ambient"});

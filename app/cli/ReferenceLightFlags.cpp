@@ -1,0 +1,54 @@
+// ReferenceLightFlags.cpp — the reference light's options and report fields.
+#include "app/cli/ReferenceLightFlags.h"
+
+#include <cmath>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+namespace amb {
+
+BounceSettings runBounceSettings() {
+    BounceSettings s;
+    s.spacing_m = 128.0;
+    s.reach_m = 600.0;
+    return s;
+}
+
+void addReferenceLightOptions(CLI::App& cmd, std::string& light, BounceSettings& bounce) {
+    cmd.add_option("--reference-light", light,
+                   "what lights the reference's surfaces besides the sun: bounce (default: the "
+                   "scene's own indirect light, a lattice of full-scene captures iterated until "
+                   "a bounce changes it by less than 1 %) or hemisphere (the fixed sky/ground "
+                   "ambient the near field also models)");
+    cmd.add_option("--bounce-spacing", bounce.spacing_m,
+                   "bounce lattice spacing [m] (default " + std::to_string(int(bounce.spacing_m)) +
+                       ")");
+    cmd.add_option("--bounce-reach", bounce.reach_m,
+                   "bounce lattice points within this distance of the path [m] (default " +
+                       std::to_string(int(bounce.reach_m)) + ")");
+    cmd.add_option("--bounce-face", bounce.faceSize,
+                   "face size of the bounce lattice's captures (default " +
+                       std::to_string(bounce.faceSize) + ")");
+}
+
+nlohmann::json bounceJson(const BounceSettings& settings, const std::vector<BounceSolve>& solves) {
+    using nlohmann::json;
+    json list = json::array();
+    for (const BounceSolve& s : solves)
+        list.push_back({{"timeOfDay_h", s.timeOfDay_h},
+                        {"points", s.points},
+                        {"bounces", s.bounces},
+                        {"converged", s.converged},
+                        {"changes", s.changes},
+                        {"maxPointChanges", s.maxPointChanges},
+                        {"captures", s.captures},
+                        {"seconds", s.seconds}});
+    return {{"spacing_m", settings.spacing_m},
+            {"reach_m", settings.reach_m},
+            {"faceSize", settings.faceSize},
+            {"tolerance", settings.tolerance},
+            {"solves", list}};
+}
+
+}  // namespace amb

@@ -1,0 +1,211 @@
+// BounceField_test.cpp — the reference's bounce field (lighting/BounceField.h): the iteration
+// against the closed form of a closed scene (the geometric series), the lattice's lay-out, the
+// interpolation, the surface light's lifetime, and the lazy per-epoch solves.
+#include "lighting/BounceField.h"
+
+#include <cmath>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "lighting/Metrics.h"
+#include "lighting/SH.h"
+#include "world/Conventions.h"
+#include "world/Error.h"
+
+namespace amb {
+namespace {
+
+// A closed scene of uniform albedo rho (a furnace): every texel sees a surface lit by a direct
+// irradiance E_d and by the surface light's irradiance there, L = rho / pi (E_d + E_amb). The
+// field's SH of a uniform radiance L gives E = pi L for every normal, so pass k holds the
+// partial sum E_k = rho E_d (1 + rho + ... + rho^(k-1)).
+class FurnaceCapture final : public CubeCapture {
+  public:
+    FurnaceCapture(double rho, double direct) : rho_(rho), direct_(direct) {}
+    int faceSize() const override { return 8; }
+    CubeCaptureStats capture(const glm::dvec3& p, double, CubeFaceMask faces,
+                             std::vector<float>& cube) override {
+        const double ambient =
+            light_ ? double(luminance(shIrradiance(light_->shAt(p), glm::vec3(0, 1, 0)))) : 0.0;
+        const float l = float(rho_ / kPi * (direct_ + ambient));
+        cube.assign(6 * 8 * 8 * 3, l);
+        ++captures;
+        CubeCaptureStats s;
+        s.faces = __builtin_popcount(faces & kAllCubeFaces);
+        return s;
+    }
+    void setSurfaceLight(const SurfaceLight* light) override { light_ = light; }
+    const SurfaceLight* light() const { return light_; }
+    int captures = 0;
+
+  private:
+    double rho_, direct_;
+    const SurfaceLight* light_ = nullptr;
+};
+
+// A capture whose uniform radiance is 1 + x / 100 of its position (ignores the surface light):
+// converges on its second pass, and shows where the field reads.
+class RampCapture final : public CubeCapture {
+  public:
+    int faceSize() const override { return 4; }
+    CubeCaptureStats capture(const glm::dvec3& p, double, CubeFaceMask,
+                             std::vector<float>& cube) override {
+        cube.assign(6 * 4 * 4 * 3, float(1.0 + p.x / 100.0));
+        return {};
+    }
+};
+
+glm::dvec3 onGround(double x, double z) {
+    return {x, 2.0, z};
+}
+
+double upIrradiance(const ShRgb& sh) {
+    return double(luminance(shIrradiance(sh, glm::vec3(0, 1, 0))));
+}
+
+// The furnace converges to the geometric series rho E_d / (1 - rho): the bounce count and every
+// pass's change are the closed form's (change_k = rho^(k-1) (1 - rho) / (1 - rho^k)), and the
+// last pass is within rho^k of the limit, below 1 % / (1 - rho) as the stopping rule promises.
+TEST(BounceField, AClosedSceneConvergesToTheGeometricSeries) {
+    for (const double rho : {0.2, 0.5}) {
+        SCOPED_TRACE(rho);
+        const double direct = 100.0;
+        FurnaceCapture capture(rho, direct);
+        BounceSettings s;
+        s.spacing_m = 100.0;
+        s.reach_m = 0.0;
+        BounceField field(s);
+        field.layOut({{0.0, 0.0}}, onGround);
+        ASSERT_EQ(field.points(), 1u);
+        const BounceSolve& solve = field.solve(capture, 12.0);
+        const int expected = rho == 0.2 ? 4 : 7;  // first k with change_k < 0.01
+        EXPECT_TRUE(solve.converged);
+        EXPECT_EQ(solve.bounces, expected);
+        ASSERT_EQ(int(solve.changes.size()), expected);
+        for (int k = 1; k <= expected; ++k) {
+            const double closed = std::pow(rho, k - 1) * (1.0 - rho) / (1.0 - std::pow(rho, k));
+            EXPECT_NEAR(solve.changes[std::size_t(k - 1)], closed, 1e-4 * closed + 1e-6) << k;
+        }
+        const double limit = rho * direct / (1.0 - rho);
+        const double partial = limit * (1.0 - std::pow(rho, expected));
+        const double e = upIrradiance(field.pointSh(0));
+        EXPECT_NEAR(e, partial, 1e-4 * partial);
+        EXPECT_NEAR(e, limit, s.tolerance / (1.0 - rho) * limit);
+        EXPECT_EQ(capture.captures, expected);
+        EXPECT_EQ(capture.light(), nullptr);  // the capture is left as it was
+    }
+}
+
+// A field that never settles within maxBounces says so.
+TEST(BounceField, StopsAtMaxBouncesAndSaysItDidNotConverge) {
+    FurnaceCapture capture(0.9, 1.0);
+    BounceSettings s;
+    s.reach_m = 0.0;
+    s.maxBounces = 5;
+    BounceField field(s);
+    field.layOut({{10.0, 10.0}}, onGround);
+    const BounceSolve& solve = field.solve(capture, 12.0);
+    EXPECT_FALSE(solve.converged);
+    EXPECT_EQ(solve.bounces, 5);
+    EXPECT_GT(solve.changes.back(), 0.01);
+    for (std::size_t k = 1; k < solve.changes.size(); ++k)
+        EXPECT_LT(solve.changes[k], solve.changes[k - 1]);
+}
+
+// The lattice: the nodes within reach of the path, on the global lattice, placed by the caller.
+TEST(BounceField, LaysTheNodesWithinReachOfThePath) {
+    BounceSettings s;
+    s.spacing_m = 100.0;
+    s.reach_m = 150.0;  // (0,0), 4 edge neighbours at 100 m and 4 diagonal ones at 141 m
+    BounceField a(s);
+    a.layOut({{0.0, 0.0}}, onGround);
+    EXPECT_EQ(a.points(), 9u);
+    s.reach_m = 120.0;
+    BounceField b(s);
+    b.layOut({{0.0, 0.0}}, onGround);
+    EXPECT_EQ(b.points(), 5u);
+    // A path along x: the union of the discs, each node once.
+    s.reach_m = 100.0;
+    BounceField c(s);
+    c.layOut({{0.0, 0.0}, {50.0, 0.0}, {100.0, 0.0}}, onGround);
+    EXPECT_EQ(c.points(), 8u);  // (-1..2, 0), (0..1, +-1)
+    for (std::size_t i = 0; i < c.points(); ++i)
+        EXPECT_DOUBLE_EQ(c.pointPosition(i).y, 2.0);
+}
+
+// Reading the field: exact at a node, bilinear between nodes, the nearest node's value where no
+// node was captured, the box's edge beyond it, zero before any solve.
+TEST(BounceField, InterpolatesBilinearlyAndHoldsTheNearestValueOutside) {
+    BounceSettings s;
+    s.spacing_m = 100.0;
+    s.reach_m = 100.0;
+    BounceField field(s);
+    field.layOut({{0.0, 0.0}, {100.0, 0.0}}, onGround);
+    EXPECT_EQ(upIrradiance(field.shAt({0.0, 0.0, 0.0})), 0.0);
+    RampCapture ramp;
+    const BounceSolve& solve = field.solve(ramp, 12.0);
+    EXPECT_TRUE(solve.converged);
+    EXPECT_EQ(solve.bounces, 2);
+    const auto e = [&](double x, double z) { return upIrradiance(field.shAt({x, 50.0, z})); };
+    const double at0 = kPi * 1.0, at100 = kPi * 2.0;  // E = pi L of the uniform radiance
+    EXPECT_NEAR(e(0.0, 0.0), at0, 1e-4 * at0);
+    EXPECT_NEAR(e(100.0, 0.0), at100, 1e-4 * at100);
+    EXPECT_NEAR(e(50.0, 0.0), 0.5 * (at0 + at100), 1e-4 * at100);
+    EXPECT_NEAR(e(25.0, 100.0), 0.75 * at0 + 0.25 * at100, 1e-4 * at100);  // row k = 1
+    // Node (2, 1) was not captured: it takes its nearest captured node's value, (1, 0) or (1, 1).
+    EXPECT_NEAR(e(200.0, 100.0), at100, 1e-4 * at100);
+    // Beyond the box: its edge, node (-1, 0), whose radiance is 1 - 100 / 100 = 0.
+    EXPECT_NEAR(e(-5000.0, 0.0), 0.0, 1e-6);
+    EXPECT_TRUE(std::isfinite(e(1e9, -1e9)));
+    EXPECT_TRUE(std::isfinite(upIrradiance(field.shAt({std::nan(""), 0.0, 0.0}))));
+}
+
+// The reference capture is lit by the field of its epoch: solved on the first capture that needs
+// it (none before), once per epoch, and the reference is left without a surface light after.
+TEST(BounceField, LitCaptureSolvesLazilyOncePerEpoch) {
+    FurnaceCapture lattice(0.5, 10.0), reference(0.5, 10.0);
+    BounceSettings s;
+    s.spacing_m = 100.0;
+    s.reach_m = 0.0;
+    s.epoch_h = 0.25;
+    BounceLitCapture lit(reference, lattice, s, {{0.0, 0.0}}, onGround, 12.0);
+    EXPECT_EQ(lattice.captures, 0);
+    std::vector<float> cube;
+    lit.capture({0.0, 2.0, 0.0}, 12.01, kAllCubeFaces, cube);
+    EXPECT_EQ(lattice.captures, 7);
+    ASSERT_EQ(lit.solves().size(), 1u);
+    EXPECT_DOUBLE_EQ(lit.solves()[0].timeOfDay_h, 12.0);
+    // The reference saw the converged field: rho / pi (E_d + E_7).
+    const double e7 = 0.5 * 10.0 * (1.0 - std::pow(0.5, 7)) / 0.5;
+    EXPECT_NEAR(cube[0], 0.5 / kPi * (10.0 + e7), 1e-4);
+    EXPECT_EQ(reference.light(), nullptr);
+    lit.capture({0.0, 2.0, 0.0}, 12.2, kAllCubeFaces, cube);
+    EXPECT_EQ(lattice.captures, 7);  // same epoch
+    lit.capture({0.0, 2.0, 0.0}, 12.3, kAllCubeFaces, cube);
+    EXPECT_EQ(lattice.captures, 14);  // the next one, solved at 12.25 h
+    ASSERT_EQ(lit.solves().size(), 2u);
+    EXPECT_DOUBLE_EQ(lit.solves()[1].timeOfDay_h, 12.25);
+}
+
+TEST(BounceField, RefusesSettingsOutOfRange) {
+    BounceSettings s;
+    s.spacing_m = 0.0;
+    EXPECT_THROW(BounceField{s}, InputError);
+    s = {};
+    s.faceSize = 1;
+    EXPECT_THROW(checkBounceSettings(s), InputError);
+    s = {};
+    s.reach_m = -1.0;
+    EXPECT_THROW(checkBounceSettings(s), InputError);
+    s = {};
+    s.reach_m = std::nan("");
+    EXPECT_THROW(checkBounceSettings(s), InputError);
+    EXPECT_THROW(parseReferenceLight("sky", "--reference-light"), InputError);
+    EXPECT_EQ(parseReferenceLight("bounce", "x"), ReferenceLight::Bounce);
+    EXPECT_EQ(parseReferenceLight("hemisphere", "x"), ReferenceLight::Hemisphere);
+    EXPECT_NE(describeBounceSettings(BounceSettings{}).find("spacing=256"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace amb
