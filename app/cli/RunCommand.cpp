@@ -72,6 +72,7 @@ struct RunOptions {
     std::string shadows = "on";
     int shadowCascades = ShadowSettings{}.cascades, shadowSize = ShadowSettings{}.mapSize,
         shadowPcf = ShadowSettings{}.pcf;
+    bool passTiming = false;  // --pass-timing
     std::string contactSheet;  // empty: <out>/contact-sheet.png; "none": none
     int sheetCells = 12;
     int faceSize = 16;
@@ -518,6 +519,7 @@ void runReplay(RunOptions o) {
     rs.viewOutput = plan.view;
     rs.exposure.enabled = plan.autoExposure;
     rs.shadows = plan.shadows;
+    rs.passTiming = o.passTiming;
     Renderer renderer(world, rs);
     auto stages =
         makeMethodStages(renderer, o.ambient, plan.volumeSettings, plan.baselines, o.faceSize);
@@ -716,6 +718,10 @@ void addRunCommand(CLI::App& app) {
                     "texels per side of each cascade, 64 to 8192 (default 512)");
     cmd->add_option("--shadow-pcf", o->shadowPcf,
                     "PCF taps per side, 1 to 3, each a bilinear 2 x 2 comparison (default 1)");
+    cmd->add_flag("--pass-timing", o->passTiming,
+                  "time each pass of the main view (shadow maps, plants, car, roads, terrain, "
+                  "sky, exposure, tone mapping) between glFinish calls, with their triangles and "
+                  "samples, into the report's \"passes\" (adds waits; changes no pixel)");
     cmd->add_option("--contact-sheet", o->contactSheet,
                     "PNG of frames across the run in a grid, or 'none' "
                     "(default <out>/contact-sheet.png)");

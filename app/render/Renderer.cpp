@@ -106,7 +106,10 @@ ShadowBinding Renderer::renderShadows(const CameraSample& camera, RenderStats& s
         shadowMap_->fit(k, centre, radius * (1.0 + margin), sky_.lightDir);
         scene_->buildCasters(camera.position_m, shadowMap_->casterViewProj(k, camera.position_m),
                              shadowMap_->texel_m(k), casters_, false);
-        stats.shadowTriangles += shadowMap_->render(k, *drawer_, casters_, camera.position_m);
+        timer_.begin(RenderPass::ShadowCascades);
+        const std::size_t triangles = shadowMap_->render(k, *drawer_, casters_, camera.position_m);
+        timer_.end(triangles);
+        stats.shadowTriangles += triangles;
         rendered = true;
     }
     binding.texture = shadowMap_->texture();
@@ -116,7 +119,10 @@ ShadowBinding Renderer::renderShadows(const CameraSample& camera, RenderStats& s
     if (const auto& car = scene_->vehicle()) {
         shadowMap_->fit(n, car->position_m, ss.carShadowRadius_m, sky_.lightDir, ss.carMapSize);
         scene_->buildVehicleCaster(camera.position_m, casters_);
-        stats.shadowTriangles += shadowMap_->render(n, *drawer_, casters_, camera.position_m);
+        timer_.begin(RenderPass::ShadowCar);
+        const std::size_t triangles = shadowMap_->render(n, *drawer_, casters_, camera.position_m);
+        timer_.end(triangles);
+        stats.shadowTriangles += triangles;
         shadowMap_->setSlot(binding.constants, kMaxShadowCascades, n, camera.position_m,
                             ss.normalOffset_texels, ss.depthBias_texels, 0.0);
         binding.constants.params.w = 1.0f;
@@ -128,6 +134,9 @@ RenderStats Renderer::render(const CameraSample& camera, const AmbientSource& am
                              RenderOutput output) {
     using Clock = std::chrono::steady_clock;
     RenderStats stats;
+    timer_.setEnabled(settings_.passTiming);
+    timer_.startFrame();
+    drawer_->setPassTimer(settings_.passTiming ? &timer_ : nullptr);
     const auto t0 = Clock::now();
     FrameConstants fc;
     fc.viewProj = viewProjection(camera);
@@ -151,10 +160,16 @@ RenderStats Renderer::render(const CameraSample& camera, const AmbientSource& am
 
     if (output == RenderOutput::Shaded || output == RenderOutput::Ambient) {
         glBindFramebuffer(GL_FRAMEBUFFER, ldrFbo_.id());
-        drawer_->drawTonemap(hdr_.id(), adaptExposure());
+        const float exposure = adaptExposure();
+        timer_.begin(RenderPass::Tonemap);
+        drawer_->drawTonemap(hdr_.id(), exposure);
+        timer_.end(1);
     }
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     const auto t2 = Clock::now();
+    drawer_->setPassTimer(nullptr);
+    stats.passesTimed = timer_.enabled();
+    if (stats.passesTimed) stats.passes = timer_.passes();
 
     stats.terrainPatches = ss.terrainPatches;
     stats.terrainPatchesDrawn = ss.terrainPatchesDrawn;
@@ -259,7 +274,9 @@ void Renderer::setViewState(const ViewState& state) {
 float Renderer::adaptExposure() {
     if (!settings_.exposure.enabled) return exposure_.hold(exposureFor(sky_, noon_));
     return exposure_.update(viewState_.time_s, sky_.timeOfDay_h, viewState_.cut, [&] {
+        timer_.begin(RenderPass::Exposure);
         const double logMean = meter_.logMeanLuminance(hdrFbo_.id());
+        timer_.end(0);
         glBindFramebuffer(GL_FRAMEBUFFER, ldrFbo_.id());
         return logMean;
     });

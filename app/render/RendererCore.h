@@ -23,6 +23,7 @@
 #include "app/frame/Draw.h"
 #include "app/frame/SkyLighting.h"
 #include "app/render/Gl.h"
+#include "app/render/PassTimer.h"
 #include "world/WorldMesh.h"
 
 namespace amb {
@@ -105,6 +106,7 @@ struct ObjectBatch {
     // A proxy or far mesh standing in for the full one: the screen witnesses' outputs mark its
     // pixels as surface kind 4 (not a witness: the reference sees the real plant).
     bool simplified = false;
+    bool vehicle = false;  // the car (its own pass in the pass timing)
 };
 
 struct DrawList {
@@ -139,11 +141,15 @@ class SceneDrawer {
     std::size_t drawDepth(const DrawList& list, const glm::mat4& viewProj);
     // Tone maps `hdrTexture` into the bound framebuffer (full-screen pass, no depth).
     void drawTonemap(GLuint hdrTexture, float exposure);
+    // Times draw()'s passes (plants, car, roads, terrain, sky) into `timer` (null: none).
+    void setPassTimer(PassTimer* timer) { timer_ = timer; }
 
   private:
+    PassTimer* timer_ = nullptr;
     // Uploads every batch's instances into one buffer (grown as needed); returns their count.
     std::size_t uploadInstances(const DrawList& list);
-    std::size_t drawObjectBatches(const DrawList& list, GLint simplifiedLocation);
+    std::size_t drawObjectBatches(const DrawList& list, GLint simplifiedLocation,
+                                  PassTimer* timer = nullptr);
     GlProgram terrain_, object_, sky_, tonemap_, caster_;
     GlBuffer constants_, shadowConstants_;
     GlTexture noShadow_;  // 1 x 1 x 1 depth array bound when a draw has no shadows

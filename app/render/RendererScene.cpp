@@ -262,7 +262,7 @@ void RendererScene::buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj
             vehicle_->position_m + glm::dvec3(0.0, settings_.roadLift_m, 0.0) - eye_m;
         inst.positionScale = glm::vec4(float(rel.x), float(rel.y), float(rel.z), 1.0f);
         inst.rotationSet = glm::vec2(float(vehicle_->heading_rad), float(vehicleSet));
-        out.objects.push_back({&vehicleMesh_, {inst}});
+        out.objects.push_back({&vehicleMesh_, {inst}, false, true});
         ++objects;
     }
     if (stats) {
