@@ -56,8 +56,9 @@ Renderer::Renderer(const World& world, const RenderSettings& settings)
     glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
     checkShadowSettings(settings.shadows, "shadow settings");
     if (settings.shadows.enabled)
-        shadowMap_ = std::make_unique<ShadowMap>(settings.shadows.cascades + 1,  // + the car's
-                                                 settings.shadows.mapSize);
+        shadowMap_ = std::make_unique<ShadowMap>(
+            settings.shadows.cascades + 1 + (settings.shadows.farDistance_m > 0.0 ? 1 : 0),
+            settings.shadows.mapSize);  // + the car's, + the far cascade
 }
 
 Renderer::~Renderer() = default;
@@ -115,15 +116,42 @@ ShadowBinding Renderer::renderShadows(const CameraSample& camera, RenderStats& s
     binding.texture = shadowMap_->texture();
     binding.constants = shadowMap_->constants(camera.position_m, n, ss.pcf,
                                               ss.normalOffset_texels, ss.depthBias_texels);
-    // The car, the one caster that moves: its own small map around it, every frame.
+    // The far terrain cascade: terrain and roads only, around the camera, re-rendered when the
+    // camera leaves it or the light turns.
+    if (ss.farDistance_m > 0.0) {
+        const int far = n + 1;
+        const bool inside = shadowMap_->fitted(far) &&
+                            glm::length(camera.position_m - shadowMap_->centre(far)) +
+                                    ss.farDistance_m <= shadowMap_->radius(far);
+        const bool turned = !shadowMap_->fitted(far) ||
+                            glm::dot(shadowMap_->towardLight(far), sky_.lightDir) < 0.99985f;
+        if (!inside || turned) {
+            shadowMap_->fit(far, camera.position_m, ss.farDistance_m * (1.0 + ss.staticMargin),
+                            sky_.lightDir);
+            scene_->buildCasters(camera.position_m,
+                                 shadowMap_->casterViewProj(far, camera.position_m),
+                                 shadowMap_->texel_m(far), casters_, false, false);
+            timer_.begin(RenderPass::ShadowFar);
+            const std::size_t triangles =
+                shadowMap_->render(far, *drawer_, casters_, camera.position_m);
+            timer_.end(triangles);
+            stats.shadowTriangles += triangles;
+        }
+        shadowMap_->setSlot(binding.constants, kFarShadowSlot, far, camera.position_m,
+                            ss.normalOffset_texels, ss.depthBias_texels, 0.0);
+        binding.constants.far.x = 1.0f;
+    }
+    // The car, the one caster that moves: its own small map around it, every frame, with the
+    // static casters around it, so that where it covers a receiver it is the one map read.
     if (const auto& car = scene_->vehicle()) {
         shadowMap_->fit(n, car->position_m, ss.carShadowRadius_m, sky_.lightDir, ss.carMapSize);
-        scene_->buildVehicleCaster(camera.position_m, casters_);
+        scene_->buildCasters(camera.position_m, shadowMap_->casterViewProj(n, camera.position_m),
+                             shadowMap_->texel_m(n), casters_, true);
         timer_.begin(RenderPass::ShadowCar);
         const std::size_t triangles = shadowMap_->render(n, *drawer_, casters_, camera.position_m);
         timer_.end(triangles);
         stats.shadowTriangles += triangles;
-        shadowMap_->setSlot(binding.constants, kMaxShadowCascades, n, camera.position_m,
+        shadowMap_->setSlot(binding.constants, kCarShadowSlot, n, camera.position_m,
                             ss.normalOffset_texels, ss.depthBias_texels, 0.0);
         binding.constants.params.w = 1.0f;
     }

@@ -44,17 +44,20 @@ static_assert(sizeof(FrameConstants) == 2 * 64 + 7 * 16, "std140 layout of Frame
 
 // ---- ShadowConstants -------------------------------------------------------------------------
 constexpr int kMaxShadowCascades = 4;
+constexpr int kCarShadowSlot = kMaxShadowCascades;      // the car's own map
+constexpr int kFarShadowSlot = kMaxShadowCascades + 1;  // the far terrain cascade
 struct ShadowConstants {
     // Camera-relative world -> (u, v, depth, 1) of each cascade, u, v, depth in [0, 1] over the
-    // part of the layer the cascade uses; slot kMaxShadowCascades: the car's own map.
-    glm::mat4 matrix[kMaxShadowCascades + 1]{};
+    // part of the layer the cascade uses; then the car's map and the far cascade.
+    glm::mat4 matrix[kMaxShadowCascades + 2]{};
     // x: normal offset [m]; y: depth bias [depth units]; z: layer of the texture array;
     // w: the share of the layer's side the cascade uses (its texels / the layer's)
-    glm::vec4 offset[kMaxShadowCascades + 1]{};
+    glm::vec4 offset[kMaxShadowCascades + 2]{};
     // x: cascades (0: no shadows); y: 1 / layer size; z: PCF taps per side; w: 1 with the car's map
     glm::vec4 params{0.0f};
+    glm::vec4 far{0.0f};  // x: 1 with the far terrain cascade
 };
-static_assert(sizeof(ShadowConstants) == (kMaxShadowCascades + 1) * 80 + 16, "std140 layout");
+static_assert(sizeof(ShadowConstants) == (kMaxShadowCascades + 2) * 80 + 32, "std140 layout");
 
 // The shadows a draw reads: a depth texture array (GL_TEXTURE_2D_ARRAY, comparison on) and its
 // constants. texture 0 or params.x 0: no shadows.
