@@ -74,6 +74,8 @@ struct RunOptions {
     std::string shadows = "on";
     int shadowCascades = ShadowSettings{}.cascades, shadowSize = ShadowSettings{}.mapSize,
         shadowPcf = ShadowSettings{}.pcf;
+    double shadowFar_m = ShadowSettings{}.farDistance_m;
+    bool passTiming = false;  // --pass-timing
     std::string contactSheet;  // empty: <out>/contact-sheet.png; "none": none
     int sheetCells = 12;
     int faceSize = 16;
@@ -237,7 +239,9 @@ RunPlan planRun(RunOptions& o) {
     plan.shadows.cascades = o.shadowCascades;
     plan.shadows.mapSize = o.shadowSize;
     plan.shadows.pcf = o.shadowPcf;
-    checkShadowSettings(plan.shadows, "--shadow-cascades/--shadow-size/--shadow-pcf");
+    plan.shadows.farDistance_m = o.shadowFar_m;
+    checkShadowSettings(plan.shadows,
+                        "--shadow-cascades/--shadow-size/--shadow-pcf/--shadow-far");
     const bool useVolume = o.ambient == "volume";
     AmbienceVolumeSettings& volumeSettings = plan.volumeSettings;
     if (!o.ambienceConfig.empty()) {
@@ -579,6 +583,7 @@ void runReplay(RunOptions o) {
     rs.viewOutput = plan.view;
     rs.exposure.enabled = plan.autoExposure;
     rs.shadows = plan.shadows;
+    rs.passTiming = o.passTiming;
     Renderer renderer(world, rs);
     auto stages =
         makeMethodStages(renderer, o.ambient, plan.volumeSettings, plan.baselines, o.faceSize);
@@ -778,6 +783,13 @@ void addRunCommand(CLI::App& app) {
                     "texels per side of each cascade, 64 to 8192 (default 512)");
     cmd->add_option("--shadow-pcf", o->shadowPcf,
                     "PCF taps per side, 1 to 3, each a bilinear 2 x 2 comparison (default 1)");
+    cmd->add_option("--shadow-far", o->shadowFar_m,
+                    "far end of the terrain's far shadow cascade [m], beyond the cascades' 200 m "
+                    "(default 800; 0: none)");
+    cmd->add_flag("--pass-timing", o->passTiming,
+                  "time each pass of the main view (shadow maps, plants, car, roads, terrain, "
+                  "sky, exposure, tone mapping) between glFinish calls, with their triangles and "
+                  "samples, into the report's \"passes\" (adds waits; changes no pixel)");
     cmd->add_option("--contact-sheet", o->contactSheet,
                     "PNG of frames across the run in a grid, or 'none' "
                     "(default <out>/contact-sheet.png)");

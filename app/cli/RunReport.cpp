@@ -363,6 +363,34 @@ void addTimingsJson(json& j, const std::vector<FrameRecord>& frames) {
     // the maps later, inside the draw), and the triangles drawn into the maps.
     j["shadowPass_ms"] = statsJson(shadow_ms);
     j["shadowTriangles"] = statsJson(shadowTris);
+    // --pass-timing: each pass of the main view over the frames that ran it (ms between
+    // glFinish calls, triangles, samples passing the depth test) and its mean over all frames.
+    bool timed = false;
+    for (const FrameRecord& f : frames) timed = timed || f.render.passesTimed;
+    if (timed) {
+        json passes = json::object();
+        for (int p = 0; p < kRenderPasses; ++p) {
+            std::vector<double> ms, triangles, samples;
+            double total_ms = 0.0;
+            std::size_t timedFrames = 0;
+            for (const FrameRecord& f : frames) {
+                if (!f.render.passesTimed) continue;
+                ++timedFrames;
+                const PassStats& s = f.render.passes[std::size_t(p)];
+                if (!s.ran) continue;
+                ms.push_back(s.ms), total_ms += s.ms;
+                triangles.push_back(double(s.triangles));
+                samples.push_back(double(s.samples));
+            }
+            passes[toString(RenderPass(p))] = {
+                {"frames", ms.size()},
+                {"ms", statsJson(ms)},
+                {"msPerFrame", timedFrames ? total_ms / double(timedFrames) : 0.0},
+                {"triangles_median", timingStats(triangles).median},
+                {"samples_median", timingStats(samples).median}};
+        }
+        j["passes"] = passes;
+    }
     const double median = timingStats(frame_ms).median;
     j["fps_median"] = median > 0 ? 1000.0 / median : 0.0;
     j["fps"] = j["fps_median"];

@@ -4,6 +4,7 @@
 // (MainView, implemented by app/render/Renderer.h) and what a draw reports (RenderStats).
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -58,6 +59,36 @@ class AmbientSource {
     }
 };
 
+// The passes of one main-view frame, as `ambience run --pass-timing` times them (each between
+// two glFinish calls, with a GL_SAMPLES_PASSED query): the static shadow cascades re-rendered
+// that frame, the far terrain cascade, the car's own map, then the HDR draw's plants, car,
+// roads, terrain and sky, the exposure meter's read-back and the tone mapping.
+enum class RenderPass : int {
+    ShadowCascades,
+    ShadowFar,
+    ShadowCar,
+    Plants,
+    Car,
+    Roads,
+    Terrain,
+    Sky,
+    Exposure,
+    Tonemap
+};
+constexpr int kRenderPasses = 10;
+inline const char* toString(RenderPass p) {
+    static const char* const names[kRenderPasses] = {
+        "shadowCascades", "shadowFar", "shadowCar", "plants", "car",
+        "roads", "terrain", "sky", "exposure", "tonemap"};
+    return names[int(p)];
+}
+struct PassStats {
+    bool ran = false;           // the pass ran this frame
+    double ms = 0.0;            // wall time between the glFinish calls around it
+    std::size_t triangles = 0;  // submitted
+    std::uint64_t samples = 0;  // that passed the depth test (GL_SAMPLES_PASSED)
+};
+
 struct RenderStats {
     std::size_t triangles = 0;
     std::size_t terrainPatches = 0, terrainPatchesDrawn = 0, objectsDrawn = 0;
@@ -66,6 +97,8 @@ struct RenderStats {
     double draw_ms = 0.0;   // submitting GL commands (CPU), the shadow pass included
     std::size_t shadowTriangles = 0;  // drawn into the shadow maps
     double shadow_ms = 0.0;           // building and submitting the shadow pass (CPU)
+    bool passesTimed = false;         // --pass-timing: `passes` holds this frame's
+    std::array<PassStats, kRenderPasses> passes{};
 };
 
 // What the main view needs to know about the frame besides its eye: the run's clock (the eye

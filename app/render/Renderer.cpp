@@ -56,8 +56,9 @@ Renderer::Renderer(const World& world, const RenderSettings& settings)
     glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
     checkShadowSettings(settings.shadows, "shadow settings");
     if (settings.shadows.enabled)
-        shadowMap_ = std::make_unique<ShadowMap>(settings.shadows.cascades + 1,  // + the car's
-                                                 settings.shadows.mapSize);
+        shadowMap_ = std::make_unique<ShadowMap>(
+            settings.shadows.cascades + 1 + (settings.shadows.farDistance_m > 0.0 ? 1 : 0),
+            settings.shadows.mapSize);  // + the car's, + the far cascade
 }
 
 Renderer::~Renderer() = default;
@@ -106,18 +107,51 @@ ShadowBinding Renderer::renderShadows(const CameraSample& camera, RenderStats& s
         shadowMap_->fit(k, centre, radius * (1.0 + margin), sky_.lightDir);
         scene_->buildCasters(camera.position_m, shadowMap_->casterViewProj(k, camera.position_m),
                              shadowMap_->texel_m(k), casters_, false);
-        stats.shadowTriangles += shadowMap_->render(k, *drawer_, casters_, camera.position_m);
+        timer_.begin(RenderPass::ShadowCascades);
+        const std::size_t triangles = shadowMap_->render(k, *drawer_, casters_, camera.position_m);
+        timer_.end(triangles);
+        stats.shadowTriangles += triangles;
         rendered = true;
     }
     binding.texture = shadowMap_->texture();
     binding.constants = shadowMap_->constants(camera.position_m, n, ss.pcf,
                                               ss.normalOffset_texels, ss.depthBias_texels);
-    // The car, the one caster that moves: its own small map around it, every frame.
+    // The far terrain cascade: terrain and roads only, around the camera, re-rendered when the
+    // camera leaves it or the light turns.
+    if (ss.farDistance_m > 0.0) {
+        const int far = n + 1;
+        const bool inside = shadowMap_->fitted(far) &&
+                            glm::length(camera.position_m - shadowMap_->centre(far)) +
+                                    ss.farDistance_m <= shadowMap_->radius(far);
+        const bool turned = !shadowMap_->fitted(far) ||
+                            glm::dot(shadowMap_->towardLight(far), sky_.lightDir) < 0.99985f;
+        if (!inside || turned) {
+            shadowMap_->fit(far, camera.position_m, ss.farDistance_m * (1.0 + ss.staticMargin),
+                            sky_.lightDir);
+            scene_->buildCasters(camera.position_m,
+                                 shadowMap_->casterViewProj(far, camera.position_m),
+                                 shadowMap_->texel_m(far), casters_, false, false);
+            timer_.begin(RenderPass::ShadowFar);
+            const std::size_t triangles =
+                shadowMap_->render(far, *drawer_, casters_, camera.position_m);
+            timer_.end(triangles);
+            stats.shadowTriangles += triangles;
+        }
+        shadowMap_->setSlot(binding.constants, kFarShadowSlot, far, camera.position_m,
+                            ss.normalOffset_texels, ss.depthBias_texels, 0.0);
+        binding.constants.far.x = 1.0f;
+    }
+    // The car, the one caster that moves: its own small map around it, every frame, with the
+    // static casters around it, so that where it covers a receiver it is the one map read.
     if (const auto& car = scene_->vehicle()) {
         shadowMap_->fit(n, car->position_m, ss.carShadowRadius_m, sky_.lightDir, ss.carMapSize);
-        scene_->buildVehicleCaster(camera.position_m, casters_);
-        stats.shadowTriangles += shadowMap_->render(n, *drawer_, casters_, camera.position_m);
-        shadowMap_->setSlot(binding.constants, kMaxShadowCascades, n, camera.position_m,
+        scene_->buildCasters(camera.position_m, shadowMap_->casterViewProj(n, camera.position_m),
+                             shadowMap_->texel_m(n), casters_, true);
+        timer_.begin(RenderPass::ShadowCar);
+        const std::size_t triangles = shadowMap_->render(n, *drawer_, casters_, camera.position_m);
+        timer_.end(triangles);
+        stats.shadowTriangles += triangles;
+        shadowMap_->setSlot(binding.constants, kCarShadowSlot, n, camera.position_m,
                             ss.normalOffset_texels, ss.depthBias_texels, 0.0);
         binding.constants.params.w = 1.0f;
     }
@@ -128,6 +162,9 @@ RenderStats Renderer::render(const CameraSample& camera, const AmbientSource& am
                              RenderOutput output) {
     using Clock = std::chrono::steady_clock;
     RenderStats stats;
+    timer_.setEnabled(settings_.passTiming);
+    timer_.startFrame();
+    drawer_->setPassTimer(settings_.passTiming ? &timer_ : nullptr);
     const auto t0 = Clock::now();
     FrameConstants fc;
     fc.viewProj = viewProjection(camera);
@@ -151,10 +188,16 @@ RenderStats Renderer::render(const CameraSample& camera, const AmbientSource& am
 
     if (output == RenderOutput::Shaded || output == RenderOutput::Ambient) {
         glBindFramebuffer(GL_FRAMEBUFFER, ldrFbo_.id());
-        drawer_->drawTonemap(hdr_.id(), adaptExposure());
+        const float exposure = adaptExposure();
+        timer_.begin(RenderPass::Tonemap);
+        drawer_->drawTonemap(hdr_.id(), exposure);
+        timer_.end(1);
     }
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     const auto t2 = Clock::now();
+    drawer_->setPassTimer(nullptr);
+    stats.passesTimed = timer_.enabled();
+    if (stats.passesTimed) stats.passes = timer_.passes();
 
     stats.terrainPatches = ss.terrainPatches;
     stats.terrainPatchesDrawn = ss.terrainPatchesDrawn;
@@ -259,7 +302,9 @@ void Renderer::setViewState(const ViewState& state) {
 float Renderer::adaptExposure() {
     if (!settings_.exposure.enabled) return exposure_.hold(exposureFor(sky_, noon_));
     return exposure_.update(viewState_.time_s, sky_.timeOfDay_h, viewState_.cut, [&] {
+        timer_.begin(RenderPass::Exposure);
         const double logMean = meter_.logMeanLuminance(hdrFbo_.id());
+        timer_.end(0);
         glBindFramebuffer(GL_FRAMEBUFFER, ldrFbo_.id());
         return logMean;
     });

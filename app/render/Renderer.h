@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "app/render/AutoExposure.h"
+#include "app/render/PassTimer.h"
 #include "app/render/RendererCore.h"
 #include "app/render/RendererScene.h"
 #include "app/render/ShadowMap.h"
@@ -46,6 +47,8 @@ struct RenderSettings {
     RenderOutput viewOutput = RenderOutput::Shaded;
     // Shadows of the main light (main view; `captures` is read by the cube captures).
     ShadowSettings shadows{};
+    // Time each pass of the frame (app/render/PassTimer.h; --pass-timing) into RenderStats.
+    bool passTiming = false;
 };
 
 // One output read back: RGBA per pixel and the camera-relative position of its surface (from
@@ -122,6 +125,7 @@ class Renderer final : public MainView {
     float adaptExposure();  // this frame's exposure (metered once per frame)
     std::unique_ptr<ShadowMap> shadowMap_;
     DrawList casters_;
+    PassTimer timer_;
 };
 
 }  // namespace amb

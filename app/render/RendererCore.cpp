@@ -117,10 +117,19 @@ void SceneDrawer::setSky(const SkyLighting& sky) {
 // One instanced draw per batch of `list`, reading the instances uploadInstances put in one
 // buffer, in the same order; `simplifiedLocation` (or -1) is told which batches are simplified.
 // Returns the triangles drawn.
-std::size_t SceneDrawer::drawObjectBatches(const DrawList& list, GLint simplifiedLocation) {
-    std::size_t triangles = 0, offset = 0;
+std::size_t SceneDrawer::drawObjectBatches(const DrawList& list, GLint simplifiedLocation,
+                                           PassTimer* timer) {
+    std::size_t triangles = 0, offset = 0, passTriangles = 0;
+    int pass = -1;
     for (const ObjectBatch& b : list.objects) {
         if (b.instances.empty()) continue;
+        const RenderPass bp = b.vehicle ? RenderPass::Car : RenderPass::Plants;
+        if (timer && int(bp) != pass) {
+            if (pass >= 0) timer->end(passTriangles);
+            timer->begin(bp);
+            pass = int(bp), passTriangles = 0;
+        }
+        passTriangles += b.mesh->triangles() * b.instances.size();
         const GLuint vao = b.mesh->vao.id();
         glVertexArrayVertexBuffer(vao, 1, instances_.id(),
                                   GLintptr(offset * sizeof(ObjectInstance)),
@@ -134,6 +143,7 @@ std::size_t SceneDrawer::drawObjectBatches(const DrawList& list, GLint simplifie
         triangles += b.mesh->triangles() * b.instances.size();
         offset += b.instances.size();
     }
+    if (timer && pass >= 0) timer->end(passTriangles);
     return triangles;
 }
 
@@ -193,7 +203,7 @@ std::size_t SceneDrawer::draw(const DrawList& list, const FrameConstants& consta
                              list.ambientSets.data());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, ambientSets_.id());
         object_.use();
-        triangles += drawObjectBatches(list, objectSimplified_);
+        triangles += drawObjectBatches(list, objectSimplified_, timer_);
     }
 
     // Terrain patches (and road pieces): one draw each, corner irradiance per patch (or, for
@@ -210,7 +220,15 @@ std::size_t SceneDrawer::draw(const DrawList& list, const FrameConstants& consta
                              GLsizeiptr(list.vertexIrradiance.size() * sizeof(glm::vec3)),
                              list.vertexIrradiance.data());
     }
+    int pass = -1;
+    std::size_t passTriangles = 0;
     for (const TerrainDraw& d : list.terrain) {
+        const RenderPass dp = d.firstVertexIrradiance >= 0 ? RenderPass::Roads : RenderPass::Terrain;
+        if (timer_ && int(dp) != pass) {
+            if (pass >= 0) timer_->end(passTriangles);
+            timer_->begin(dp);
+            pass = int(dp), passTriangles = 0;
+        }
         glUniform3fv(terrainOrigin_, 1, &d.origin.x);
         glUniform4fv(terrainRect_, 1, &d.rect.x);
         glm::vec4 corners[4];
@@ -232,15 +250,19 @@ std::size_t SceneDrawer::draw(const DrawList& list, const FrameConstants& consta
                        reinterpret_cast<const void*>(std::uintptr_t(d.firstIndex) * 4));
         if (perVertex) glDisableVertexArrayAttrib(vao, 5);
         triangles += std::size_t(count) / 3;
+        passTriangles += std::size_t(count) / 3;
     }
+    if (timer_ && pass >= 0) timer_->end(passTriangles);
 
     // Sky last, only where no surface was drawn (depth still 0 = infinitely far).
+    if (timer_) timer_->begin(RenderPass::Sky);
     glDisable(GL_CULL_FACE);
     glDepthFunc(GL_GEQUAL);
     glDepthMask(GL_FALSE);
     sky_.use();
     glBindVertexArray(emptyVao_.id());
     glDrawArrays(GL_TRIANGLES, 0, 3);
+    if (timer_) timer_->end(1);
     glDepthMask(GL_TRUE);
     glBindVertexArray(0);
     return triangles;

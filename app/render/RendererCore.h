@@ -23,6 +23,7 @@
 #include "app/frame/Draw.h"
 #include "app/frame/SkyLighting.h"
 #include "app/render/Gl.h"
+#include "app/render/PassTimer.h"
 #include "world/WorldMesh.h"
 
 namespace amb {
@@ -43,17 +44,20 @@ static_assert(sizeof(FrameConstants) == 2 * 64 + 7 * 16, "std140 layout of Frame
 
 // ---- ShadowConstants -------------------------------------------------------------------------
 constexpr int kMaxShadowCascades = 4;
+constexpr int kCarShadowSlot = kMaxShadowCascades;      // the car's own map
+constexpr int kFarShadowSlot = kMaxShadowCascades + 1;  // the far terrain cascade
 struct ShadowConstants {
     // Camera-relative world -> (u, v, depth, 1) of each cascade, u, v, depth in [0, 1] over the
-    // part of the layer the cascade uses; slot kMaxShadowCascades: the car's own map.
-    glm::mat4 matrix[kMaxShadowCascades + 1]{};
+    // part of the layer the cascade uses; then the car's map and the far cascade.
+    glm::mat4 matrix[kMaxShadowCascades + 2]{};
     // x: normal offset [m]; y: depth bias [depth units]; z: layer of the texture array;
     // w: the share of the layer's side the cascade uses (its texels / the layer's)
-    glm::vec4 offset[kMaxShadowCascades + 1]{};
+    glm::vec4 offset[kMaxShadowCascades + 2]{};
     // x: cascades (0: no shadows); y: 1 / layer size; z: PCF taps per side; w: 1 with the car's map
     glm::vec4 params{0.0f};
+    glm::vec4 far{0.0f};  // x: 1 with the far terrain cascade
 };
-static_assert(sizeof(ShadowConstants) == (kMaxShadowCascades + 1) * 80 + 16, "std140 layout");
+static_assert(sizeof(ShadowConstants) == (kMaxShadowCascades + 2) * 80 + 32, "std140 layout");
 
 // The shadows a draw reads: a depth texture array (GL_TEXTURE_2D_ARRAY, comparison on) and its
 // constants. texture 0 or params.x 0: no shadows.
@@ -105,6 +109,7 @@ struct ObjectBatch {
     // A proxy or far mesh standing in for the full one: the screen witnesses' outputs mark its
     // pixels as surface kind 4 (not a witness: the reference sees the real plant).
     bool simplified = false;
+    bool vehicle = false;  // the car (its own pass in the pass timing)
 };
 
 struct DrawList {
@@ -139,11 +144,15 @@ class SceneDrawer {
     std::size_t drawDepth(const DrawList& list, const glm::mat4& viewProj);
     // Tone maps `hdrTexture` into the bound framebuffer (full-screen pass, no depth).
     void drawTonemap(GLuint hdrTexture, float exposure);
+    // Times draw()'s passes (plants, car, roads, terrain, sky) into `timer` (null: none).
+    void setPassTimer(PassTimer* timer) { timer_ = timer; }
 
   private:
+    PassTimer* timer_ = nullptr;
     // Uploads every batch's instances into one buffer (grown as needed); returns their count.
     std::size_t uploadInstances(const DrawList& list);
-    std::size_t drawObjectBatches(const DrawList& list, GLint simplifiedLocation);
+    std::size_t drawObjectBatches(const DrawList& list, GLint simplifiedLocation,
+                                  PassTimer* timer = nullptr);
     GlProgram terrain_, object_, sky_, tonemap_, caster_;
     GlBuffer constants_, shadowConstants_;
     GlTexture noShadow_;  // 1 x 1 x 1 depth array bound when a draw has no shadows

@@ -262,7 +262,7 @@ void RendererScene::buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj
             vehicle_->position_m + glm::dvec3(0.0, settings_.roadLift_m, 0.0) - eye_m;
         inst.positionScale = glm::vec4(float(rel.x), float(rel.y), float(rel.z), 1.0f);
         inst.rotationSet = glm::vec2(float(vehicle_->heading_rad), float(vehicleSet));
-        out.objects.push_back({&vehicleMesh_, {inst}});
+        out.objects.push_back({&vehicleMesh_, {inst}, false, true});
         ++objects;
     }
     if (stats) {
@@ -472,7 +472,8 @@ namespace amb {
 // ---- [SECTION] Casters -----------------------------------------------------------------------
 
 void RendererScene::buildCasters(const glm::dvec3& eye_m, const glm::mat4& lightViewProj,
-                                 double texel_m, DrawList& out, bool withVehicle) {
+                                 double texel_m, DrawList& out, bool withVehicle,
+                                 bool withPlants) {
     out.clear();
     updateTerrain(eye_m);
     // frustumOf's fifth plane is depth <= 1: for the light's box, its far side. The light side
@@ -493,7 +494,7 @@ void RendererScene::buildCasters(const glm::dvec3& eye_m, const glm::mat4& light
         d.origin = glm::vec3(c.origin_m - eye_m);
         out.terrain.push_back(d);
     }
-    addPlantCasters(eye_m, lightViewProj, texel_m, false, out);
+    if (withPlants) addPlantCasters(eye_m, lightViewProj, texel_m, false, out);
     if (vehicle_ && withVehicle) {
         ObjectInstance inst;
         const glm::dvec3 rel = vehicle_->position_m - eye_m;

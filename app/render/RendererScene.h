@@ -69,7 +69,7 @@ class RendererScene {
     // kind and (withVehicle) the car, each culled to the cascade and plants at a LOD by their
     // size in texels of `texel_m` (full mesh, proxy, far mesh). No ambient is looked up.
     void buildCasters(const glm::dvec3& eye_m, const glm::mat4& lightViewProj, double texel_m,
-                      DrawList& out, bool withVehicle = true);
+                      DrawList& out, bool withVehicle = true, bool withPlants = true);
     // Shadow casters of the capture scene over a region: a terrain proxy centred on `centre_m`
     // and the trees (all of them: a tree in the near field still shades the ground the probe
     // sees), culled to the map, at the LOD of their height in texels of `texel_m` as the main

@@ -27,6 +27,9 @@ void checkShadowSettings(const ShadowSettings& s, const std::string& where) {
     need(std::isfinite(s.staticMargin) && s.staticMargin >= 0.0 && s.staticMargin <= 2.0 &&
              std::isfinite(s.nearMargin) && s.nearMargin >= 0.0 && s.nearMargin <= 2.0,
          "cascade margins", "must be 0 to 2");
+    need(s.farDistance_m == 0.0 || (std::isfinite(s.farDistance_m) &&
+                                    s.farDistance_m > s.distance_m && s.farDistance_m <= 20000.0),
+         "far cascade distance", "must be 0 (none) or beyond the cascades' end, up to 20000 m");
     need(s.carMapSize >= 16 && s.carMapSize <= s.mapSize, "car map size",
          "must be 16 to the map size");
     need(std::isfinite(s.carShadowRadius_m) && s.carShadowRadius_m >= 1.0 &&
@@ -63,7 +66,10 @@ std::string describeShadows(const ShadowSettings& s) {
           << s.distance_m << " m, PCF " << s.pcf << "x" << s.pcf << " bilinear taps";
         o << ", static casters re-rendered when the view leaves a cascade (margins "
           << s.nearMargin << ", " << s.staticMargin << "), the car in its own " << s.carMapSize
-          << "^2 map over " << s.carShadowRadius_m << " m every frame";
+          << "^2 map over " << s.carShadowRadius_m
+          << " m (with the static casters there) every frame";
+        if (s.farDistance_m > 0.0)
+            o << ", terrain to " << s.farDistance_m << " m in a far cascade";
     } else {
         o << "main view: none";
     }

@@ -41,6 +41,11 @@ struct ShadowSettings {
     double staticMargin = 0.2;  // the others
     int carMapSize = 256;
     double carShadowRadius_m = 8.0;
+    // The far terrain cascade: the terrain's (and roads') shadows from the last cascade's end
+    // out to farDistance_m around the camera (0: none), fitted to that sphere grown by
+    // staticMargin and re-rendered only when the camera leaves it or the light turns by 1
+    // degree: the terrain does not move.
+    double farDistance_m = 800.0;
     // Coarse captures: maps over regions of the capture scene, reused across captures. A probe
     // uses the map of the square cell (of side sqrt 2 (region - captureTreeRange_m)) it lies in,
     // centred on the cell, so every tree of its capture is on the map; captureMaps cells are

@@ -504,5 +504,79 @@ TEST(Renderer, TheAmbientViewIsNotShadowed) {
     EXPECT_GT(terrainInShadow, 20);
 }
 
+
+// Pass timing (--pass-timing, app/render/PassTimer.h) waits between the passes and counts
+// them; it changes no pixel. Over the highway, behind a car, at 10 h: two frames each with
+// timing on and off give the same tone-mapped and HDR images, byte for byte; with timing every
+// pass of the frame is counted: the cascades (first frame), the car's map, plants, car, roads,
+// terrain, sky, the exposure meter and the tone mapping, each geometry pass with triangles and
+// samples, and the samples of the surfaces and the sky cover the image (overdraw only adds).
+TEST(Renderer, PassTimingCountsEveryPassAndChangesNoPixel) {
+    AMB_REQUIRE_PLATFORM(platform, Backend::Auto, kW, kH);
+    const World world(WorldSettings{});
+    const Road& road = world.roads().roads().front();
+    const std::size_t i = road.centreline.size() / 3;
+    const glm::dvec3 at = road.centreline[i];
+    glm::dvec3 along = road.centreline[i + 4] - at;
+    along.y = 0.0;
+    along = glm::normalize(along);
+    CameraSample cam;
+    cam.position_m = at - 7.0 * along + glm::dvec3(0.0, 3.0, 0.0);
+    cam.forward = glm::normalize(along + glm::dvec3(0.0, -0.2, 0.0));
+    cam.up = glm::normalize(glm::cross(glm::cross(cam.forward, glm::dvec3(0, 1, 0)), cam.forward));
+    ViewState state;
+    state.vehicle = VehiclePose{at, std::atan2(along.x, along.z), 0.0};
+    struct Run {
+        std::vector<unsigned char> ldr;
+        std::vector<float> hdr;
+        std::vector<RenderStats> stats;
+    };
+    const auto run = [&](bool timed) {
+        RenderSettings rs = testSettings();
+        rs.passTiming = timed;
+        Renderer r(world, rs);
+        const FixedAmbient ambient(AmbientMode::Hemisphere, r.setTimeOfDay(10.0));
+        Run out;
+        for (int frame = 0; frame < 2; ++frame) {
+            state.time_s = frame / 30.0;
+            r.setViewState(state);
+            out.stats.push_back(r.drawView(cam, ambient));
+        }
+        out.ldr = r.readRgb8();
+        out.hdr = r.readHdr();
+        return out;
+    };
+    const Run plain = run(false), timed = run(true);
+    EXPECT_EQ(plain.ldr, timed.ldr) << "tone-mapped image";
+    EXPECT_EQ(plain.hdr, timed.hdr) << "HDR image";
+    EXPECT_FALSE(plain.stats[0].passesTimed);
+    ASSERT_TRUE(timed.stats[0].passesTimed);
+    const auto& first = timed.stats[0].passes;
+    const auto pass = [&](RenderPass p) { return first[std::size_t(int(p))]; };
+    for (RenderPass p : {RenderPass::ShadowCascades, RenderPass::ShadowCar, RenderPass::Plants,
+                         RenderPass::Car, RenderPass::Roads, RenderPass::Terrain, RenderPass::Sky,
+                         RenderPass::Exposure, RenderPass::Tonemap}) {
+        EXPECT_TRUE(pass(p).ran) << toString(p);
+        EXPECT_GE(pass(p).ms, 0.0) << toString(p);
+        if (p != RenderPass::Exposure) {
+            EXPECT_GT(pass(p).triangles, 0u) << toString(p);
+        }
+    }
+    for (RenderPass p : {RenderPass::ShadowCascades, RenderPass::Plants, RenderPass::Car,
+                         RenderPass::Roads, RenderPass::Terrain, RenderPass::Sky})
+        EXPECT_GT(pass(p).samples, 0u) << toString(p);
+    std::uint64_t covered = 0;
+    for (RenderPass p : {RenderPass::Plants, RenderPass::Car, RenderPass::Roads,
+                         RenderPass::Terrain, RenderPass::Sky})
+        covered += pass(p).samples;
+    EXPECT_GE(covered, std::uint64_t(kW) * kH);
+    // The draw's triangles are the passes' (plants, car, roads, terrain).
+    std::size_t drawn = 0;
+    for (RenderPass p : {RenderPass::Plants, RenderPass::Car, RenderPass::Roads, RenderPass::Terrain})
+        drawn += pass(p).triangles;
+    EXPECT_EQ(drawn, timed.stats[0].triangles);
+    EXPECT_EQ(pass(RenderPass::Tonemap).samples, std::uint64_t(kW) * kH);
+}
+
 }  // namespace
 }  // namespace amb
