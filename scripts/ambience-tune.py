@@ -7,7 +7,7 @@ Optuna"):
   ambience-tune.py --ambience EXE --params LIST --replays LIST --eval-replays LIST
                    --oracle reference|self --out DIR --study NAME --sampler tpe|nsga2
                    --trials N --jobs N --max-frames N --eval-max-frames N [--storage URL]
-                   [--seed N] [--no-eval] [--backend B]
+                   [--seed N] [--no-eval] [--backend B] [--command TEXT]
 
 Two objectives, both minimised, averaged over the tuning replays:
   error  the mean error against the oracle: with --oracle reference the terrain witnesses'
@@ -87,6 +87,7 @@ def parse_args(argv):
     p.add_argument("--seed", type=int, default=None)
     p.add_argument("--backend", default="auto")
     p.add_argument("--no-eval", action="store_true")
+    p.add_argument("--command", default="")
     return p.parse_args(argv)
 
 
@@ -752,9 +753,7 @@ def main(argv):
     out = os.path.abspath(args.out)
     os.makedirs(out, exist_ok=True)
     storage = args.storage or "sqlite:///" + os.path.join(out, "study.db")
-    command = "ambience tune " + " ".join(shlex.quote(a) for a in argv
-                                          if not a.startswith("--ambience") and
-                                          a != args.ambience)
+    command = args.command or "ambience-tune.py " + shlex.join(argv)
     try:
         schema = read_schema(args.ambience)
         params = parse_params(args.params, schema)

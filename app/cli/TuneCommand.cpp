@@ -175,7 +175,8 @@ void checkOptions(const TuneOptions& o) {
 // Debian's Python (the one python3-optuna installs into), else the first on PATH.
 std::string python() { return access("/usr/bin/python3", X_OK) == 0 ? "/usr/bin/python3" : "python3"; }
 
-[[noreturn]] void runTune(const TuneOptions& o) {
+// `o` as the study's summary shows its command: the options given, as typed.
+[[noreturn]] void runTune(const TuneOptions& o, const std::string& commandLine) {
     checkOptions(o);
     const std::string script = findDataFile("ambience-tune.py");
     if (script.empty())
@@ -217,6 +218,7 @@ std::string python() { return access("/usr/bin/python3", X_OK) == 0 ? "/usr/bin/
     if (!o.storage.empty()) args.insert(args.end(), {"--storage", o.storage});
     if (o.seed >= 0) args.insert(args.end(), {"--seed", std::to_string(o.seed)});
     if (o.noEval) args.push_back("--no-eval");
+    args.insert(args.end(), {"--command", commandLine});
     std::vector<char*> argv;
     for (std::string& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
@@ -270,13 +272,21 @@ void addTuneCommand(CLI::App& app) {
                   "add trials only: no outputs, no evaluation (a worker on another machine)");
     cmd->add_option("--backend", o->backend, "auto, egl or osmesa (default auto)");
     cmd->callback([o, cmd] {
+        std::string line = "ambience tune";
         for (const auto* opt : cmd->get_options()) {
-            if (opt->count() == 0 || opt->get_type_size() == 0) continue;
-            for (const std::string& value : opt->results())
+            if (opt->count() == 0 || opt->get_name() == "--help") continue;
+            line += " " + opt->get_name();
+            if (opt->get_type_size() == 0) continue;
+            for (const std::string& value : opt->results()) {
                 if (value.empty())
                     throw InputError(opt->get_name(), "an empty value (name what it means)");
+                const bool plain = value.find_first_not_of(
+                                       "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                       "0123456789-_.,:=/+@%") == std::string::npos;
+                line += plain ? " " + value : " '" + value + "'";
+            }
         }
-        runTune(*o);
+        runTune(*o, line);
     });
 }
 
