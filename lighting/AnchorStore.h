@@ -21,9 +21,10 @@
 //                          hierarchical and smooth; see AnchorStore::interpolate).
 // [SECTION] Files          save()/load() as .vdb (OpenVDB grids, inspectable with vdb_print).
 //
-// OpenVDB is used only inside AnchorStore.cpp (one int32 grid per level mapping (i, 0, k) to an
-// index into a contiguous anchor pool with a free list; in memory with smaller tree nodes than
-// the standard Int32Grid, in files as standard Int32Grids); this header does not include it.
+// OpenVDB is used only inside AnchorStoreVdb.cpp (one int32 grid per level mapping (i, 0, k) to
+// an index into a contiguous anchor pool with a free list; in memory with smaller tree nodes than
+// the standard Int32Grid, in files as standard Int32Grids); this header and AnchorStore.cpp (the
+// rest of the store, its inside in AnchorStoreImpl.h) do not include it.
 #pragma once
 
 #include <array>

@@ -22,6 +22,7 @@
 
 #include "lighting/AnchorField.h"
 #include "lighting/AnchorStore.h"
+#include "lighting/NearField.h"
 #include "lighting/ProbeEnvironment.h"
 #include "lighting/SettingsSchema.h"
 #include "world/Error.h"
@@ -549,24 +550,29 @@ std::unique_ptr<AmbienceMethod> makeCapturingMethod(const std::string& name, Cub
                                                     const ProbeEnvironment& environment,
                                                     const AmbienceVolumeSettings& volumeSettings,
                                                     const BaselineSettings& baselineSettings,
-                                                    const RoadNetwork* roads) {
+                                                    const RoadNetwork* roads,
+                                                    const NearFieldSceneMaker& nearScene) {
+    std::unique_ptr<AmbienceMethod> method;
+    // The near field as the method's own settings say (see NearField.h "Radii").
+    const NearFieldSettings* near = &baselineSettings.capture.nearField;
     if (name == "volume") {
-        return std::make_unique<AmbienceVolume>(capture, environment, volumeSettings, roads);
+        method = std::make_unique<AmbienceVolume>(capture, environment, volumeSettings, roads);
+        near = &volumeSettings.capture.nearField;
+    } else if (name == "nearest") {
+        method = std::make_unique<NearestAnchorMethod>(capture, environment, volumeSettings, roads);
+        near = &volumeSettings.capture.nearField;
+    } else if (name == "grid") {
+        method = std::make_unique<ScrollingGridMethod>(capture, environment, baselineSettings);
+    } else if (name == "reactive") {
+        method = std::make_unique<ReactiveCacheMethod>(capture, environment, baselineSettings);
+    } else if (name == "object") {
+        method = std::make_unique<PerObjectMethod>(capture, environment, baselineSettings);
+    } else {
+        throw InputError("--ambient", "unknown method '" + name +
+                                          "' (expected volume, nearest, grid, reactive or object)");
     }
-    if (name == "nearest") {
-        return std::make_unique<NearestAnchorMethod>(capture, environment, volumeSettings, roads);
-    }
-    if (name == "grid") {
-        return std::make_unique<ScrollingGridMethod>(capture, environment, baselineSettings);
-    }
-    if (name == "reactive") {
-        return std::make_unique<ReactiveCacheMethod>(capture, environment, baselineSettings);
-    }
-    if (name == "object") {
-        return std::make_unique<PerObjectMethod>(capture, environment, baselineSettings);
-    }
-    throw InputError("--ambient", "unknown method '" + name +
-                                      "' (expected volume, nearest, grid, reactive or object)");
+    if (!near->enabled || !nearScene) return method;
+    return std::make_unique<NearFieldMethod>(std::move(method), nearScene(), *near);
 }
 
 }  // namespace amb

@@ -27,6 +27,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -42,6 +43,7 @@
 namespace amb {
 
 class CubeCapture;
+class NearFieldScene;
 class ProbeEnvironment;
 class RoadNetwork;
 
@@ -322,13 +324,21 @@ class NearestAnchorMethod final : public AmbienceMethod {
 
 // ---- Factory --------------------------------------------------------------------------------
 
+// Makes the scene the near field reads (NearField.h; WorldNearFieldScene for the world drawn).
+using NearFieldSceneMaker = std::function<std::unique_ptr<NearFieldScene>()>;
+
 // The method named `name` (the --ambient option): "volume" (AmbienceVolume), "nearest", "grid",
 // "reactive" or "object". `capture`, `environment` and `roads` (may be null) must outlive it.
 // Another name throws InputError("--ambient", ...).
+// The two-scale ambience (NearField.h) is the method's own settings' to ask for: volume and
+// nearest read volumeSettings.capture.nearField, the baselines baselineSettings.capture.nearField.
+// Where that asks for it (enabled), the method comes wrapped in a NearFieldMethod over a scene
+// from `nearScene`, with those settings; without `nearScene` (the bare methods, in tests), never.
 std::unique_ptr<AmbienceMethod> makeCapturingMethod(const std::string& name, CubeCapture& capture,
                                                     const ProbeEnvironment& environment,
                                                     const AmbienceVolumeSettings& volumeSettings,
                                                     const BaselineSettings& baselineSettings,
-                                                    const RoadNetwork* roads);
+                                                    const RoadNetwork* roads,
+                                                    const NearFieldSceneMaker& nearScene = {});
 
 }  // namespace amb

@@ -613,6 +613,10 @@ class NearFieldMethod final : public AmbienceMethod {
                     const NearFieldSettings& settings);
     ~NearFieldMethod() override;
 
+    // The method whose far field this one completes.
+    AmbienceMethod& far() { return *far_; }
+    const AmbienceMethod& far() const { return *far_; }
+
     std::string methodName() const override { return far_->methodName(); }
     void predictStage(const glm::dvec3& cameraPosition_m, const glm::dvec3& cameraVelocity_mps,
                       double timeOfDay_h, double dt_s) override;

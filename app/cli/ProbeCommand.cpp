@@ -10,7 +10,7 @@
 #include "app/cli/CliChecks.h"
 #include "app/cli/Commands.h"
 #include "app/render/CubeCaptureGl.h"
-#include "app/render/Gl.h"
+#include "app/render/ShaderDirectory.h"
 #include "app/cli/OutputPaths.h"
 #include "app/platform/Platform.h"
 #include "lighting/CubeMapFile.h"

@@ -26,7 +26,7 @@
 #include "app/render/CubeCaptureGl.h"
 #include "app/render/DebugOverlay.h"
 #include "app/frame/FrameLoop.h"
-#include "app/render/Gl.h"
+#include "app/render/ShaderDirectory.h"
 #include "app/platform/Platform.h"
 #include "app/cli/OutputPaths.h"
 #include "app/cli/ReferenceLightFlags.h"

@@ -14,7 +14,6 @@
 #include <utility>
 
 #include <imgui.h>
-#include <imgui_impl_glfw.h>
 #include <imgui_stdlib.h>
 
 #include "app/frame/MethodStages.h"
@@ -102,13 +101,11 @@ TuningPanel::TuningPanel(void* window, LiveMethod& method, std::string configPat
     ImGuiIO& io = ImGui::GetIO();
     io.IniFilename = nullptr;  // no imgui.ini in the working folder
     ImGui::StyleColorsDark();
-    ImGui_ImplGlfw_InitForOpenGL(static_cast<GLFWwindow*>(window_), true);
-    renderer_ = std::make_unique<PanelRenderer>();
+    renderer_ = std::make_unique<PanelRenderer>(window_);
 }
 
 TuningPanel::~TuningPanel() {
     renderer_.reset();
-    ImGui_ImplGlfw_Shutdown();
     ImGui::DestroyContext();
 }
 
@@ -123,7 +120,6 @@ bool TuningPanel::wantsMouse() const {
 void TuningPanel::build(ViewControls& controls) {
     const auto t0 = std::chrono::steady_clock::now();
     renderer_->newFrame();
-    ImGui_ImplGlfw_NewFrame();
     ImGui::NewFrame();
     ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
     ImGui::SetNextWindowSize(ImVec2(400, 0), ImGuiCond_FirstUseEver);

@@ -88,8 +88,9 @@ struct ViewControls {
 
 class TuningPanel {
   public:
-    // Needs the window's GL context current; `window` is the GLFWwindow. `configPath`: the file
-    // Save writes and Load reads; `replayDuration_s` bounds the scrub slider (0: no replay).
+    // Needs the window's GL context current; `window` is Platform::nativeWindow (the backends
+    // are app/render/PanelRenderer.h's). `configPath`: the file Save writes and Load reads;
+    // `replayDuration_s` bounds the scrub slider (0: no replay).
     TuningPanel(void* window, LiveMethod& method, std::string configPath, double replayDuration_s);
     ~TuningPanel();
     TuningPanel(const TuningPanel&) = delete;

@@ -25,7 +25,7 @@
 #include "app/render/DebugOverlay.h"
 #include "app/frame/FrameLoop.h"
 #include "app/render/CubeCaptureGl.h"
-#include "app/render/Gl.h"
+#include "app/render/ShaderDirectory.h"
 #include "app/render/Renderer.h"
 #include "app/platform/Platform.h"
 #include "app/cli/RunReport.h"
@@ -37,8 +37,6 @@
 #include "world/Error.h"
 #include "world/TextFile.h"
 #include "world/World.h"
-// GLFW after glad (app/render/Gl.h).
-#include <GLFW/glfw3.h>
 
 namespace amb {
 
@@ -85,19 +83,15 @@ struct FreeCamera {
     }
 };
 
-bool keyDown(GLFWwindow* w, int key) {
-    return glfwGetKey(w, key) == GLFW_PRESS;
-}
-
 // Key presses (down now, up at the last look), while `enabled` (not while the panel types).
 struct KeyEdges {
-    GLFWwindow* window;
+    const Platform& window;
     bool enabled = true;
-    bool prev[GLFW_KEY_LAST + 1] = {};
-    bool pressed(int key) {
-        const bool now = keyDown(window, key);
-        const bool edge = now && !prev[key];
-        prev[key] = now;
+    bool prev[kKeyCount] = {};
+    bool pressed(Key key) {
+        const bool now = window.keyDown(key);
+        const bool edge = now && !prev[int(key)];
+        prev[int(key)] = now;
         return edge && enabled;
     }
 };
@@ -153,11 +147,10 @@ std::unique_ptr<Platform> openWindow(const Size& size) {
 // Free flight: W A S D move, Q E down / up, Shift faster, right mouse button + drag looks
 // around (the keys and the mouse only when the panel does not take them); never below 1 m
 // above the ground.
-CameraSample flyFree(GLFWwindow* window, const World& world, FreeCamera& free, double& lastX,
+CameraSample flyFree(const Platform& window, const World& world, FreeCamera& free, double& lastX,
                      double& lastY, bool keys, bool mouse) {
-    double x = 0.0, y = 0.0;
-    glfwGetCursorPos(window, &x, &y);
-    if (mouse && glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS) {
+    const auto [x, y] = window.cursorPosition();
+    if (mouse && window.mouseButtonDown(MouseButton::Right)) {
         free.yaw_rad += (x - lastX) * 0.004;
         free.pitch_rad = std::clamp(free.pitch_rad - (y - lastY) * 0.004, -1.5, 1.5);
     }
@@ -165,15 +158,15 @@ CameraSample flyFree(GLFWwindow* window, const World& world, FreeCamera& free, d
     lastY = y;
     const CameraSample s = free.sample();
     const glm::dvec3 right = glm::normalize(glm::cross(s.forward, glm::dvec3(0, 1, 0)));
-    const double speed = (keyDown(window, GLFW_KEY_LEFT_SHIFT) ? 120.0 : 20.0) * kStep_s;
+    const double speed = (window.keyDown(Key::LeftShift) ? 120.0 : 20.0) * kStep_s;
     glm::dvec3 move(0.0);
     if (!keys) return s;
-    if (keyDown(window, GLFW_KEY_W)) move += s.forward;
-    if (keyDown(window, GLFW_KEY_S)) move -= s.forward;
-    if (keyDown(window, GLFW_KEY_D)) move += right;
-    if (keyDown(window, GLFW_KEY_A)) move -= right;
-    if (keyDown(window, GLFW_KEY_E)) move.y += 1.0;
-    if (keyDown(window, GLFW_KEY_Q)) move.y -= 1.0;
+    if (window.keyDown(Key::W)) move += s.forward;
+    if (window.keyDown(Key::S)) move -= s.forward;
+    if (window.keyDown(Key::D)) move += right;
+    if (window.keyDown(Key::A)) move -= right;
+    if (window.keyDown(Key::E)) move.y += 1.0;
+    if (window.keyDown(Key::Q)) move.y -= 1.0;
     free.position += move * speed;
     const double ground = world.height(free.position.x, free.position.z) + 1.0;
     free.position.y = std::max(free.position.y, ground);
@@ -258,7 +251,6 @@ void runView(const ViewOptions& o) {
     const AmbienceVolumeSettings settings = viewSettings(o);
 
     std::unique_ptr<Platform> platform = openWindow(size);
-    GLFWwindow* window = static_cast<GLFWwindow*>(platform->nativeWindow());
     const World world(replay.world);
     RenderSettings rs;
     rs.width = size.width;
@@ -272,7 +264,7 @@ void runView(const ViewOptions& o) {
     std::unique_ptr<TuningPanel> panel;
     if (!o.noPanel) {
         panel = std::make_unique<TuningPanel>(
-            window, live, o.config.empty() ? "ambience-settings.json" : o.config,
+            platform->nativeWindow(), live, o.config.empty() ? "ambience-settings.json" : o.config,
             haveReplay ? replay.duration_s() : 0.0);
     }
     bool showPanel = panel != nullptr;
@@ -291,10 +283,10 @@ void runView(const ViewOptions& o) {
     }
     CameraRecorder recorder(replay.world, o.record);
     int screenshots = 0;
-    KeyEdges keys{window};
-    auto pressed = [&](int key) { return keys.pressed(key); };
-    double lastX = 0.0, lastY = 0.0;
-    glfwGetCursorPos(window, &lastX, &lastY);
+    KeyEdges keys{*platform};
+    auto pressed = [&](Key key) { return keys.pressed(key); };
+    const CursorPosition cursor = platform->cursorPosition();
+    double lastX = cursor.x, lastY = cursor.y;
     std::fprintf(stderr,
                  "view: %s; F follow/free, WASD+QE, right mouse look, Space pause, "
                  "arrows scrub, [ ] time, R record, P screenshot, Tab panel, Esc quit\n",
@@ -306,18 +298,18 @@ void runView(const ViewOptions& o) {
         if (panel && showPanel) panel->build(controls);
         keys.enabled = !(panel && showPanel && panel->wantsKeyboard());
         const bool mouseToView = !(panel && showPanel && panel->wantsMouse());
-        if (pressed(GLFW_KEY_ESCAPE)) break;
-        if (pressed(GLFW_KEY_TAB) && panel) showPanel = !showPanel;
-        if (pressed(GLFW_KEY_F) && haveReplay) {
+        if (pressed(Key::Escape)) break;
+        if (pressed(Key::Tab) && panel) showPanel = !showPanel;
+        if (pressed(Key::F) && haveReplay) {
             follow = !follow;
             if (!follow) free.lookAlong(replay.sampleAt(controls.replayTime_s));
         }
         double& replayTime_s = controls.replayTime_s;
-        if (pressed(GLFW_KEY_SPACE)) controls.paused = !controls.paused;
-        if (pressed(GLFW_KEY_LEFT)) replayTime_s = std::max(0.0, replayTime_s - 5.0);
-        if (pressed(GLFW_KEY_RIGHT)) replayTime_s += 5.0;
-        if (pressed(GLFW_KEY_LEFT_BRACKET)) timeOfDay_h = std::fmod(timeOfDay_h + 23.5, 24.0);
-        if (pressed(GLFW_KEY_RIGHT_BRACKET)) timeOfDay_h = std::fmod(timeOfDay_h + 0.5, 24.0);
+        if (pressed(Key::Space)) controls.paused = !controls.paused;
+        if (pressed(Key::Left)) replayTime_s = std::max(0.0, replayTime_s - 5.0);
+        if (pressed(Key::Right)) replayTime_s += 5.0;
+        if (pressed(Key::LeftBracket)) timeOfDay_h = std::fmod(timeOfDay_h + 23.5, 24.0);
+        if (pressed(Key::RightBracket)) timeOfDay_h = std::fmod(timeOfDay_h + 0.5, 24.0);
         renderer.setViewOutput(controls.ambientView ? RenderOutput::Ambient : RenderOutput::Shaded);
 
         // Camera for this frame.
@@ -326,11 +318,11 @@ void runView(const ViewOptions& o) {
         if (follow) {
             cam = followReplay(replay, controls, step_s, o.time_h < 0.0, timeOfDay_h);
         } else {
-            cam = flyFree(window, world, free, lastX, lastY, keys.enabled, mouseToView);
+            cam = flyFree(*platform, world, free, lastX, lastY, keys.enabled, mouseToView);
         }
 
         // Record the camera at the fixed step.
-        if (pressed(GLFW_KEY_R)) recorder.toggle(timeOfDay_h);
+        if (pressed(Key::R)) recorder.toggle(timeOfDay_h);
         recorder.add(cam);
 
         // Every stage of the frame (FrameLoop), on the window's camera and clocks.
@@ -361,7 +353,7 @@ void runView(const ViewOptions& o) {
         if (panel && showPanel) panel->render(platform->width(), platform->height());
 
         const bool last = o.frames > 0 && frame + 1 >= o.frames;
-        saveShots(o, pressed(GLFW_KEY_P), last, renderer, *platform, screenshots);
+        saveShots(o, pressed(Key::P), last, renderer, *platform, screenshots);
         platform->swapBuffers();
         if (last) break;
     }

@@ -121,18 +121,15 @@ MethodAmbienceStages::MethodAmbienceStages(std::unique_ptr<CubeCapture> capture,
     if (method == "constant" || method == "hemisphere") {
         method_ = std::make_unique<FixedMethod>(parseAmbientMode(method, "--ambient"), world.sky());
     } else {
-        method_ = makeCapturingMethod(method, *capture_, *environment_, settings, baselines,
-                                      &world.roads());
-        volume_ = dynamic_cast<AmbienceVolume*>(method_.get());
         // The two-scale ambience: the method's own settings say whether its captures leave the
-        // near plants out; then every shading point gets them back (lighting/NearField.h).
-        const bool ours = method == "volume" || method == "nearest";
-        const NearFieldSettings& near =
-            ours ? settings.capture.nearField : baselines.capture.nearField;
-        if (near.enabled) {
-            method_ = std::make_unique<NearFieldMethod>(
-                std::move(method_), std::make_unique<WorldNearFieldScene>(world), near);
-        }
+        // near plants out; then the factory wraps it so that every shading point gets them
+        // back, from the world drawn (lighting/NearField.h).
+        method_ = makeCapturingMethod(method, *capture_, *environment_, settings, baselines,
+                                      &world.roads(), [&world] {
+                                          return std::make_unique<WorldNearFieldScene>(world);
+                                      });
+        auto* near = dynamic_cast<NearFieldMethod*>(method_.get());
+        volume_ = dynamic_cast<AmbienceVolume*>(near ? &near->far() : method_.get());
     }
     ambient_ = std::make_unique<MethodAmbient>(*method_);
 }

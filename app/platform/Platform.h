@@ -20,6 +20,19 @@ enum class Backend { Auto, Egl, OsMesa, Glfw };
 Backend parseBackend(const std::string& text, const std::string& where);
 const char* toString(Backend backend);
 
+// The keys and mouse buttons the viewer reads (`ambience view`), so that nothing above the
+// platform names GLFW's.
+enum class Key {
+    W, A, S, D, Q, E, LeftShift,                         // free flight
+    Escape, Tab, F, Space, Left, Right, LeftBracket, RightBracket, R, P,  // commands
+};
+inline constexpr int kKeyCount = int(Key::P) + 1;
+enum class MouseButton { Left, Right };
+// The cursor in screen coordinates from the window's top left corner.
+struct CursorPosition {
+    double x = 0.0, y = 0.0;
+};
+
 class Platform {
   public:
     virtual ~Platform() = default;
@@ -33,8 +46,20 @@ class Platform {
     virtual void swapBuffers() {}
     virtual void pollEvents() {}
     virtual bool shouldClose() const { return false; }
-    // The native window (GLFWwindow*) for input handling, or nullptr.
+    // The native window (GLFWwindow*) for the panel's input backend (app/render/PanelRenderer.h),
+    // or nullptr.
     virtual void* nativeWindow() const { return nullptr; }
+    // Window only: the keyboard and the mouse as of the last pollEvents; offscreen: nothing is
+    // pressed and the cursor stays at (0, 0).
+    virtual bool keyDown(Key key) const {
+        (void)key;
+        return false;
+    }
+    virtual bool mouseButtonDown(MouseButton button) const {
+        (void)button;
+        return false;
+    }
+    virtual CursorPosition cursorPosition() const { return {}; }
 
     // GL_VERSION and GL_RENDERER of the current context.
     std::string glVersion() const;

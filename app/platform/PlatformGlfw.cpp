@@ -8,6 +8,29 @@
 namespace amb {
 namespace {
 
+int glfwKey(Key key) {
+    switch (key) {
+        case Key::W: return GLFW_KEY_W;
+        case Key::A: return GLFW_KEY_A;
+        case Key::S: return GLFW_KEY_S;
+        case Key::D: return GLFW_KEY_D;
+        case Key::Q: return GLFW_KEY_Q;
+        case Key::E: return GLFW_KEY_E;
+        case Key::LeftShift: return GLFW_KEY_LEFT_SHIFT;
+        case Key::Escape: return GLFW_KEY_ESCAPE;
+        case Key::Tab: return GLFW_KEY_TAB;
+        case Key::F: return GLFW_KEY_F;
+        case Key::Space: return GLFW_KEY_SPACE;
+        case Key::Left: return GLFW_KEY_LEFT;
+        case Key::Right: return GLFW_KEY_RIGHT;
+        case Key::LeftBracket: return GLFW_KEY_LEFT_BRACKET;
+        case Key::RightBracket: return GLFW_KEY_RIGHT_BRACKET;
+        case Key::R: return GLFW_KEY_R;
+        case Key::P: return GLFW_KEY_P;
+    }
+    return GLFW_KEY_UNKNOWN;
+}
+
 class PlatformGlfw final : public Platform {
   public:
     PlatformGlfw(int width, int height, const std::string& title, bool visible) {
@@ -54,6 +77,19 @@ class PlatformGlfw final : public Platform {
     void pollEvents() override { glfwPollEvents(); }
     bool shouldClose() const override { return glfwWindowShouldClose(window_); }
     void* nativeWindow() const override { return window_; }
+    bool keyDown(Key key) const override {
+        const int k = glfwKey(key);
+        return k != GLFW_KEY_UNKNOWN && glfwGetKey(window_, k) == GLFW_PRESS;
+    }
+    bool mouseButtonDown(MouseButton button) const override {
+        const int b = button == MouseButton::Left ? GLFW_MOUSE_BUTTON_LEFT : GLFW_MOUSE_BUTTON_RIGHT;
+        return glfwGetMouseButton(window_, b) == GLFW_PRESS;
+    }
+    CursorPosition cursorPosition() const override {
+        CursorPosition c;
+        glfwGetCursorPos(window_, &c.x, &c.y);
+        return c;
+    }
 
   private:
     GLFWwindow* window_ = nullptr;

@@ -11,6 +11,8 @@
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
+#include "app/render/ShaderDirectory.h"
+
 namespace amb {
 
 // One GL object name with its delete function; movable, not copyable.
@@ -55,12 +57,6 @@ using GlFramebuffer = GlName<glDeleteFramebufferName>;
 GlBuffer makeBuffer(const void* data, size_t bytes, GLbitfield flags = 0);
 GlVertexArray makeVertexArray();
 GlTexture makeTexture2D(GLenum internalFormat, int width, int height, int levels = 1);
-
-// The folder the renderer loads GLSL from: $AMBIENCE_SHADER_DIR if set, else the first
-// `shaders` data folder (world/DataPaths.h): P/share/ambience/shaders for an installed program,
-// <executable dir>/../shaders in the build tree.
-std::string shaderDirectory();
-void setShaderDirectory(const std::string& dir);  // overrides both (the --shaders option)
 
 // Reads a shader file and resolves `#include "name"` lines against the shader folder (the same
 // GL_GOOGLE_include_directive syntax glslangValidator checks at build time).

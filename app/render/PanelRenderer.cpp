@@ -1,4 +1,5 @@
-// PanelRenderer.cpp — Dear ImGui's OpenGL 3 backend over the window (see PanelRenderer.h).
+// PanelRenderer.cpp — Dear ImGui's GLFW and OpenGL 3 backends over the window (see
+// PanelRenderer.h).
 #include "app/render/PanelRenderer.h"
 
 #include <algorithm>
@@ -6,23 +7,28 @@
 #include "app/render/Gl.h"
 // The backend's header after glad: the backend itself was built against glad's entry points.
 #include <imgui.h>
+#include <imgui_impl_glfw.h>
 #include <imgui_impl_opengl3.h>
 
 #include "world/Error.h"
 
 namespace amb {
 
-PanelRenderer::PanelRenderer() {
+PanelRenderer::PanelRenderer(void* window) {
+    // The window's input first (installs its callbacks, chaining the window's own).
+    ImGui_ImplGlfw_InitForOpenGL(static_cast<GLFWwindow*>(window), true);
     // GLSL 4.10 core and up take the backend's core shaders; the contexts here are 4.5 core.
     AMB_CHECK(ImGui_ImplOpenGL3_Init("#version 450 core"));
 }
 
 PanelRenderer::~PanelRenderer() {
     ImGui_ImplOpenGL3_Shutdown();
+    ImGui_ImplGlfw_Shutdown();
 }
 
 void PanelRenderer::newFrame() {
     ImGui_ImplOpenGL3_NewFrame();
+    ImGui_ImplGlfw_NewFrame();
 }
 
 void PanelRenderer::draw(ImDrawData* data, int windowWidth, int windowHeight) {

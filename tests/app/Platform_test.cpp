@@ -57,6 +57,24 @@ TEST(Platform, OsMesaGivesCore45Context) {
     expectClearReadsBack(*p);
 }
 
+// The viewer reads its keys and mouse through the platform (Platform::keyDown ...): an offscreen
+// platform has no window, so nothing is ever pressed and the cursor stays at the origin.
+TEST(Platform, OffscreenHasNoKeyboardOrMouse) {
+    std::unique_ptr<Platform> p;
+    try {
+        p = createOffscreenPlatform(Backend::Auto, 16, 16);
+    } catch (const PlatformUnavailable& e) {
+        GTEST_SKIP() << e.what();
+    }
+    p->pollEvents();
+    for (int k = 0; k < kKeyCount; ++k) EXPECT_FALSE(p->keyDown(Key(k))) << "key " << k;
+    EXPECT_FALSE(p->mouseButtonDown(MouseButton::Left));
+    EXPECT_FALSE(p->mouseButtonDown(MouseButton::Right));
+    EXPECT_EQ(p->cursorPosition().x, 0.0);
+    EXPECT_EQ(p->cursorPosition().y, 0.0);
+    EXPECT_EQ(p->nativeWindow(), nullptr);
+}
+
 TEST(Platform, AutoFallsBackAndRejectsBadSizes) {
     EXPECT_THROW(createOffscreenPlatform(Backend::Auto, 0, 0), InputError);
     EXPECT_THROW(parseBackend("vulkan", "--backend"), InputError);

@@ -18,6 +18,7 @@
 
 #include "FakeCubeCapture.h"
 #include "lighting/CubeMapProjector.h"
+#include "lighting/NearField.h"
 #include "world/Error.h"
 
 namespace amb {
@@ -589,6 +590,61 @@ TEST(Baselines, FactoryNamesAndUnknownName) {
         ADD_FAILURE() << "no error for an empty name";
     } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find("--ambient"), std::string::npos);
+    }
+}
+
+// A scene with nothing near: the near field's wrapping, not what it puts back, is on trial.
+struct EmptyNearScene final : NearFieldScene {
+    void occludersNear(const glm::dvec3&, double, double, std::vector<SphereOccluder>&) const override {}
+    DirectionalLight mainLight(double) const override { return {}; }
+    HemisphereAmbient ambient(double) const override {
+        return {glm::dvec3(1.0, 1.1, 1.3), glm::dvec3(0.3, 0.3, 0.2)};
+    }
+    double groundHeight(double, double) const override { return 0.0; }
+};
+
+TEST(Baselines, FactoryWrapsTheNearFieldWhereTheMethodsOwnSettingsAskForIt) {
+    FakeCubeCapture capture(kFace);
+    FlatProbeEnvironment environment;
+    int scenesMade = 0;
+    const NearFieldSceneMaker scene = [&scenesMade] {
+        ++scenesMade;
+        return std::make_unique<EmptyNearScene>();
+    };
+    for (const char* name : {"volume", "nearest", "grid", "reactive", "object"}) {
+        const bool ours = std::string(name) == "volume" || std::string(name) == "nearest";
+        for (const bool volumeAsks : {false, true}) {
+            for (const bool baselineAsks : {false, true}) {
+                AmbienceVolumeSettings vs;
+                BaselineSettings bs;
+                vs.capture.nearField.enabled = volumeAsks;
+                bs.capture.nearField.enabled = baselineAsks;
+                // The sky detail follows the near field's terrain switch: the two settings
+                // differ there, so the wrapper shows whose settings it was given.
+                vs.capture.nearField.terrain = true;
+                vs.capture.nearField.vertexDetail = true;
+                bs.capture.nearField.terrain = false;
+                const bool asks = ours ? volumeAsks : baselineAsks;
+                const std::string where = std::string(name) + (volumeAsks ? " volume asks" : "") +
+                                          (baselineAsks ? " baseline asks" : "");
+                const int before = scenesMade;
+                const auto method =
+                    makeCapturingMethod(name, capture, environment, vs, bs, nullptr, scene);
+                ASSERT_TRUE(method) << where;
+                EXPECT_EQ(method->methodName(), name) << where;
+                const auto* near = dynamic_cast<const NearFieldMethod*>(method.get());
+                EXPECT_EQ(near != nullptr, asks) << where;
+                EXPECT_EQ(scenesMade - before, asks ? 1 : 0) << where;
+                if (near) {
+                    EXPECT_EQ(near->far().methodName(), name) << where;
+                    EXPECT_EQ(dynamic_cast<const NearFieldMethod*>(&near->far()), nullptr) << where;
+                    EXPECT_EQ(near->terrainSkyDetail(), ours) << where;
+                }
+                // Without a scene to read, the bare method whatever the settings.
+                const auto bare = makeCapturingMethod(name, capture, environment, vs, bs, nullptr);
+                EXPECT_EQ(dynamic_cast<const NearFieldMethod*>(bare.get()), nullptr) << where;
+            }
+        }
     }
 }
 
