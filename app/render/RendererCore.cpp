@@ -220,9 +220,13 @@ std::size_t SceneDrawer::draw(const DrawList& list, const FrameConstants& consta
                              GLsizeiptr(list.vertexIrradiance.size() * sizeof(glm::vec3)),
                              list.vertexIrradiance.data());
     }
+    // Road pieces before the terrain patches: a road lies on the terrain, so the early depth
+    // test then skips shading the terrain under it.
     int pass = -1;
     std::size_t passTriangles = 0;
+    for (int roads = 1; roads >= 0; --roads)
     for (const TerrainDraw& d : list.terrain) {
+        if ((d.firstVertexIrradiance >= 0) != (roads == 1)) continue;
         const RenderPass dp = d.firstVertexIrradiance >= 0 ? RenderPass::Roads : RenderPass::Terrain;
         if (timer_ && int(dp) != pass) {
             if (pass >= 0) timer_->end(passTriangles);

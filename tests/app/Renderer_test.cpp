@@ -580,3 +580,132 @@ TEST(Renderer, PassTimingCountsEveryPassAndChangesNoPixel) {
 
 }  // namespace
 }  // namespace amb
+
+namespace amb {
+namespace {
+// Night frames read: the day time-lapse's view (replays/day-timelapse.json: its world and
+// camera) at 21:50, lit by the moon (the main light at night, world/Sky.h) and the night sky,
+// tone mapped with the exposure metered on the frame, has a mean display luminance (Rec. 709
+// weights on the 8-bit values) of at least 20 of 255, and stays below the same view at dusk
+// (20:00) and at noon: the night is readable but darker than the day.
+TEST(Renderer, NightFramesReadAndStayDarkerThanDusk) {
+    AMB_REQUIRE_PLATFORM(platform, Backend::Auto, kW, kH);
+    const World world(WorldSettings{});
+    CameraSample cam;
+    cam.position_m = glm::dvec3(-4200.0, 11.279953818851169, -5000.0);
+    cam.forward = glm::dvec3(0.8627299156628211, 0.08715574274765818, 0.4980973490458726);
+    cam.up = glm::dvec3(-0.07547908730517336, 0.9961946980917455, -0.043577871373829076);
+    const auto meanLuminance = [&](double h, SkyLighting* skyOut) {
+        Renderer r(world, testSettings());
+        const SkyLighting& sky = r.setTimeOfDay(h);
+        if (skyOut) *skyOut = sky;
+        const FixedAmbient ambient(AmbientMode::Hemisphere, sky);
+        r.render(cam, ambient);
+        const std::vector<unsigned char> ldr = r.readRgb8();
+        double sum = 0.0;
+        for (std::size_t i = 0; i + 2 < ldr.size(); i += 3)
+            sum += luminance(glm::vec3(ldr[i], ldr[i + 1], ldr[i + 2]));
+        return sum / double(ldr.size() / 3);
+    };
+    SkyLighting night;
+    const double atNight = meanLuminance(21.0 + 50.0 / 60.0, &night);
+    const double atDusk = meanLuminance(20.0, nullptr), atNoon = meanLuminance(12.0, nullptr);
+    ::testing::Test::RecordProperty("nightMean", std::to_string(atNight));
+    ::testing::Test::RecordProperty("duskMean", std::to_string(atDusk));
+    EXPECT_GT(night.lightDir.y, 0.0f) << "the moon is up at 21:50";
+    EXPECT_GE(atNight, 20.0);
+    EXPECT_LT(atNight, atDusk);
+    EXPECT_LT(atNight, atNoon);
+}
+}  // namespace
+}  // namespace amb
+
+namespace amb {
+namespace {
+// The far terrain cascade (ShadowSettings::farDistance_m) shades terrain beyond the cascades:
+// at 18 h (the sun about 10 degrees up), 150 m above the most rugged of 49 spots, looking across
+// the light 14 degrees down, with the far cascade to 800 m and without. Of the pixels whose
+// surface lies within 780 m but outside every cascade's map (across the light, beyond the
+// corner of its square), at least 3 % are in shadow with it (luminance below 0.7 x the same
+// pixel without it: without it no map covers them, so they are lit). Well inside a cascade
+// (within 0.85 of its radius across the light, away from the hand-over band) the two images are
+// the same.
+TEST(Renderer, TheFarCascadeShadesTerrainBeyondTheCascades) {
+    AMB_REQUIRE_PLATFORM(platform, Backend::Auto, kW, kH);
+    const World world(WorldSettings{});
+    const double h = 18.0;
+    RenderSettings nearOnly = testSettings(), withFar = testSettings();
+    nearOnly.shadows.farDistance_m = 0.0;
+    withFar.shadows.farDistance_m = 800.0;
+    Renderer a(world, nearOnly), b(world, withFar);
+    const SkyLighting& sky = a.setTimeOfDay(h);
+    b.setTimeOfDay(h);
+    const FixedAmbient ambient(AmbientMode::Hemisphere, sky);
+    CameraSample cam;
+    // The most rugged of a few spots: the widest spread of heights 400 m around it.
+    double x = 0.0, z = 0.0, best = -1.0;
+    for (int i = -3; i <= 3; ++i)
+        for (int k = -3; k <= 3; ++k) {
+            const double cx = 1500.0 * i, cz = 1500.0 * k;
+            double lo = 1e9, hi = -1e9;
+            for (int a = 0; a < 16; ++a) {
+                const double y = world.height(cx + 400.0 * std::cos(a * 0.3927),
+                                              cz + 400.0 * std::sin(a * 0.3927));
+                lo = std::min(lo, y), hi = std::max(hi, y);
+            }
+            if (hi - lo > best) best = hi - lo, x = cx, z = cz;
+        }
+    cam.position_m = glm::dvec3(x, world.height(x, z) + 150.0, z);
+    // Across the light: cast shadows lie beside what casts them.
+    const glm::dvec3 sideways = glm::normalize(glm::dvec3(-sky.lightDir.z, 0.0, sky.lightDir.x));
+    cam.forward = glm::normalize(sideways + glm::dvec3(0.0, -0.25, 0.0));
+    cam.up = glm::normalize(glm::cross(glm::cross(cam.forward, glm::dvec3(0, 1, 0)), cam.forward));
+    a.render(cam, ambient, RenderOutput::Albedo);
+    const SurfaceImage surface = a.readSurface(cam);
+    a.render(cam, ambient);
+    b.render(cam, ambient);
+    const std::vector<float> off = a.readHdr(), on = b.readHdr();
+    int far = 0, farShadowed = 0, nearPixels = 0, nearDiffer = 0;
+    // Outside every cascade's map: across the light, further from its centre than the corner of
+    // its square (half-side its radius).
+    const ShadowMap& maps = *a.shadowMap();
+    const glm::dvec3 light = glm::normalize(glm::dvec3(sky.lightDir));
+    // A cascade covers what lies across the light within its square (half-side its radius);
+    // the last one hands over to the far cascade in its outer tenth.
+    const auto across = [&](const glm::vec3& rel, int k) {
+        const glm::dvec3 d = cam.position_m + glm::dvec3(rel) - maps.centre(k);
+        return glm::length(d - glm::dot(d, light) * light) / maps.radius(k);
+    };
+    const auto beyondCascades = [&](const glm::vec3& rel) {
+        for (int k = 0; k < nearOnly.shadows.cascades; ++k)
+            if (across(rel, k) <= 1.415) return false;
+        return true;
+    };
+    const auto wellInside = [&](const glm::vec3& rel) {
+        for (int k = 0; k < nearOnly.shadows.cascades; ++k)
+            if (across(rel, k) <= 0.85) return true;
+        return false;
+    };
+    for (std::size_t p = 0; p < std::size_t(kW) * kH; ++p) {
+        if (!(surface.rgba[4 * p + 3] > 0.0f)) continue;
+        const double d = glm::length(surface.position[p]);
+        const auto lum = [&](const std::vector<float>& v) {
+            return luminance(glm::vec3(v[3 * p], v[3 * p + 1], v[3 * p + 2]));
+        };
+        if (wellInside(surface.position[p])) {
+            ++nearPixels;
+            nearDiffer += lum(on) != lum(off);
+        } else if (d < 780.0 && beyondCascades(surface.position[p])) {
+            ++far;
+            farShadowed += lum(on) < 0.7f * lum(off);
+        }
+    }
+    ::testing::Test::RecordProperty("farPixels", far);
+    ::testing::Test::RecordProperty("farShadowed", farShadowed);
+    ASSERT_GT(far, 500);
+    EXPECT_GT(farShadowed, far * 3 / 100);
+    EXPECT_GT(nearPixels, 100);
+    EXPECT_EQ(nearDiffer, 0);
+}
+}  // namespace
+}  // namespace amb
