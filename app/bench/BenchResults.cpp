@@ -1,0 +1,629 @@
+// BenchResults.cpp — results.csv, summary.md and the plots of `ambience bench` (BenchResults.h).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <sstream>
+
+#include "app/bench/BenchCollect.h"
+#include "app/bench/BenchResults.h"
+#include "app/bench/BenchRunner.h"
+#include "app/bench/BenchStats.h"
+#include "world/DataPaths.h"
+#include "world/Error.h"
+#include "world/TextFile.h"
+
+namespace amb::bench {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// The object at `key` of `j`, or an empty object (a report read back may hold anything).
+const json& objectAt(const json& j, const char* key) {
+    static const json empty = json::object();
+    if (!j.is_object()) return empty;
+    const auto it = j.find(key);
+    return it != j.end() && it->is_object() ? *it : empty;
+}
+
+// The string at `key` of `j`, or `fallback`.
+std::string stringAt(const json& j, const char* key, const std::string& fallback) {
+    if (!j.is_object()) return fallback;
+    const auto it = j.find(key);
+    return it != j.end() && it->is_string() ? it->get<std::string>() : fallback;
+}
+
+const std::vector<std::string> kColumns = {"replay",
+                                           "method",
+                                           "point",
+                                           "params",
+                                           "status",
+                                           "error_message",
+                                           "frames",
+                                           "measured_frames",
+                                           "error_mean",
+                                           "error_p50",
+                                           "error_p95",
+                                           "error_max",
+                                           "error_ring0_mean",
+                                           "error_ring1_mean",
+                                           "error_ring2_mean",
+                                           "error_ring3_mean",
+                                           "error_ring0_p95",
+                                           "error_ring1_p95",
+                                           "error_ring2_p95",
+                                           "error_ring3_p95",
+                                           "error_ring0_max",
+                                           "error_ring1_max",
+                                           "error_ring2_max",
+                                           "error_ring3_max",
+                                           "pop_p99",
+                                           "pop_max",
+                                           "pop_move_p99",
+                                           "pop_move_max",
+                                           "ambience_ms_median",
+                                           "ambience_ms_p95",
+                                           "frame_ms_median",
+                                           "frame_ms_p95",
+                                           "predict_ms_median",
+                                           "predict_ms_p95",
+                                           "capture_ms_median",
+                                           "capture_ms_p95",
+                                           "store_ms_median",
+                                           "store_ms_p95",
+                                           "interpolate_ms_median",
+                                           "interpolate_ms_p95",
+                                           "lookup_ms_median",
+                                           "lookup_ms_p95",
+                                           "share_of_frame",
+                                           "faces_per_s",
+                                           "faces_captured",
+                                           "probes_max",
+                                           "probes_end",
+                                           "bytes_max",
+                                           "bytes_end",
+                                           "teleports",
+                                           "rejected_probes",
+                                           "mean_speed_mps",
+                                           "oracle_s",
+                                           "oracle",
+                                           "self_error_mean",
+                                           "budget_witnesses",
+                                           "budget_total_rms",
+                                           "budget_truncation",
+                                           "budget_capture",
+                                           "budget_spacing",
+                                           "budget_schedule",
+                                           "budget_closure",
+                                           "car_error_mean",
+                                           "tree_base_error_mean",
+                                           "tree_crown_error_mean",
+                                           "screen_error_mean",
+                                           "screen_terrain_error_mean",
+                                           "screen_road_error_mean",
+                                           "screen_object_error_mean",
+                                           "screen_witnesses",
+                                           "drawn_error_mean",
+                                           "drawn_error_p95",
+                                           "drawn_witnesses",
+                                           "drawn_under_crown_error_mean",
+                                           "drawn_under_crown_witnesses",
+                                           "drawn_hidden_witnesses",
+                                           "reference_s",
+                                           "wall_s",
+                                           "run_dir"};
+
+std::map<std::string, std::string> resultRow(const Job& job) {
+    std::map<std::string, std::string> row;
+    auto put = [&](const std::string& key, double v) {
+        if (!std::isfinite(v)) return;
+        char text[64];
+        std::snprintf(text, sizeof(text), "%.6g", v);
+        row[key] = text;
+    };
+    row["replay"] = job.replay.name;
+    row["method"] = job.method;
+    row["point"] = job.point.label;
+    row["params"] = job.point.params;
+    row["status"] = job.ok ? "ok" : "failed";
+    row["error_message"] = job.error;
+    row["run_dir"] = job.runDir;
+    put("wall_s", job.wall_s);
+    if (!job.ok) return row;
+    const json& r = job.report;
+    put("frames", number(r, {"frameCount"}));
+    const json m = objectAt(r, "measurement");
+    put("measured_frames", number(m, {"measuredFrames"}));
+    put("error_mean", number(m, {"error", "mean"}));
+    put("error_p50", number(m, {"error", "p50"}));
+    put("error_p95", number(m, {"error", "p95"}));
+    put("error_max", number(m, {"error", "max"}));
+    if (m.contains("errorByRing") && m["errorByRing"].is_array()) {
+        for (std::size_t ring = 0; ring < m["errorByRing"].size() && ring < 4; ++ring) {
+            const json& e = m["errorByRing"][ring];
+            const std::string name = "error_ring" + std::to_string(ring);
+            put(name + "_mean", number(e, {"mean"}));
+            put(name + "_p95", number(e, {"p95"}));
+            put(name + "_max", number(e, {"max"}));
+        }
+    }
+    put("pop_p99", number(m, {"pop", "p99"}));
+    put("pop_max", number(m, {"pop", "max"}));
+    put("pop_move_p99", number(m, {"pop_move", "p99"}));
+    put("pop_move_max", number(m, {"pop_move", "max"}));
+    put("mean_speed_mps", number(m, {"meanSpeed_mps"}));
+    put("oracle_s", number(m, {"oracle_s"}));
+    row["oracle"] = stringAt(m, "oracle", "self");
+    if (m.contains("reference")) {
+        const json& ref = m["reference"];
+        const json& b = objectAt(ref, "budget");
+        put("self_error_mean", number(b, {"selfError", "mean"}));
+        put("budget_witnesses", number(b, {"count"}));
+        put("budget_total_rms", number(b, {"rmsTotal"}));
+        for (const char* term : {"truncation", "capture", "spacing", "schedule", "closure"})
+            put(std::string("budget_") + term, number(b, {term}));
+        for (const char* kind : {"car", "tree_base", "tree_crown"})
+            put(std::string(kind) + "_error_mean", number(ref, {"objects", kind, "error", "mean"}));
+        put("reference_s", number(ref, {"reference_s"}));
+        if (number(ref, {"drawn", "error", "count"}) > 0) {
+            put("drawn_error_mean", number(ref, {"drawn", "error", "mean"}));
+            put("drawn_error_p95", number(ref, {"drawn", "error", "p95"}));
+            put("drawn_witnesses", number(ref, {"drawn", "error", "count"}));
+            put("drawn_under_crown_error_mean", number(ref, {"drawn", "underCrown", "mean"}));
+            put("drawn_under_crown_witnesses", number(ref, {"drawn", "underCrown", "count"}));
+            put("drawn_hidden_witnesses", number(ref, {"drawn", "hidden"}));
+        }
+        if (number(ref, {"screen", "error", "count"}) > 0) {
+            put("screen_error_mean", number(ref, {"screen", "error", "mean"}));
+            put("screen_witnesses", number(ref, {"screen", "error", "count"}));
+            for (const char* kind : {"terrain", "road", "object"})
+                if (number(ref, {"screen", kind, "count"}) > 0)
+                    put(std::string("screen_") + kind + "_error_mean",
+                        number(ref, {"screen", kind, "mean"}));
+        }
+    }
+    put("ambience_ms_median", number(r, {"ambience", "ambience_ms", "median"}));
+    put("ambience_ms_p95", number(r, {"ambience", "ambience_ms", "p95"}));
+    put("frame_ms_median", number(r, {"frame_ms", "median"}));
+    put("frame_ms_p95", number(r, {"frame_ms", "p95"}));
+    for (const char* stage : {"predict", "capture", "store", "interpolate"}) {
+        put(std::string(stage) + "_ms_median", number(r, {"stages_ms", stage, "median"}));
+        put(std::string(stage) + "_ms_p95", number(r, {"stages_ms", stage, "p95"}));
+    }
+    put("lookup_ms_median", number(r, {"ambience", "lookup_ms", "median"}));
+    put("lookup_ms_p95", number(r, {"ambience", "lookup_ms", "p95"}));
+    put("share_of_frame", number(r, {"ambience", "shareOfFrameTime"}));
+    put("faces_per_s", number(r, {"ambience", "facesPerSecond"}));
+    put("faces_captured", number(r, {"ambience", "facesCaptured"}));
+    put("probes_max", number(r, {"ambience", "anchorsMax"}));
+    put("probes_end", number(r, {"ambience", "anchorsEnd"}));
+    put("bytes_max", number(r, {"ambience", "bytesMax"}));
+    put("bytes_end", number(r, {"ambience", "bytesEnd"}));
+    put("teleports", number(r, {"ambience", "teleports"}));
+    put("rejected_probes", number(r, {"ambience", "rejectedProbes"}));
+    return row;
+}
+
+std::string fmt(double v, const char* format) {
+    if (!std::isfinite(v)) return "—";
+    char text[64];
+    std::snprintf(text, sizeof(text), format, v);
+    return text;
+}
+
+// With --budgets: per replay, each method's mean error and ambience ms at each budget (the
+// default point's family), ours against the best other method at that budget, and the Pareto
+// front over every run of the replay (no other run both cheaper and more accurate).
+// The headline error of a run over its measured frames up to `lastFrame`, from the run's CSV:
+// the terrain witnesses of reference.csv with the reference oracle, else measure.csv's
+// per-frame means (every measured frame has the same witnesses). NaN without data.
+double errorUpTo(const std::string& dir, const Job& j, int lastFrame) {
+    const bool reference =
+        stringAt(objectAt(j.report, "measurement"), "oracle", "") == "reference";
+    std::stringstream in;
+    try {
+        in.str(readTextFile(
+            (fs::path(dir) / j.runDir / (reference ? "reference.csv" : "measure.csv")).string(),
+            "measurement file", kMaxOracleFileBytes, Links::Refuse));
+    } catch (const InputError&) {
+        return std::nan("");
+    }
+    std::string line;
+    if (!std::getline(in, line)) return std::nan("");
+    double sum = 0.0;
+    std::size_t count = 0;
+    while (std::getline(in, line)) {
+        std::vector<std::string> f;
+        std::stringstream ss(line);
+        for (std::string cell; std::getline(ss, cell, ',');) f.push_back(cell);
+        if (f.size() < 6) continue;
+        if (std::atoi(f[0].c_str()) > lastFrame) continue;
+        if (reference && f[1].rfind("ring_", 0) != 0) continue;  // objects are not headline
+        const double e = std::atof(f[reference ? 5 : 4].c_str());
+        if (std::isfinite(e)) sum += e, ++count;
+    }
+    return count ? sum / double(count) : std::nan("");
+}
+
+// Our run against another of the same replay: the ratio of mean errors over the frames both
+// measured, with its paired bootstrap 95 % interval (BenchStats.h).
+// With `drawn`, the terrain witnesses' errors at the drawn normal (reference runs only).
+RatioInterval ratioAgainst(const std::string& dir, const Job& ours, const Job& other,
+                           bool drawn = false) {
+    const bool reference =
+        stringAt(objectAt(ours.report, "measurement"), "oracle", "") == "reference";
+    const auto errors = [&](const Job& j) {
+        return readFrameErrors((fs::path(dir) / j.runDir).string(), reference, drawn);
+    };
+    return pairedBootstrapRatio(errors(ours), errors(other));
+}
+
+void writeBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
+                        const std::vector<std::string>& replays, int fullLengthBudget,
+                        const std::string& dir) {
+    std::vector<int> budgets;
+    std::vector<std::string> methods;
+    for (const Job& j : jobs) {
+        if (j.point.family.empty()) return;  // no --budgets
+        if (std::find(budgets.begin(), budgets.end(), j.point.facesPerFrame) == budgets.end())
+            budgets.push_back(j.point.facesPerFrame);
+        if (std::find(methods.begin(), methods.end(), j.method) == methods.end())
+            methods.push_back(j.method);
+    }
+    std::sort(budgets.begin(), budgets.end());
+    auto errorOf = [](const Job& j) {
+        return number(objectAt(j.report, "measurement"), {"error", "mean"});
+    };
+    auto msOf = [](const Job& j) { return number(j.report, {"ambience", "ambience_ms", "median"}); };
+    out << "## Budget: error against cost\n\n";
+    out << "Each cell: mean error / ambience ms per frame (median), default settings at each "
+           "capture budget (faces per frame). Ours / best other = our mean error over the "
+           "lowest of the other methods' at that budget, over the frames both measured, with "
+           "its paired bootstrap 95 % interval. Runs above "
+        << fullLengthBudget
+        << " faces per frame play the first (" << fullLengthBudget
+        << " / faces) of each replay, every method alike.\n\n";
+    for (const std::string& replay : replays) {
+        out << "### " << replay << "\n\n| faces per frame |";
+        for (const auto& m : methods) out << " " << (m == "volume" ? "**volume (ours)**" : m) << " |";
+        out << " ours / best other |\n|---|";
+        for (std::size_t i = 0; i <= methods.size(); ++i) out << "---|";
+        out << "\n";
+        for (int b : budgets) {
+            out << "| " << b << " |";
+            double best = std::nan("");
+            const Job *oursJob = nullptr, *bestJob = nullptr;
+            for (const auto& m : methods) {
+                const Job* found = nullptr;
+                for (const Job& j : jobs)
+                    if (j.replay.name == replay && j.method == m && j.point.family == "default" &&
+                        j.point.facesPerFrame == b && j.ok)
+                        found = &j;
+                if (!found) {
+                    out << " — |";
+                    continue;
+                }
+                const double e = errorOf(*found);
+                out << " " << fmt(e, "%.4f") << " / " << fmt(msOf(*found), "%.2f") << " |";
+                if (m == "volume") oursJob = found;
+                else if (std::isfinite(e) && !(e >= best)) best = e, bestJob = found;
+            }
+            out << " **"
+                << (oursJob && bestJob ? formatRatio(ratioAgainst(dir, *oursJob, *bestJob)) : "—")
+                << "** |\n";
+        }
+        // Runs above the full-length budget play a share of the replay: every run is also
+        // measured over the frames all of them play, and the Pareto front is taken on that.
+        int common = std::numeric_limits<int>::max();
+        std::vector<const Job*> runs;
+        for (const Job& j : jobs)
+            if (j.replay.name == replay && j.ok && std::isfinite(msOf(j))) {
+                runs.push_back(&j);
+                common = std::min(common, int(number(j.report, {"frameCount"})) - 1);
+            }
+        std::map<const Job*, double> prefix;
+        for (const Job* j : runs) prefix[j] = errorUpTo(dir, *j, common);
+        out << "\nOver the frames every budget plays (0 to " << common
+            << "), mean error: ";
+        for (int b : budgets) {
+            out << (b == budgets.front() ? "" : "; ") << b << " faces:";
+            for (const auto& m : methods)
+                for (const Job* j : runs)
+                    if (j->method == m && j->point.family == "default" &&
+                        j->point.facesPerFrame == b)
+                        out << " " << (m == "volume" ? "**ours**" : m) << " "
+                            << fmt(prefix[j], "%.3f");
+        }
+        std::vector<const Job*> front;
+        for (const Job* a : runs) {
+            if (!std::isfinite(prefix[a])) continue;
+            bool dominated = false;
+            for (const Job* b : runs) {
+                if (!std::isfinite(prefix[b])) continue;
+                const bool noWorse = msOf(*b) <= msOf(*a) && prefix[b] <= prefix[a];
+                const bool better = msOf(*b) < msOf(*a) || prefix[b] < prefix[a];
+                if (b != a && noWorse && better) dominated = true;
+            }
+            if (!dominated) front.push_back(a);
+        }
+        std::sort(front.begin(), front.end(),
+                  [&](const Job* a, const Job* b) { return msOf(*a) < msOf(*b); });
+        out << "\n\nPareto front over those frames (cheapest first): ";
+        for (std::size_t i = 0; i < front.size(); ++i)
+            out << (i ? ", " : "") << front[i]->method << " " << front[i]->point.label << " ("
+                << fmt(prefix[front[i]], "%.3f") << " at " << fmt(msOf(*front[i]), "%.2f")
+                << " ms)";
+        out << "\n\n";
+    }
+}
+
+// With the reference oracle: per replay, the error budget of each method at the default point
+// of the ideal budget (RMS over the terrain witnesses of the reference frames), the errors on
+// objects, and the pop along the car.
+void writeErrorBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
+                             const std::vector<std::string>& replays, int idealBudget) {
+    bool any = false;
+    for (const Job& j : jobs)
+        any |= j.ok && objectAt(j.report, "measurement").contains("reference");
+    if (!any) return;
+    out << "## Error budget against the reference oracle\n\n"
+           "RMS over the terrain witnesses of the reference frames, each term relative to the "
+           "reference irradiance (lighting/ReferenceOracle.h): **a** SH order-2 truncation, "
+           "**b** capture resolution and scene simplification (16 x 16 coarse capture against "
+           "the 64 x 64 full scene), **c** spacing and interpolation (an ideal volume of fresh "
+           "captures at the lattice points the method reads, against a capture at the point), "
+           "**d** scheduling, staleness and blending (the method against its ideal volume). "
+           "Closure = (a² + b² + c² + d²) / total²: 1 when the terms add up as squares. Methods "
+           "without a lattice show c + d in column d. Objects: mean error against the reference "
+           "at the car (1 m above its ground point) and at tree bases and crowns within 6-48 m. "
+           "Screen: the screen-weighted mean error, at random pixels of the main view (terrain, "
+           "road, plants and the car), of the ambient irradiance as the draw applies it against "
+           "the reference at that surface point and normal (terrain / road / object means in "
+           "brackets). Pop moving: along the car.\n\n";
+    for (const std::string& replay : replays) {
+        out << "### " << replay << "\n\n| method | total (RMS) | a truncation | b capture | "
+               "c spacing | d schedule | closure | dominant | mean error | self-oracle error | "
+               "car | tree base | tree crown | screen (terrain / road / object) | "
+               "pop moving p99 / max |\n"
+               "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+        for (const Job& j : jobs) {
+            if (j.replay.name != replay || !j.ok) continue;
+            if (j.point.family.empty() && j.point.label != "default") continue;
+            if (!j.point.family.empty() &&
+                (j.point.family != "default" || j.point.facesPerFrame != idealBudget))
+                continue;
+            const json m = objectAt(j.report, "measurement");
+            if (!m.contains("reference")) continue;
+            const json& ref = m["reference"];
+            const json b = objectAt(ref, "budget");
+            const double terms[4] = {number(b, {"truncation"}), number(b, {"capture"}),
+                                     number(b, {"spacing"}), number(b, {"schedule"})};
+            const char* names[4] = {"a", "b", "c", "d"};
+            int dominant = 0;
+            for (int t = 1; t < 4; ++t)
+                if (std::isfinite(terms[t]) && !(terms[t] <= terms[dominant])) dominant = t;
+            out << "| " << (j.method == "volume" ? "**volume (ours)**" : j.method) << " | "
+                << fmt(number(b, {"rmsTotal"}), "%.4f");
+            for (double t : terms) out << " | " << fmt(t, "%.4f");
+            out << " | " << fmt(number(b, {"closure"}), "%.2f") << " | " << names[dominant]
+                << " | " << fmt(number(b, {"error", "mean"}), "%.4f") << " | "
+                << fmt(number(b, {"selfError", "mean"}), "%.4f");
+            for (const char* kind : {"car", "tree_base", "tree_crown"})
+                out << " | " << fmt(number(ref, {"objects", kind, "error", "mean"}), "%.3f");
+            const auto screenMean = [&](const char* kind) {
+                return number(ref, {"screen", kind, "count"}) > 0
+                           ? number(ref, {"screen", kind, "mean"})
+                           : std::nan("");
+            };
+            out << " | " << fmt(screenMean("error"), "%.3f") << " ("
+                << fmt(screenMean("terrain"), "%.2f") << " / " << fmt(screenMean("road"), "%.2f")
+                << " / " << fmt(screenMean("object"), "%.2f") << ")";
+            out << " | " << fmt(number(m, {"pop_move", "p99"}), "%.4f") << " / "
+                << fmt(number(m, {"pop_move", "max"}), "%.3f") << " |\n";
+        }
+        out << "\n";
+    }
+    out << "Plot: `error-budget.png` (squared terms stacked, per replay and method).\n\n";
+}
+
+}  // namespace
+
+double number(const json& j, std::initializer_list<const char*> path) {
+    const json* at = &j;
+    for (const char* key : path) {
+        if (!at->is_object() || !at->contains(key)) return std::nan("");
+        at = &(*at)[key];
+    }
+    return at->is_number() ? at->get<double>() : std::nan("");
+}
+
+// A CSV field on one line: quoted when it holds a comma or a quote, control characters (a
+// newline from a report read back) as spaces.
+std::string csvField(const std::string& s) {
+    if (s.find_first_of(",\"") == std::string::npos && !hasControlCharacter(s)) return s;
+    std::string q = "\"";
+    for (char c : s) {
+        if (c == '"')
+            q += "\"\"";
+        else
+            q += hasControlCharacter(std::string(1, c)) ? ' ' : c;
+    }
+    return q + "\"";
+}
+
+void writeResultsCsv(const std::vector<Job>& jobs, const std::string& path) {
+    std::ostringstream out;
+    for (std::size_t c = 0; c < kColumns.size(); ++c) out << (c ? "," : "") << kColumns[c];
+    out << "\n";
+    for (const Job& job : jobs) {
+        const auto row = resultRow(job);
+        for (std::size_t c = 0; c < kColumns.size(); ++c) {
+            const auto it = row.find(kColumns[c]);
+            out << (c ? "," : "") << (it == row.end() ? "" : csvField(it->second));
+        }
+        out << "\n";
+    }
+    writeTextFile(path, out.str(), "results");
+}
+
+void writeSummary(const std::vector<Job>& jobs, const std::string& path,
+                  const std::string& commandLine, const std::string& timing,
+                  const std::string& oracle, int idealBudget, int fullLengthBudget) {
+    std::ostringstream out;
+    const std::string dir = fs::path(path).parent_path().string();
+    out << "# Ambience bench: speed against error\n\n";
+    out << "Command: `" << commandLine << "`  \n";
+    out << timing << " **Oracle: " << oracle
+        << (oracle == "reference"
+                ? "** (the full scene at 64 x 64, irradiance straight from the cube map, on every "
+                  "reference frame; lighting/ReferenceOracle.h)."
+                : "** (the methods' own 16 x 16 coarse capture at the point, projected to order-2 "
+                  "SH: it leaves out capture resolution, scene simplification and SH truncation).")
+        << " Error = relative L2 distance of the applied irradiance from the oracle's over the "
+           "sphere of normals, luminance-weighted, at the witness points "
+           "(the camera's ground point and terrain patch corners in rings of 16-48, 48-144 and "
+           "144-432 m). Pop = per-frame change of applied irradiance at fixed points less the "
+           "oracle's own change; pop moving = along the camera's ground point (the car on "
+           "drives), the per-frame change less the previous frame's (lighting/Metrics.h). "
+           "Ambience ms = stages predict + capture + store + interpolate "
+           "and the lookups, per frame (median). All methods have the same capture budget.\n\n";
+    std::vector<std::string> replays;
+    for (const Job& j : jobs)
+        if (std::find(replays.begin(), replays.end(), j.replay.name) == replays.end())
+            replays.push_back(j.replay.name);
+    // Headline: default point, per replay.
+    for (const std::string& replay : replays) {
+        out << "## " << replay << "\n\n";
+        const bool drawn = oracle == "reference";
+        if (drawn && replay == replays.front())
+            out << "Error at the drawn normal: the terrain witnesses as the screen shows them, "
+                   "the ambient the draw applies there (the drawn patch's corners, each at its "
+                   "normal, interpolated across the patch) against the reference irradiance at "
+                   "that surface point and its normal (lighting/Metrics.h ReferenceWitness); "
+                   "witnesses under tree crowns are in the mean and also shown alone; those on "
+                   "ground a bush, rock or trunk hides are left out. Sphere: the same "
+                   "witnesses' error over the whole sphere of normals.\n\n";
+        out << "| method | point | " << (drawn ? "error at the drawn normal (terrain) | " : "")
+            << (drawn ? "sphere " : "")
+            << "mean error | p95 error | max error | p99 pop | max pop | "
+               "p99 pop moving | max pop moving | ambience ms (median) | faces/s | "
+               "probes (max) | kB (max) |\n";
+        out << (drawn ? "|---" : "") << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+        const Job* ours = nullptr;
+        std::vector<const Job*> others;
+        for (const Job& j : jobs) {
+            if (j.replay.name != replay) continue;
+            if (!j.ok) {
+                out << "| " << j.method << " | " << j.point.label
+                    << " | failed: " << j.error.substr(0, 120) << " | | | | | | | | | |\n";
+                continue;
+            }
+            const json& r = j.report;
+            const json m = objectAt(r, "measurement");
+            const double e = number(m, {"error", "mean"});
+            if (j.point.label == "default" && j.method == "volume") ours = &j;
+            if (j.point.label == "default" && j.method != "volume") others.push_back(&j);
+            out << "| " << (j.method == "volume" ? "**volume (ours)**" : j.method) << " | "
+                << j.point.label << " | ";
+            if (drawn) {
+                const auto d = [&](const char* a, const char* b) {
+                    return number(m, {"reference", "drawn", a, b});
+                };
+                out << "**" << fmt(d("error", "mean"), "%.4f") << "** (under crowns "
+                    << fmt(d("underCrown", "mean"), "%.3f") << ", "
+                    << fmt(d("underCrown", "count"), "%.0f") << " of "
+                    << fmt(d("error", "count"), "%.0f") << ") | ";
+            }
+            out << fmt(e, "%.4f") << " | "
+                << fmt(number(m, {"error", "p95"}), "%.4f") << " | "
+                << fmt(number(m, {"error", "max"}), "%.3f") << " | "
+                << fmt(number(m, {"pop", "p99"}), "%.5f") << " | "
+                << fmt(number(m, {"pop", "max"}), "%.3f") << " | "
+                << fmt(number(m, {"pop_move", "p99"}), "%.5f") << " | "
+                << fmt(number(m, {"pop_move", "max"}), "%.3f") << " | "
+                << fmt(number(r, {"ambience", "ambience_ms", "median"}), "%.2f") << " | "
+                << fmt(number(r, {"ambience", "facesPerSecond"}), "%.1f") << " | "
+                << fmt(number(r, {"ambience", "anchorsMax"}), "%.0f") << " | "
+                << fmt(number(r, {"ambience", "bytesMax"}) / 1024.0, "%.1f") << " |\n";
+        }
+        if (ours && !others.empty()) {
+            // The drawn normal's ratio first (the headline) with the reference, then the
+            // sphere's.
+            for (const bool atDrawn : drawn ? std::vector<bool>{true, false}
+                                            : std::vector<bool>{false}) {
+                out << "\nOur mean error" << (atDrawn ? " at the drawn normal" : drawn ? " over the sphere of normals" : "")
+                    << " / each other method's (default points), over the frames both "
+                       "measured, with the paired bootstrap 95 % interval (blocks of "
+                       "consecutive measured frames resampled; app/bench/BenchStats.h):";
+                int frames = 0;
+                for (const Job* other : others) {
+                    const RatioInterval r = ratioAgainst(dir, *ours, *other, atDrawn);
+                    frames = std::max(frames, r.frames);
+                    out << (other == others.front() ? " " : "; ") << other->method << " **"
+                        << formatRatio(r) << "**" << (r.excludesOne() ? "" : " (interval holds 1)");
+                }
+                out << " (" << frames << " frames).\n";
+            }
+            out << "\n";
+        } else {
+            out << "\n";
+        }
+    }
+    // Stress: every replay (the fast flight with its cut, the time-lapse, the far flight), for
+    // every method: finite error, memory held, teleports and rejected probes.
+    out << "## Stress and memory (default point)\n\n";
+    out << "| replay | method | frames | teleports | rejected probes | probes (max) | kB (max) | "
+           "max error | finite |\n";
+    out << "|---|---|---|---|---|---|---|---|---|\n";
+    for (const Job& j : jobs) {
+        if (j.point.label != "default" || !j.ok) continue;
+        const json& r = j.report;
+        const double maxError = number(r, {"measurement", "error", "max"});
+        out << "| " << j.replay.name << " | " << j.method << " | "
+            << fmt(number(r, {"frameCount"}), "%.0f") << " | "
+            << fmt(number(r, {"ambience", "teleports"}), "%.0f") << " | "
+            << fmt(number(r, {"ambience", "rejectedProbes"}), "%.0f") << " | "
+            << fmt(number(r, {"ambience", "anchorsMax"}), "%.0f") << " | "
+            << fmt(number(r, {"ambience", "bytesMax"}) / 1024.0, "%.1f") << " | "
+            << fmt(maxError, "%.3f") << " | " << (std::isfinite(maxError) ? "yes" : "**NO**")
+            << " |\n";
+    }
+    out << "\n";
+    writeBudgetSection(out, jobs, replays, fullLengthBudget, fs::path(path).parent_path().string());
+    writeErrorBudgetSection(out, jobs, replays, idealBudget);
+    out << "## Plots\n\n";
+    for (const std::string& replay : replays)
+        out << "- `pareto-" << replay << ".png`, `error-over-time-" << replay << ".png`\n";
+    out << "- `error-vs-speed.png`, `error-by-ring.png`\n\n";
+    out << "Each run's report, measurement CSV, log and exact command line are in `runs/`.\n";
+    writeTextFile(path, out.str(), "summary");
+}
+
+void drawPlots(const std::string& out) {
+    // Beside the executable in the build tree, in P/share/ambience when installed (DataPaths.h).
+    const fs::path script = findDataFile("bench-plots.py");
+    if (script.empty()) {
+        std::fprintf(stderr, "plots skipped: bench-plots.py found neither beside the executable "
+                             "nor in its installed data folder\n");
+        return;
+    }
+    // Debian's Python (the one python3-matplotlib installs into), else the first on PATH.
+    const std::string python = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+    if (spawnAndWait({"/usr/bin/env", python, "-c", "import matplotlib"}, "/dev/null") != 0) {
+        std::fprintf(stderr,
+                     "plots skipped: python3 with matplotlib is missing (Debian: apt-get install "
+                     "python3-matplotlib); results.csv and summary.md are written\n");
+        return;
+    }
+    const int rc = spawnAndWait({"/usr/bin/env", python, script.string(), out},
+                                (fs::path(out) / "plots.log").string());
+    if (rc != 0)
+        std::fprintf(stderr, "plots failed (exit %d), see %s/plots.log\n", rc, out.c_str());
+    else
+        std::fprintf(stderr, "plots written (see %s/plots.log)\n", out.c_str());
+}
+
+}  // namespace amb::bench
