@@ -77,18 +77,6 @@ bool isRealFolder(const fs::path& path) {
 
 }  // namespace
 
-std::vector<std::string> splitList(const std::string& text) {
-    std::vector<std::string> out;
-    std::stringstream in(text);
-    std::string item;
-    while (std::getline(in, item, ',')) {
-        item.erase(0, item.find_first_not_of(" \t"));
-        item.erase(item.find_last_not_of(" \t") + 1);
-        if (!item.empty()) out.push_back(item);
-    }
-    return out;
-}
-
 std::vector<ReplayRef> resolveReplays(const std::string& list) {
     std::vector<ReplayRef> out;
     const std::string dir = shippedReplayDir();

@@ -8,11 +8,13 @@
 #include <vector>
 
 #include "app/bench/BenchJobs.h"
+#include "app/cli/CliChecks.h"
 
 namespace amb::bench {
 
-// The items of a comma-separated list, blanks around each trimmed, empty ones left out.
-std::vector<std::string> splitList(const std::string& text);
+// The items of a comma-separated list, blanks around each trimmed, empty ones left out (one
+// for every command: app/cli/CliChecks.h).
+using amb::splitList;
 
 // The replays a --replays list names (every shipped replay when empty), each with a name of its
 // own: two replays of one bench may not share one.
