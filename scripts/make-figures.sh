@@ -134,7 +134,7 @@ else
   light_args=()
   # Screen witnesses at the bench's default (32 a reference frame).
   bench_args=(--replays highway-drive,mountain-drive,low-flight --max-frames 900)
-  # The study of docs/TUNING.md "Tuning with Optuna": the keys bench --tune descends over, in
+  # The study of docs/TUNING.md "Tuning with Optuna": the keys the old descent stepped over, in
   # the region its three rounds reach (clipped to the schema's ranges).
   tune_args=(--params "scheduler.horizon_s=0.375:10,scheduler.corridorCells=0.5:32,store.blendTime_s=0.125:8,scheduler.finestRingCells=0.125:8,scheduler.coarseRingCells=0.25:8,store.reachCells=1:4,nearField.captureRadius_m=5:40,nearField.radius_m=8:60"
              --max-frames 450 --trials 40 --jobs 2)

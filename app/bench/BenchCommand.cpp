@@ -7,14 +7,13 @@
 // replay (the cheapest method) captures it and saves it, the others of that replay wait for it
 // and read it back. Outputs in --out: runs/<replay>__<method>__<point>/ (each run's report,
 // measurement CSV, log and exit status), oracle/<replay>.json, results.csv (one row per run),
-// summary.md (tables), PNG plots from bench-plots.py (matplotlib), and with --tune, tune.csv and
-// tuned-volume.json. `--emit DIR` writes the runs as shell command lines for GNU parallel or
+// summary.md (tables) and PNG plots from bench-plots.py (matplotlib). `--emit DIR` writes the runs as shell command lines for GNU parallel or
 // Slurm instead (BenchEmit.h), and `--collect DIR` reads them back: every run's result is read
 // from its folder (readRun), whoever ran it.
 //
 // The command line, --emit and --collect here; the jobs (BenchJobs.h), their names and folders
-// (BenchRunFolders.h), running them (BenchRunner.h), the results (BenchResults.h) and --tune
-// (BenchTune.h) in files of their own.
+// (BenchRunFolders.h), running them (BenchRunner.h) and the results (BenchResults.h) in files of
+// their own. Tuning is `ambience tune` (TuneCommand.cpp).
 #include <unistd.h>
 
 #include <algorithm>
@@ -35,7 +34,6 @@
 #include "app/bench/BenchRunFolders.h"
 #include "app/bench/BenchRunner.h"
 #include "app/bench/BenchSweep.h"
-#include "app/bench/BenchTune.h"
 #include "app/cli/Commands.h"
 #include "app/cli/OutputPaths.h"
 #include "app/cli/ReferenceLightFlags.h"
@@ -167,13 +165,10 @@ void checkOptions(const BenchOptions& o) {
     if (o.maxFrames < 0) throw InputError("--max-frames", "must be >= 0");
     if (o.stride < 1) throw InputError("--stride", "must be at least 1");
     if (o.frames && o.noFrames) throw InputError("--frames", "conflicts with --no-frames");
-    if (o.tuneRounds < 1 || o.tuneRounds > 5) throw InputError("--tune-rounds", "expected 1 to 5");
-    if (o.tuneBudget < 1 || o.tuneBudget > 6) throw InputError("--tune-budget", "expected 1 to 6");
-    if (!(o.tuneMinGain >= 0.0 && o.tuneMinGain < 1.0))
-        throw InputError("--tune-min-gain", "expected 0 to 1");
-    if (!o.emit.empty() && o.tune)
-        throw InputError("--emit",
-                         "--tune picks each candidate from the last: it cannot be emitted");
+    if (o.tune)
+        throw InputError("--tune",
+                         "the coordinate descent is gone: `ambience tune` runs a study of error "
+                         "against cost (docs/TUNING.md \"Tuning with Optuna\")");
     if (!o.emit.empty() && o.fromRuns) throw InputError("--emit", "conflicts with --from-runs");
 }
 
@@ -198,7 +193,7 @@ void checkBenchFiles(const BenchOptions& o, const std::vector<ReplayRef>& replay
         std::error_code ec;
         if (!o.sweep.empty() && !fs::equivalent(o.sweep, fs::path(o.out) / "sweep.json", ec))
             output("sweep.json");
-    } else if (!o.tune) {
+    } else {
         for (const char* file : {"results.csv", "summary.md", "plots.log"}) output(file);
     }
     plan.check();
@@ -230,10 +225,6 @@ void runBench(const BenchOptions& o, const std::string& commandLine) {
 
     Runner runner = benchRunner(o, points);
     const auto start = std::chrono::steady_clock::now();
-    if (o.tune) {
-        tune(o, runner, workers);
-        return;
-    }
     const auto replays = o.resolved.empty() ? resolveReplays(o.replays) : o.resolved;
     checkBenchFiles(o, replays, folderOption);
 
@@ -343,17 +334,8 @@ void addBenchCommand(CLI::App& app) {
     cmd->add_flag("--from-runs", o->fromRuns,
                   "run nothing: rewrite results.csv, summary.md and the plots from the runs "
                   "already in --out (same --replays, --methods, --sweep and --budgets)");
-    cmd->add_flag("--tune", o->tune,
-                  "coordinate descent over the volume's scheduler and store parameters at the "
-                  "default budget; writes tune.csv and tuned-volume.json");
-    cmd->add_option("--tune-replays", o->tuneReplays,
-                    "replays the tuning averages over (default highway-drive,mountain-drive,"
-                    "low-flight,stress-flight)");
-    cmd->add_option("--tune-rounds", o->tuneRounds, "passes over the parameters (default 1)");
-    cmd->add_option("--tune-min-gain", o->tuneMinGain,
-                    "smallest fall of the mean error a change must bring (default 0.002)");
-    cmd->add_option("--tune-budget", o->tuneBudget,
-                    "capture budget held fixed while tuning, faces per frame (default 1)");
+    // Kept only to point whoever still types it to `ambience tune`.
+    cmd->add_flag("--tune", o->tune, "removed: see `ambience tune`")->group("");
     cmd->add_option("--backend", o->backend, "auto, egl or osmesa (default auto)");
     auto* out = cmd->get_option("--out");
     cmd->add_option("--emit", o->emit,

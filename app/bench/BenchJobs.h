@@ -2,7 +2,7 @@
 // one job (a replay x a method x a parameter point) with its outcome. Shared by the files of
 // app/bench: BenchCommand.cpp (the command line, --emit, --collect), BenchRunFolders.cpp (names
 // and run folders), BenchRunner.cpp (running a job list), BenchResults.cpp (results.csv,
-// summary.md, plots) and BenchTune.cpp (--tune).
+// summary.md, plots).
 #pragma once
 
 #include <string>
@@ -39,12 +39,8 @@ struct BenchOptions {
     int stride = 2;
     bool frames = false;  // render the main view too (slow on a software rasteriser)
     bool noFrames = false;
-    bool tune = false;
+    bool tune = false;  // the removed --tune, refused with a pointer to `ambience tune`
     bool fromRuns = false;
-    std::string tuneReplays = "highway-drive,mountain-drive,low-flight,stress-flight";
-    int tuneRounds = 1;
-    int tuneBudget = 1;  // faces per frame: the cost the tuning holds fixed
-    double tuneMinGain = 0.002;
     std::string backend = "auto";
     std::string emit;     // --emit DIR: write the runs as command lines, run nothing
     std::string collect;  // --collect DIR: the results of runs emitted there

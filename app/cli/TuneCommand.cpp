@@ -39,7 +39,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// The keys `ambience bench --tune` descends over: the study's default parameters.
+// The study's default parameters: the keys the coordinate descent it replaced (`bench --tune`,
+// removed) stepped over.
 const char* const kDefaultParams =
     "scheduler.horizon_s,scheduler.corridorCells,store.blendTime_s,scheduler.finestRingCells,"
     "scheduler.coarseRingCells,store.reachCells,nearField.captureRadius_m,nearField.radius_m";
@@ -238,8 +239,8 @@ void addTuneCommand(CLI::App& app) {
     auto o = std::make_shared<TuneOptions>();
     cmd->add_option("--params", o->params,
                     "comma-separated keys of the volume's settings file to tune, each KEY (the "
-                    "schema's range) or KEY=LO:HI (narrower) (default: the keys bench --tune "
-                    "descends over)");
+                    "schema's range) or KEY=LO:HI (narrower) (default: the keys the removed "
+                    "coordinate descent stepped over)");
     cmd->add_option("--replays", o->replays,
                     std::string("tuning replays, names or files (default ") + kDefaultReplays +
                         "; never the held-out ones)");

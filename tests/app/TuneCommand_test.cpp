@@ -67,6 +67,23 @@ TEST(TuneCommand, BadOptionsAreOneLineNamingTheOption) {
     EXPECT_NE(r.err.find("--tune-rounds"), std::string::npos) << r.err;
 }
 
+// The coordinate descent `bench --tune` gave way to the study (docs/TUNING.md "Optuna against
+// the coordinate descent"): whoever still types it is sent to `ambience tune`, before any work.
+TEST(TuneCommand, BenchTuneIsGoneAndSaysWhere) {
+    const fs::path dir = fs::temp_directory_path() / "ambience-bench-tune-gone";
+    fs::remove_all(dir);
+    const auto r = runAmbience("bench --tune --out " + dir.string());
+    EXPECT_EQ(r.exitCode, 2) << r.err;
+    EXPECT_EQ(r.errLines(), 1) << r.err;
+    EXPECT_NE(r.err.find("ambience tune"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir)) << "refused after making its folder";
+    for (const char* gone : {"--tune-rounds 2", "--tune-budget 1", "--tune-replays highway-drive",
+                             "--tune-min-gain 0.01"}) {
+        const auto o = runAmbience(std::string("bench ") + gone + " --out " + dir.string());
+        EXPECT_EQ(o.exitCode, 2) << gone << ": " << o.err;
+    }
+}
+
 int csvRows(const fs::path& file) {
     std::ifstream in(file);
     std::string line;
