@@ -504,16 +504,6 @@ void RendererScene::buildCasters(const glm::dvec3& eye_m, const glm::mat4& light
     }
 }
 
-void RendererScene::buildVehicleCaster(const glm::dvec3& eye_m, DrawList& out) {
-    out.clear();
-    if (!vehicle_) return;
-    ObjectInstance inst;
-    const glm::dvec3 rel = vehicle_->position_m - eye_m;
-    inst.positionScale = glm::vec4(float(rel.x), float(rel.y), float(rel.z), 1.0f);
-    inst.rotationSet = glm::vec2(float(vehicle_->heading_rad), 0.0f);
-    out.objects.push_back({&vehicleMesh_, {inst}});
-}
-
 void RendererScene::buildCaptureCasters(const glm::dvec3& centre_m,
                                         const glm::mat4& lightViewProj, double texel_m,
                                         DrawList& out) {

@@ -57,8 +57,6 @@ class RendererScene {
     // The car drawn by the next buildView calls (lit like any object: its own SH set), or none.
     void setVehicle(const std::optional<VehiclePose>& pose) { vehicle_ = pose; }
     const std::optional<VehiclePose>& vehicle() const { return vehicle_; }
-    // The car alone as a shadow caster (its own map), relative to eye_m; empty without a car.
-    void buildVehicleCaster(const glm::dvec3& eye_m, DrawList& out);
     // Capture scene around a probe (no culling: all six faces share it). Positions relative to
     // `probe_m`. Plants whose base lies within nearRadius_m (horizontally) are left out.
     void buildCapture(const glm::dvec3& probe_m, const AmbientSource& ambient, DrawList& out,
