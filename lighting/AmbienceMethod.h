@@ -115,6 +115,22 @@ class AmbienceMethod {
             out[i] = glm::max(shIrradiance(sh[i], glm::vec3(normals[i])), glm::vec3(0.0f));
     }
 
+    // What cornerIrradianceAtPoints gives at these points if the method's far field (its
+    // interpolated probes: cornerShAt at the points' ground points) were `far` instead: the error
+    // budget at the drawn normal (lighting/Metrics.h, DrawnBudget) puts fresh captures there to
+    // make the far field ideal and keep the rest of the draw's path. By default the far field is
+    // all there is.
+    virtual void irradianceFromFar(std::size_t count, const glm::dvec3* points_m,
+                                   const glm::dvec3* normals, const ShRgb* far, glm::vec3* out,
+                                   const double* patch_m = nullptr) const {
+        (void)points_m, (void)patch_m;
+        for (std::size_t i = 0; i < count; ++i)
+            out[i] = glm::max(shIrradiance(far[i], glm::vec3(normals[i])), glm::vec3(0.0f));
+    }
+    // The radius (horizontal, metres) of the plants the method's captures leave out around a
+    // probe (the near field puts them back); 0: its captures see the whole coarse scene.
+    virtual double farCaptureRadius_m() const { return 0.0; }
+
     // Where the draw looked up ambience this frame (terrain corners, objects). Only methods that
     // place probes by demand use it; called once per frame before the next predictStage.
     virtual void noteLookups(std::size_t count, const double* x_m, const double* z_m) {

@@ -228,12 +228,14 @@ const ReferenceSample& ErrorMeter::reference(int frameIndex, const glm::dvec3& p
     return referenceCache_.emplace(key, std::move(sample)).first->second;
 }
 
-double ErrorMeter::drawnTerrainError(int index, double timeOfDay_h, const glm::dvec3& camera_m,
-                                     const Witness& w, const AmbienceMethod& method,
-                                     GroundCover& cover) {
+DrawnBudget ErrorMeter::drawnTerrainError(int index, double timeOfDay_h,
+                                          const glm::dvec3& camera_m, const Witness& w,
+                                          const AmbienceMethod& method, bool budget,
+                                          GroundCover& cover) {
+    DrawnBudget b;
     const DrawnPatch p = environment_.drawnPatch(w.x_m, w.z_m, camera_m);
     cover = p.cover;
-    if (!(p.size_m > 0.0) || p.cover == GroundCover::Hidden) return std::nan("");
+    if (!(p.size_m > 0.0) || p.cover == GroundCover::Hidden) return b;
     // The four corners as the draw asks them (MethodAmbient::cornerIrradianceBatch: the corner
     // kShadingHeight_m up, its normal, the patch's size for the near field's patch mean).
     std::array<glm::dvec3, 4> at;
@@ -243,13 +245,75 @@ double ErrorMeter::drawnTerrainError(int index, double timeOfDay_h, const glm::d
         at[c] = p.corner_m[c] + glm::dvec3(0.0, kShadingHeight_m, 0.0);
         patch[c] = p.size_m;
     }
-    method.cornerIrradianceAtPoints(4, at.data(), p.cornerNormal.data(), e.data(), patch.data());
     const double u = (w.x_m - p.x0_m) / p.size_m, v = (w.z_m - p.z0_m) / p.size_m;
-    const glm::dvec3 drawn = glm::dvec3(e[0]) * ((1.0 - u) * (1.0 - v)) +
-                             glm::dvec3(e[1]) * (u * (1.0 - v)) +
-                             glm::dvec3(e[2]) * ((1.0 - u) * v) + glm::dvec3(e[3]) * (u * v);
-    return irradianceRelativeError(
-        drawn, surfaceReference(index, p.surface_m, p.surfaceNormal, timeOfDay_h));
+    const auto blend = [&] {
+        return glm::dvec3(e[0]) * ((1.0 - u) * (1.0 - v)) + glm::dvec3(e[1]) * (u * (1.0 - v)) +
+               glm::dvec3(e[2]) * ((1.0 - u) * v) + glm::dvec3(e[3]) * (u * v);
+    };
+    const ScreenEntry& ref = surfaceEntry(index, p.surface_m, p.surfaceNormal, timeOfDay_h);
+    const glm::dvec3 eRef(ref.irradiance);
+    method.cornerIrradianceAtPoints(4, at.data(), p.cornerNormal.data(), e.data(), patch.data());
+    b.drawn = irradianceRelativeError(blend(), eRef);
+    if (!budget) return b;
+    // The same path with the far field from fresh captures at the corners' ground points.
+    const double radius = method.farCaptureRadius_m();
+    std::array<ShRgb, 4> far;
+    for (std::size_t c = 0; c < 4; ++c)
+        far[c] = farOracle(index, p.corner_m[c].x, p.corner_m[c].z, timeOfDay_h, radius);
+    method.irradianceFromFar(4, at.data(), p.cornerNormal.data(), far.data(), e.data(),
+                             patch.data());
+    b.freshFar = irradianceRelativeError(blend(), eRef);
+    // ... and at the witness' own point and surface normal: no blend across the patch.
+    const glm::dvec3 point = p.surface_m + glm::dvec3(0.0, kShadingHeight_m, 0.0);
+    const ShRgb farHere = farOracle(index, w.x_m, w.z_m, timeOfDay_h, radius);
+    const double noPatch = 0.0;
+    glm::vec3 here;
+    method.irradianceFromFar(1, &point, &p.surfaceNormal, &farHere, &here, &noPatch);
+    b.atPoint = irradianceRelativeError(glm::dvec3(here), eRef);
+    b.truncation = irradianceRelativeError(glm::dvec3(ref.truncated), eRef);
+    return b;
+}
+
+ShRgb ErrorMeter::farOracle(int frameIndex, double x_m, double z_m, double timeOfDay_h,
+                            double radius_m) {
+    if (!(radius_m > 0.0)) return oracle(frameIndex, x_m, z_m, timeOfDay_h);
+    const Key key{frameIndex, x_m, z_m, radius_m};
+    const auto it = farCache_.find(key);
+    if (it != farCache_.end()) {
+        ++oracleHits_;
+        return it->second;
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    std::vector<float> cube;
+    capture_.captureFar(environment_.placeProbe(x_m, z_m, settings_.maxAside_m), timeOfDay_h,
+                        kAllCubeFaces, cube, radius_m);
+    const ShRgb sh = toFloat(
+        projectCubeMap(capture_.faceSize(), cube, {}, capture_.sunDirection(timeOfDay_h)).sh);
+    oracle_s_ += secondsSince(t0);
+    ++oracleCaptures_;
+    return farCache_.emplace(key, sh).first->second;
+}
+
+DrawnBudgetSummary summarizeDrawnBudget(const std::vector<DrawnBudget>& budgets) {
+    DrawnBudgetSummary s;
+    for (const DrawnBudget& b : budgets) {
+        if (!b.complete()) continue;
+        ++s.count;
+        s.drawn += b.drawn;
+        s.farField += b.drawn - b.freshFar;
+        s.patch += b.freshFar - b.atPoint;
+        s.model += b.atPoint - b.truncation;
+        s.truncation += b.truncation;
+    }
+    if (s.count > 0) {
+        const double n = double(s.count);
+        s.drawn /= n, s.farField /= n, s.patch /= n, s.model /= n, s.truncation /= n;
+    }
+    return s;
+}
+
+double DrawnBudgetSummary::closure() const {
+    return drawn > 0.0 ? (farField + patch + model + truncation) / drawn : 0.0;
 }
 
 void ErrorMeter::referenceFrame(int index, double timeOfDay_h, const glm::dvec3& camera_m,
@@ -280,7 +344,9 @@ void ErrorMeter::referenceFrame(int index, double timeOfDay_h, const glm::dvec3&
         const ReferenceSample& ref = reference(index, r.position_m, timeOfDay_h);
         r.terms = budgetTerms(ref, oracles[i], ideal(w.x_m, w.z_m),
                               appliedAt(method, w, r.position_m), rule_);
-        r.drawnError = drawnTerrainError(index, timeOfDay_h, camera_m, w, method, r.cover);
+        r.drawnBudget = drawnTerrainError(index, timeOfDay_h, camera_m, w, method,
+                                          referenceSettings_.idealVolume, r.cover);
+        r.drawnError = r.drawnBudget.drawn;
         referenceWitnesses_.push_back(r);
     }
     const ReferenceSettings& rs = referenceSettings_;
@@ -324,22 +390,35 @@ void ErrorMeter::screenFrame(int frameIndex, double timeOfDay_h,
 
 glm::dvec3 ErrorMeter::surfaceReference(int frameIndex, const glm::dvec3& surface_m,
                                         const glm::dvec3& normal, double timeOfDay_h) {
+    return glm::dvec3(surfaceEntry(frameIndex, surface_m, normal, timeOfDay_h).irradiance);
+}
+
+const ErrorMeter::ScreenEntry& ErrorMeter::surfaceEntry(int frameIndex,
+                                                        const glm::dvec3& surface_m,
+                                                        const glm::dvec3& normal,
+                                                        double timeOfDay_h) {
     const glm::dvec3 n = glm::normalize(normal);
     const glm::dvec3 probe = surface_m + kScreenProbeOffset_m * n;
     const Key key{frameIndex, probe.x, probe.z, probe.y};
     auto it = screenCache_.find(key);
     if (it == screenCache_.end()) {
         const auto t0 = std::chrono::steady_clock::now();
-        const glm::dvec3 e =
-            referenceIrradianceAt(reference_->faceSize(), reference_->captureAll(probe, timeOfDay_h),
-                                  reference_->sunDirection(timeOfDay_h), n);
-        it = screenCache_.emplace(key, ScreenEntry{glm::vec3(n), glm::vec3(e)}).first;
+        const std::optional<glm::dvec3> sun = reference_->sunDirection(timeOfDay_h);
+        std::vector<float> cube = reference_->captureAll(probe, timeOfDay_h);
+        const int size = reference_->faceSize();
+        // The cube's own order-2 SH at the normal, the sun's texel left out as everywhere.
+        const glm::dvec3 truncated =
+            glm::max(shIrradiance(projectCubeMap(size, cube, {}, sun).sh, n), glm::dvec3(0.0));
+        const glm::dvec3 e = referenceIrradianceAt(size, std::move(cube), sun, n);
+        it = screenCache_
+                 .emplace(key, ScreenEntry{glm::vec3(n), glm::vec3(e), glm::vec3(truncated)})
+                 .first;
         reference_s_ += secondsSince(t0);
         ++referenceCaptures_;
     } else {
         ++referenceHits_;
     }
-    return glm::dvec3(it->second.irradiance);
+    return it->second;
 }
 
 std::vector<double> ErrorMeter::drawnErrors(int ring, int underCrown) const {
@@ -349,6 +428,17 @@ std::vector<double> ErrorMeter::drawnErrors(int ring, int underCrown) const {
         if (r.ring >= 0 && (ring < 0 || r.ring == ring) && std::isfinite(r.drawnError) &&
             (underCrown < 0 || underCrown == crown))
             out.push_back(r.drawnError);
+    }
+    return out;
+}
+
+std::vector<DrawnBudget> ErrorMeter::drawnBudgets(int ring, int underCrown) const {
+    std::vector<DrawnBudget> out;
+    for (const ReferenceWitness& r : referenceWitnesses_) {
+        const int crown = r.cover == GroundCover::UnderCrown ? 1 : 0;
+        if (r.ring >= 0 && (ring < 0 || r.ring == ring) && r.drawnBudget.complete() &&
+            (underCrown < 0 || underCrown == crown))
+            out.push_back(r.drawnBudget);
     }
     return out;
 }
@@ -692,12 +782,15 @@ void ErrorMeter::saveReference(const std::string& path, const std::string& signa
     j["entries"] = std::move(entries);
     nlohmann::json screen = nlohmann::json::array();
     for (const auto& [key, entry] : screenCache_) {
-        screen.push_back({{"frame", key.frame},
-                          {"x", key.x},
-                          {"y", key.y},
-                          {"z", key.z},
-                          {"n", {entry.normal.x, entry.normal.y, entry.normal.z}},
-                          {"e", {entry.irradiance.x, entry.irradiance.y, entry.irradiance.z}}});
+        nlohmann::json e = {{"frame", key.frame},
+                            {"x", key.x},
+                            {"y", key.y},
+                            {"z", key.z},
+                            {"n", {entry.normal.x, entry.normal.y, entry.normal.z}},
+                            {"e", {entry.irradiance.x, entry.irradiance.y, entry.irradiance.z}}};
+        if (std::isfinite(entry.truncated.x))
+            e["t"] = {entry.truncated.x, entry.truncated.y, entry.truncated.z};
+        screen.push_back(std::move(e));
     }
     j["screen"] = std::move(screen);
     writeJsonFile(path, j, "reference file");
@@ -754,7 +847,8 @@ void ErrorMeter::loadReferenceText(const std::string& text, const std::string& w
         if (!loaded.emplace(key, std::move(sample)).second)
             throw InputError(at, "repeats an earlier entry's frame, x, y and z");
     }
-    // Screen witnesses' references (optional): {"frame", "x", "y", "z", "n": [3], "e": [3]}.
+    // Screen witnesses' references (optional): {"frame", "x", "y", "z", "n": [3], "e": [3],
+    // "t": [3] (optional)}.
     std::map<Key, ScreenEntry> screen;
     if (j.contains("screen")) {
         const nlohmann::json& list = j["screen"];
@@ -765,11 +859,15 @@ void ErrorMeter::loadReferenceText(const std::string& text, const std::string& w
             const Key key{frame, xz[0], xz[1],
                           oracleNumber(requireField(list[n], "y", at), at, "y")};
             ScreenEntry entry{};
-            for (const char* field : {"n", "e"}) {
+            // "t" (the truncated reference) is optional: files written before it have none.
+            for (const char* field : {"n", "e", "t"}) {
+                if (field[0] == 't' && !list[n].contains("t")) continue;
                 const nlohmann::json& v = requireField(list[n], field, at);
                 if (!v.is_array() || v.size() != 3)
                     throw InputError(at, std::string(field) + ": expected 3 numbers");
-                glm::vec3& out = field[0] == 'n' ? entry.normal : entry.irradiance;
+                glm::vec3& out = field[0] == 'n'   ? entry.normal
+                                 : field[0] == 'e' ? entry.irradiance
+                                                   : entry.truncated;
                 for (int c = 0; c < 3; ++c) {
                     const double x = oracleNumber(v[std::size_t(c)], at, field);
                     if (!(std::fabs(x) <= kMaxOracleCoefficient))

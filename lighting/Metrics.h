@@ -43,6 +43,7 @@
 //   same replay read it back.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -128,6 +129,41 @@ enum class OracleKind { Self, Reference };
 OracleKind parseOracleKind(const std::string& text, const std::string& where);
 const char* toString(OracleKind kind);
 
+// The error at the drawn normal of one terrain witness, split into a budget that closes: each
+// step makes one more stage of the draw's path ideal, and each term is what the step takes off
+// the error, so over any set of witnesses the means add up to the drawn error exactly:
+//   drawn = farField + patch + model + truncation, where
+//   farField    drawn - freshFar: the far field as interpolated from the method's probes
+//               (spacing, staleness, blending, holes) against fresh captures of the far scene at
+//               the patch's four corners (placed as probes are, the plants the method's captures
+//               leave out left out), the rest of the draw's path (near field, patch mean) kept;
+//   patch       freshFar - atPoint: the patch's bilinear blend of its four corners (and the near
+//               field's patch mean) against the same path evaluated at the witness' own point and
+//               surface normal with a fresh far capture there;
+//   model       atPoint - truncation: what the ambience model itself misses at a point (the
+//               coarse capture scene, its surfaces lit by the hemisphere model, the near field's
+//               spheres and ground) against the reference;
+//   truncation  the reference cube's own order-2 SH at the normal against the reference.
+// A term can be negative (an ideal stage that removes errors which cancelled others).
+struct DrawnBudget {
+    double drawn = std::numeric_limits<double>::quiet_NaN();       // = ReferenceWitness::drawnError
+    double freshFar = std::numeric_limits<double>::quiet_NaN();    // error with fresh far captures
+    double atPoint = std::numeric_limits<double>::quiet_NaN();     // ... at the witness' point
+    double truncation = std::numeric_limits<double>::quiet_NaN();  // P2 of the reference
+    bool complete() const {
+        return std::isfinite(drawn) && std::isfinite(freshFar) && std::isfinite(atPoint) &&
+               std::isfinite(truncation);
+    }
+};
+// Means of the terms over the witnesses with a complete budget.
+struct DrawnBudgetSummary {
+    std::size_t count = 0;
+    double drawn = 0.0, farField = 0.0, patch = 0.0, model = 0.0, truncation = 0.0;
+    // (farField + patch + model + truncation) / drawn: 1 up to rounding, by construction.
+    double closure() const;
+};
+DrawnBudgetSummary summarizeDrawnBudget(const std::vector<DrawnBudget>& budgets);
+
 // One witness of a reference frame (lighting/ReferenceOracle.h): a terrain corner (ring >= 0,
 // as the measured frame's witnesses) or an object (ring -1, `object`).
 struct ReferenceWitness {
@@ -144,6 +180,9 @@ struct ReferenceWitness {
     // channels, E_ref from a reference capture kScreenProbeOffset_m along the normal.
     // A witness on ground a bush, a rock or a trunk stands on is not seen: it gets none.
     double drawnError = std::numeric_limits<double>::quiet_NaN();
+    // The same error split into its budget (DrawnBudget; incomplete without the ideal volume,
+    // ReferenceSettings::idealVolume, which its fresh captures go with).
+    DrawnBudget drawnBudget;
     GroundCover cover = GroundCover::Open;  // at the witness' ground point
     // How the sphere figure's capture point (position_m) was placed: a terrain witness in a
     // plant's footprint is moved aside or lifted, as probes are (the drawn-normal figure reads
@@ -222,6 +261,8 @@ class ErrorMeter {
     // ring or (ring < 0) all; witnesses without one are left out.
     // `underCrown` 0: open ground only, 1: under crowns only, -1: both.
     std::vector<double> drawnErrors(int ring = -1, int underCrown = -1) const;
+    // The budgets of the same witnesses (only those complete).
+    std::vector<DrawnBudget> drawnBudgets(int ring = -1, int underCrown = -1) const;
     // Terrain witnesses on hidden ground (GroundCover::Hidden), left out of drawnErrors.
     std::size_t hiddenWitnesses() const;
     // Terrain witnesses whose sphere-figure capture was placed so (ReferenceWitness::placement).
@@ -286,8 +327,11 @@ class ErrorMeter {
     double movingX_m_ = 0.0, movingZ_m_ = 0.0;
     int movingSeen_ = 0;
     ShRgb oracleAt(int frameIndex, const glm::dvec3& position_m, double timeOfDay_h);
-    double drawnTerrainError(int index, double timeOfDay_h, const glm::dvec3& camera_m,
-                             const Witness& w, const AmbienceMethod& method, GroundCover& cover);
+    // The drawn-normal error of a terrain witness (budget.drawn), with the rest of its budget
+    // when `budget` (fresh captures).
+    DrawnBudget drawnTerrainError(int index, double timeOfDay_h, const glm::dvec3& camera_m,
+                                  const Witness& w, const AmbienceMethod& method, bool budget,
+                                  GroundCover& cover);
     void referenceFrame(int index, double timeOfDay_h, const glm::dvec3& camera_m,
                         const std::vector<Witness>& witnesses, const std::vector<ShRgb>& oracles,
                         const AmbienceMethod& method, int measuredIndex);
@@ -314,7 +358,17 @@ class ErrorMeter {
     std::map<Key, ReferenceSample> referenceCache_;
     struct ScreenEntry {
         glm::vec3 normal, irradiance;
+        // The reference cube's order-2 SH evaluated at the normal (the budget's truncation);
+        // NaN when read from a file that has none.
+        glm::vec3 truncated{std::numeric_limits<float>::quiet_NaN()};
     };
+    // The entry of surfaceReference (captured when missing).
+    const ScreenEntry& surfaceEntry(int frameIndex, const glm::dvec3& surface_m,
+                                    const glm::dvec3& normal, double timeOfDay_h);
+    // Fresh captures of the far scene (the plants within `radius_m` left out) placed as probes
+    // are at ground point (x, z): the ideal far field of DrawnBudget (radius 0: oracle()).
+    ShRgb farOracle(int frameIndex, double x_m, double z_m, double timeOfDay_h, double radius_m);
+    std::map<Key, ShRgb> farCache_;
     std::map<Key, ScreenEntry> screenCache_;
     std::vector<ScreenResult> screenResults_;
     bool referenceNow_ = false;

@@ -633,6 +633,10 @@ class NearFieldMethod final : public AmbienceMethod {
     void cornerIrradianceAtPoints(std::size_t count, const glm::dvec3* points_m,
                                   const glm::dvec3* normals, glm::vec3* out,
                                   const double* patch_m = nullptr) const override;
+    void irradianceFromFar(std::size_t count, const glm::dvec3* points_m,
+                           const glm::dvec3* normals, const ShRgb* far, glm::vec3* out,
+                           const double* patch_m = nullptr) const override;
+    double farCaptureRadius_m() const override;
     void noteLookups(std::size_t count, const double* x_m, const double* z_m) override {
         far_->noteLookups(count, x_m, z_m);
     }

@@ -123,11 +123,25 @@ void NearFieldMethod::cornerIrradianceAtPoints(std::size_t count, const glm::dve
     for (std::size_t i = 0; i < count; ++i) x[i] = points_m[i].x, z[i] = points_m[i].z;
     std::vector<ShRgb> far(count);
     far_->cornerShAt(count, x.data(), z.data(), far.data());
+    irradianceFromFar(count, points_m, normals, far.data(), out, patch_m);
+}
+
+double NearFieldMethod::farCaptureRadius_m() const {
+    // As CaptureSettings::nearRadius_m: what the far method's probes leave out.
+    const NearFieldSettings& s = near_->settings();
+    return s.enabled && s.plants ? s.captureRadius_m : 0.0;
+}
+
+void NearFieldMethod::irradianceFromFar(std::size_t count, const glm::dvec3* points_m,
+                                        const glm::dvec3* normals, const ShRgb* far,
+                                        glm::vec3* out, const double* patch_m) const {
+    std::vector<double> x(count), z(count);
+    for (std::size_t i = 0; i < count; ++i) x[i] = points_m[i].x, z[i] = points_m[i].z;
     // Every point's far-field irradiance (what the far method alone gives, not the near field's
     // time); the near field's answers replace it within range.
     for (std::size_t i = 0; i < count; ++i)
         out[i] = glm::max(shIrradiance(far[i], glm::vec3(normals[i])), glm::vec3(0.0f));
-    gather(count, x.data(), z.data(), far.data(), near_->settings().cornerRange_m);
+    gather(count, x.data(), z.data(), far, near_->settings().cornerRange_m);
     std::vector<glm::dvec3> points, pointNormals;
     nearPatch_.clear();
     for (std::size_t i : nearIndex_) {

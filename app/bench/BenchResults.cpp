@@ -112,6 +112,12 @@ const std::vector<std::string> kColumns = {"replay",
                                            "drawn_under_crown_error_mean",
                                            "drawn_under_crown_witnesses",
                                            "drawn_hidden_witnesses",
+                                           "drawn_budget_witnesses",
+                                           "drawn_budget_far_field",
+                                           "drawn_budget_patch",
+                                           "drawn_budget_model",
+                                           "drawn_budget_truncation",
+                                           "drawn_budget_closure",
                                            "reference_s",
                                            "wall_s",
                                            "run_dir"};
@@ -175,6 +181,14 @@ std::map<std::string, std::string> resultRow(const Job& job) {
             put("drawn_under_crown_error_mean", number(ref, {"drawn", "underCrown", "mean"}));
             put("drawn_under_crown_witnesses", number(ref, {"drawn", "underCrown", "count"}));
             put("drawn_hidden_witnesses", number(ref, {"drawn", "hidden"}));
+            if (number(ref, {"drawn", "budget", "count"}) > 0) {
+                put("drawn_budget_witnesses", number(ref, {"drawn", "budget", "count"}));
+                put("drawn_budget_far_field", number(ref, {"drawn", "budget", "farField"}));
+                put("drawn_budget_patch", number(ref, {"drawn", "budget", "patch"}));
+                put("drawn_budget_model", number(ref, {"drawn", "budget", "model"}));
+                put("drawn_budget_truncation", number(ref, {"drawn", "budget", "truncation"}));
+                put("drawn_budget_closure", number(ref, {"drawn", "budget", "closure"}));
+            }
         }
         if (number(ref, {"screen", "error", "count"}) > 0) {
             put("screen_error_mean", number(ref, {"screen", "error", "mean"}));
@@ -429,6 +443,58 @@ void writeErrorBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
     out << "Plot: `error-budget.png` (squared terms stacked, per replay and method).\n\n";
 }
 
+// With the reference oracle and the ideal volume: per replay, the drawn-normal error of each
+// method split into terms that add up to it (DrawnBudget, lighting/Metrics.h).
+void writeDrawnBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
+                             const std::vector<std::string>& replays, int idealBudget) {
+    bool any = false;
+    for (const Job& j : jobs)
+        any |= j.ok && number(objectAt(j.report, "measurement"),
+                              {"reference", "drawn", "budget", "count"}) > 0;
+    if (!any) return;
+    out << "## Error budget at the drawn normal\n\n"
+           "The mean error at the drawn normal (terrain witnesses) split into terms that add up "
+           "to it, each what one more ideal stage of the draw's path takes off the error: "
+           "**far field** (the method's interpolated probes against fresh captures of the far "
+           "scene at the drawn patch's four corners, the near field and patch mean kept), "
+           "**patch** (the patch's blend of its corners against the same path at the witness' "
+           "own point and surface normal), **model** (what the ambience model misses at a point: "
+           "the coarse capture scene and its lighting, the near field's spheres and ground), "
+           "**truncation** (the reference's own order-2 SH at the normal). Closure = sum of the "
+           "terms over the drawn mean: 1 by construction (a check, not a finding); a negative "
+           "term is an ideal stage that uncovers errors that cancelled. Over the witnesses with "
+           "all four steps (the runs that capture the ideal volume).\n\n";
+    for (const std::string& replay : replays) {
+        out << "### " << replay << "\n\n| method | drawn mean | far field | patch | model | "
+               "truncation | closure | largest | witnesses |\n"
+               "|---|---|---|---|---|---|---|---|---|\n";
+        for (const Job& j : jobs) {
+            if (j.replay.name != replay || !j.ok) continue;
+            if (j.point.family.empty() && j.point.label != "default") continue;
+            if (!j.point.family.empty() &&
+                (j.point.family != "default" || j.point.facesPerFrame != idealBudget))
+                continue;
+            const json b = objectAt(objectAt(objectAt(objectAt(j.report, "measurement"),
+                                                      "reference"),
+                                             "drawn"),
+                                    "budget");
+            if (!(number(b, {"count"}) > 0)) continue;
+            const char* names[4] = {"far field", "patch", "model", "truncation"};
+            const double terms[4] = {number(b, {"farField"}), number(b, {"patch"}),
+                                     number(b, {"model"}), number(b, {"truncation"})};
+            int largest = 0;
+            for (int t = 1; t < 4; ++t)
+                if (std::fabs(terms[t]) > std::fabs(terms[largest])) largest = t;
+            out << "| " << (j.method == "volume" ? "**volume (ours)**" : j.method) << " | "
+                << fmt(number(b, {"drawn"}), "%.4f");
+            for (double t : terms) out << " | " << fmt(t, "%+.4f");
+            out << " | " << fmt(number(b, {"closure"}), "%.3f") << " | " << names[largest]
+                << " | " << fmt(number(b, {"count"}), "%.0f") << " |\n";
+        }
+        out << "\n";
+    }
+}
+
 }  // namespace
 
 double number(const json& j, std::initializer_list<const char*> path) {
@@ -653,6 +719,7 @@ void writeSummary(const std::vector<Job>& jobs, const std::string& path,
     out << "\n";
     writeBudgetSection(out, jobs, replays, fullLengthBudget, fs::path(path).parent_path().string());
     writeErrorBudgetSection(out, jobs, replays, idealBudget);
+    writeDrawnBudgetSection(out, jobs, replays, idealBudget);
     out << "## Plots\n\n";
     for (const std::string& replay : replays)
         out << "- `pareto-" << replay << ".png`, `error-over-time-" << replay << ".png`\n";

@@ -545,6 +545,12 @@ void printRunSummary(const RunOptions& o, const RunPlan& plan, int frames, const
                 b.count, b.total, b.truncation, b.capture, b.spacing, b.schedule, b.closure(),
                 meter->referenceSeconds(), (long long)meter->referenceCaptures(),
                 (long long)meter->referenceCacheHits());
+            const DrawnBudgetSummary d = summarizeDrawnBudget(meter->drawnBudgets());
+            if (d.count > 0)
+                std::printf(
+                    "error at the drawn normal (mean over %zu terrain witnesses): %.4f = far field "
+                    "%+.4f, patch %+.4f, model %+.4f, truncation %+.4f (closure %.3f)\n",
+                    d.count, d.drawn, d.farField, d.patch, d.model, d.truncation, d.closure());
         }
     }
     if (volume) {

@@ -667,6 +667,22 @@ std::string measurementJson(const ErrorMeter& meter) {
         for (int r = 0; r < ms.rings(); ++r)
             drawnRings.push_back(summaryJson(summarize(meter.drawnErrors(r))));
         drawnJson["byRing"] = drawnRings;
+        // Its budget that closes (DrawnBudget, lighting/Metrics.h): the mean drawn error as
+        // far field + patch + model + truncation, over the witnesses with all four steps.
+        const auto drawnBudgetJson = [](const std::vector<DrawnBudget>& budgets) {
+            const DrawnBudgetSummary b = summarizeDrawnBudget(budgets);
+            return json{{"count", b.count},      {"drawn", b.drawn},
+                        {"farField", b.farField}, {"patch", b.patch},
+                        {"model", b.model},       {"truncation", b.truncation},
+                        {"closure", b.closure()}};
+        };
+        drawnJson["budget"] = drawnBudgetJson(meter.drawnBudgets());
+        drawnJson["budgetOpen"] = drawnBudgetJson(meter.drawnBudgets(-1, 0));
+        drawnJson["budgetUnderCrown"] = drawnBudgetJson(meter.drawnBudgets(-1, 1));
+        json drawnBudgetRings = json::array();
+        for (int r = 0; r < ms.rings(); ++r)
+            drawnBudgetRings.push_back(drawnBudgetJson(meter.drawnBudgets(r)));
+        drawnJson["budgetByRing"] = drawnBudgetRings;
         json objects = json::object();
         for (int k = 0; k < kObjectKinds; ++k)
             objects[toString(ObjectKind(k))] = budgetJson(meter.objectBudget(ObjectKind(k)));
@@ -721,7 +737,7 @@ void writeReferenceCsv(const ErrorMeter& meter, const std::string& path) {
     std::ofstream out(path);
     if (!out) throw InputError(path, "cannot write the reference CSV");
     out << "frame,witness,x,y,z,total,truncation,capture,spacing,schedule,self,drawn,cover,"
-           "placed\n";
+           "placed,drawn_fresh_far,drawn_at_point,drawn_truncation\n";
     out.precision(9);
     for (const ReferenceWitness& r : meter.referenceWitnesses()) {
         out << r.frame << ','
@@ -736,7 +752,13 @@ void writeReferenceCsv(const ErrorMeter& meter, const std::string& path) {
                 : r.cover == GroundCover::UnderCrown ? "crown"
                 : r.cover == GroundCover::Hidden     ? "hidden"
                                                      : "open")
-            << ',' << (r.ring < 0 ? "" : toString(r.placement)) << "\n";
+            << ',' << (r.ring < 0 ? "" : toString(r.placement));
+        const DrawnBudget& b = r.drawnBudget;
+        for (const double v : {b.freshFar, b.atPoint, b.truncation}) {
+            out << ',';
+            if (std::isfinite(v)) out << v;
+        }
+        out << "\n";
     }
     if (!out) throw InputError(path, "cannot write the reference CSV");
 }

@@ -4,6 +4,7 @@
 // here; progress lines in a log.
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -145,21 +146,37 @@ TEST(RunMeasure, ReferenceGradesTheDrawnNormal) {
     const double mean = drawn["error"]["mean"].get<double>();
     EXPECT_TRUE(std::isfinite(mean) && mean > 0.0 && mean < 5.0) << mean;
     // reference.csv: one row per witness; the terrain rows' drawn column filled unless hidden.
+    const auto split = [](const std::string& text) {
+        std::vector<std::string> fields;
+        std::stringstream in(text);
+        std::string f;
+        while (std::getline(in, f, ',')) fields.push_back(f);
+        if (!text.empty() && text.back() == ',') fields.push_back("");
+        return fields;
+    };
     std::ifstream csv(dir / "a" / "reference.csv");
     std::string line;
     std::getline(csv, line);
-    EXPECT_EQ(line.substr(line.size() - 19), ",drawn,cover,placed");
+    const std::vector<std::string> header = split(line);
+    const auto column = [&](const char* name) {
+        const auto it = std::find(header.begin(), header.end(), name);
+        EXPECT_NE(it, header.end()) << name;
+        return std::size_t(it - header.begin());
+    };
+    const std::size_t drawnAt = column("drawn"), coverAt = column("cover"),
+                      placedAt = column("placed"), freshAt = column("drawn_fresh_far");
     int terrain = 0, filled = 0, hiddenRows = 0, aside = 0, lifted = 0;
     while (std::getline(csv, line)) {
         if (line.find(",ring_") == std::string::npos) continue;
         ++terrain;
-        const std::string placed = line.substr(line.rfind(',') + 1);
+        const std::vector<std::string> f = split(line);
+        ASSERT_EQ(f.size(), header.size()) << line;
+        const std::string& placed = f[placedAt];
         EXPECT_TRUE(placed == "point" || placed == "aside" || placed == "lifted") << line;
         aside += placed == "aside", lifted += placed == "lifted";
-        line = line.substr(0, line.rfind(','));
-        const std::string cover = line.substr(line.rfind(',') + 1);
-        const std::string rest = line.substr(0, line.rfind(','));
-        const std::string value = rest.substr(rest.rfind(',') + 1);
+        const std::string& cover = f[coverAt];
+        const std::string& value = f[drawnAt];
+        EXPECT_TRUE(f[freshAt].empty()) << line;  // --no-ideal-volume: no fresh captures
         if (cover == "hidden") {
             ++hiddenRows;
             EXPECT_TRUE(value.empty()) << line;
@@ -176,6 +193,37 @@ TEST(RunMeasure, ReferenceGradesTheDrawnNormal) {
     EXPECT_EQ(drawn["terrainWitnesses"].get<int>(), terrain);
     EXPECT_EQ(ref["light"], "hemisphere");
     EXPECT_FALSE(ref.contains("bounce"));
+}
+
+// With the ideal volume the drawn-normal error comes with its budget: every graded witness
+// gets the fresh-capture steps, the terms add up to the drawn mean, the truncation is a small
+// non-negative part, and reference.csv carries the steps per witness.
+TEST(RunMeasure, DrawnBudgetClosesOnTheWorld) {
+    const fs::path dir = scratchDir("run-drawn-budget");
+    const auto r = runAmbience(
+        "run --no-frames --max-frames 21 --measure-every 10 --oracle-kind reference "
+        "--reference-every 1 --reference-trees 0 --reference-size 16 "
+        "--reference-light hemisphere --out " +
+        (dir / "a").string());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("error at the drawn normal (mean over"), std::string::npos) << r.out;
+    const auto drawn = readJson(dir / "a" / "report.json")["measurement"]["reference"]["drawn"];
+    const auto b = drawn["budget"];
+    ASSERT_GT(b["count"].get<int>(), 0);
+    EXPECT_EQ(b["count"].get<int>(), drawn["error"]["count"].get<int>());
+    EXPECT_NEAR(b["drawn"].get<double>(), drawn["error"]["mean"].get<double>(), 1e-9);
+    const double sum = b["farField"].get<double>() + b["patch"].get<double>() +
+                       b["model"].get<double>() + b["truncation"].get<double>();
+    EXPECT_NEAR(sum, b["drawn"].get<double>(), 1e-9);
+    EXPECT_NEAR(b["closure"].get<double>(), 1.0, 1e-9);
+    EXPECT_GE(b["truncation"].get<double>(), 0.0);
+    EXPECT_LT(b["truncation"].get<double>(), b["drawn"].get<double>());
+    EXPECT_EQ(drawn["budgetOpen"]["count"].get<int>() + drawn["budgetUnderCrown"]["count"].get<int>(),
+              b["count"].get<int>());
+    std::ifstream csv(dir / "a" / "reference.csv");
+    std::string header;
+    std::getline(csv, header);
+    EXPECT_NE(header.find(",drawn_fresh_far,drawn_at_point,drawn_truncation"), std::string::npos);
 }
 
 // The reference lit by its own bounce field (the default): the report names the light and how

@@ -221,3 +221,105 @@ TEST(ReferenceOracle, MeterCacheRoundTripsAndRefusesBadFiles) {
                  InputError);
     std::remove(path.c_str());
 }
+
+// The drawn-normal budget's summary: each term is a step between two successive errors, so the
+// means add up to the drawn mean exactly; witnesses without every step are left out.
+TEST(DrawnBudget, TermsAreTheStepsAndAddUpToTheDrawnMean) {
+    DrawnBudget a{0.5, 0.3, 0.2, 0.05}, b{0.3, 0.3, 0.1, 0.05}, partial;
+    partial.drawn = 9.0;  // no fresh captures: left out
+    const DrawnBudgetSummary s = summarizeDrawnBudget({a, b, partial});
+    EXPECT_EQ(s.count, 2u);
+    EXPECT_NEAR(s.drawn, 0.4, 1e-12);
+    EXPECT_NEAR(s.farField, 0.1, 1e-12);    // (0.2 + 0.0) / 2
+    EXPECT_NEAR(s.patch, 0.15, 1e-12);      // (0.1 + 0.2) / 2
+    EXPECT_NEAR(s.model, 0.1, 1e-12);       // (0.15 + 0.05) / 2
+    EXPECT_NEAR(s.truncation, 0.05, 1e-12);
+    EXPECT_NEAR(s.closure(), 1.0, 1e-12);
+    EXPECT_FALSE(partial.complete());
+    EXPECT_EQ(summarizeDrawnBudget({partial}).count, 0u);
+}
+
+namespace {
+
+// A flat world whose drawn patches are `size` across with the witness at (u, v) inside.
+class PatchedEnvironment final : public testing_support::FlatProbeEnvironment {
+  public:
+    PatchedEnvironment(double size_m, double u, double v) : size_m_(size_m), u_(u), v_(v) {}
+    DrawnPatch drawnPatch(double x_m, double z_m, const glm::dvec3&) const override {
+        DrawnPatch p;
+        p.size_m = size_m_;
+        p.x0_m = x_m - u_ * size_m_, p.z0_m = z_m - v_ * size_m_;
+        for (int c = 0; c < 4; ++c) {
+            p.corner_m[c] = {p.x0_m + (c & 1 ? size_m_ : 0.0), 0.0,
+                             p.z0_m + (c & 2 ? size_m_ : 0.0)};
+            p.cornerNormal[c] = {0.0, 1.0, 0.0};
+        }
+        p.surface_m = {x_m, 0.0, z_m};
+        return p;
+    }
+
+  private:
+    double size_m_, u_, v_;
+};
+
+// A method whose far field is a fresh coarse capture wherever it is asked (the ideal volume
+// itself), or that scaled by 1 + `gain`.
+struct FreshCaptureMethod final : AmbienceMethod {
+    CubeCapture* capture = nullptr;
+    const ProbeEnvironment* environment = nullptr;
+    MeasureSettings settings;
+    float gain = 0.0f;
+    std::string methodName() const override { return "fresh"; }
+    void predictStage(const glm::dvec3&, const glm::dvec3&, double, double) override {}
+    void captureStage() override {}
+    void storeStage() override {}
+    ShRgb shAt(double x_m, double z_m) const override {
+        return oracleSh(*capture, *environment, settings, x_m, z_m, 12.0) * (1.0f + gain);
+    }
+    MethodStatistics methodStatistics() const override { return {}; }
+};
+
+}  // namespace
+
+// The budget on a meter: a method whose far field is the fresh capture has no far-field term;
+// one that scales it by 1.5 has a far-field term of about 0.5 and the same later steps; with the
+// witness on a patch corner the patch's blend costs nothing, inside a patch it costs something;
+// the terms add up to the drawn mean.
+TEST(DrawnBudget, FreshCapturesMakeTheFarFieldTermVanish) {
+    using testing_support::FakeCubeCapture;
+    const auto run = [](double u, double v, float gain) {
+        FakeCubeCapture coarse(8), full(16);
+        PatchedEnvironment environment(32.0, u, v);
+        MeasureSettings ms;
+        ms.every = 1;
+        ErrorMeter meter(coarse, environment, ms);
+        ReferenceSettings rs;
+        rs.every = 1;
+        rs.objectTrees = 0;
+        meter.attachReference(full, rs, true);
+        FreshCaptureMethod method;
+        method.capture = &coarse, method.environment = &environment, method.settings = ms;
+        method.gain = gain;
+        for (int f = 0; f < 3; ++f)
+            meter.frame(f, f / 30.0, 12.0, {40.0 * f, 0.0, 25.0}, 10.0, method);
+        return summarizeDrawnBudget(meter.drawnBudgets());
+    };
+    const DrawnBudgetSummary exact = run(0.0, 0.0, 0.0f);
+    ASSERT_GT(exact.count, 3u);
+    EXPECT_NEAR(exact.farField, 0.0, 1e-6);
+    EXPECT_NEAR(exact.patch, 0.0, 1e-6);  // the witness is corner 0: the blend is that corner
+    EXPECT_NEAR(exact.closure(), 1.0, 1e-9);
+    EXPECT_GT(exact.truncation, 0.0);
+    EXPECT_LT(exact.truncation, 0.05);  // a smooth fake sky: order 2 holds most of it
+
+    const DrawnBudgetSummary inside = run(0.4, 0.7, 0.0f);
+    EXPECT_NEAR(inside.farField, 0.0, 1e-6);
+    EXPECT_GT(std::fabs(inside.patch), 1e-4);  // the fake's ground colour varies across 32 m
+    EXPECT_NEAR(inside.closure(), 1.0, 1e-9);
+
+    const DrawnBudgetSummary off = run(0.0, 0.0, 0.5f);
+    EXPECT_NEAR(off.farField, 0.5, 0.05);
+    EXPECT_NEAR(off.model, exact.model, 1e-6);  // the steps after the far field do not see it
+    EXPECT_NEAR(off.truncation, exact.truncation, 1e-9);
+    EXPECT_NEAR(off.closure(), 1.0, 1e-9);
+}
