@@ -271,6 +271,8 @@ DrawnBudget ErrorMeter::drawnTerrainError(int index, double timeOfDay_h,
     method.irradianceFromFar(1, &point, &p.surfaceNormal, &farHere, &here, &noPatch);
     b.atPoint = irradianceRelativeError(glm::dvec3(here), eRef);
     b.truncation = irradianceRelativeError(glm::dvec3(ref.truncated), eRef);
+    method.cornerIrradianceAtPoints(1, &point, &p.surfaceNormal, &here, &noPatch);
+    b.perPoint = irradianceRelativeError(glm::dvec3(here), eRef);
     return b;
 }
 
@@ -304,10 +306,12 @@ DrawnBudgetSummary summarizeDrawnBudget(const std::vector<DrawnBudget>& budgets)
         s.patch += b.freshFar - b.atPoint;
         s.model += b.atPoint - b.truncation;
         s.truncation += b.truncation;
+        s.perPoint += b.perPoint;  // NaN spreads: a budget without it says so
     }
     if (s.count > 0) {
         const double n = double(s.count);
         s.drawn /= n, s.farField /= n, s.patch /= n, s.model /= n, s.truncation /= n;
+        s.perPoint /= n;
     }
     return s;
 }

@@ -150,6 +150,11 @@ struct DrawnBudget {
     double freshFar = std::numeric_limits<double>::quiet_NaN();    // error with fresh far captures
     double atPoint = std::numeric_limits<double>::quiet_NaN();     // ... at the witness' point
     double truncation = std::numeric_limits<double>::quiet_NaN();  // P2 of the reference
+    // Beside the chain, not in it: the method's own answer (its interpolated far field, the near
+    // field) at the witness' point and surface normal, with no patch to blend across: what a
+    // draw that evaluated the ambient per pixel would show, so drawn - perPoint is what such a
+    // draw could gain. Taken with the rest of the budget.
+    double perPoint = std::numeric_limits<double>::quiet_NaN();
     bool complete() const {
         return std::isfinite(drawn) && std::isfinite(freshFar) && std::isfinite(atPoint) &&
                std::isfinite(truncation);
@@ -159,6 +164,7 @@ struct DrawnBudget {
 struct DrawnBudgetSummary {
     std::size_t count = 0;
     double drawn = 0.0, farField = 0.0, patch = 0.0, model = 0.0, truncation = 0.0;
+    double perPoint = 0.0;  // the mean of DrawnBudget::perPoint (NaN when one lacks it)
     // (farField + patch + model + truncation) / drawn: 1 up to rounding, by construction.
     double closure() const;
 };

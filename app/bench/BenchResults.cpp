@@ -118,6 +118,7 @@ const std::vector<std::string> kColumns = {"replay",
                                            "drawn_budget_model",
                                            "drawn_budget_truncation",
                                            "drawn_budget_closure",
+                                           "drawn_per_point_error_mean",
                                            "reference_s",
                                            "wall_s",
                                            "run_dir"};
@@ -188,6 +189,7 @@ std::map<std::string, std::string> resultRow(const Job& job) {
                 put("drawn_budget_model", number(ref, {"drawn", "budget", "model"}));
                 put("drawn_budget_truncation", number(ref, {"drawn", "budget", "truncation"}));
                 put("drawn_budget_closure", number(ref, {"drawn", "budget", "closure"}));
+                put("drawn_per_point_error_mean", number(ref, {"drawn", "budget", "perPoint"}));
             }
         }
         if (number(ref, {"screen", "error", "count"}) > 0) {
@@ -463,11 +465,14 @@ void writeDrawnBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
            "**truncation** (the reference's own order-2 SH at the normal). Closure = sum of the "
            "terms over the drawn mean: 1 by construction (a check, not a finding); a negative "
            "term is an ideal stage that uncovers errors that cancelled. Over the witnesses with "
-           "all four steps (the runs that capture the ideal volume).\n\n";
+           "all four steps (the runs that capture the ideal volume). **Per point**, beside the "
+           "chain: the method's own answer (its far field as interpolated, the near field) at "
+           "the witness' point and normal with no patch to blend across, the error a draw that "
+           "evaluated the ambient per pixel would show.\n\n";
     for (const std::string& replay : replays) {
         out << "### " << replay << "\n\n| method | drawn mean | far field | patch | model | "
-               "truncation | closure | largest | witnesses |\n"
-               "|---|---|---|---|---|---|---|---|---|\n";
+               "truncation | closure | largest | witnesses | per point |\n"
+               "|---|---|---|---|---|---|---|---|---|---|\n";
         for (const Job& j : jobs) {
             if (j.replay.name != replay || !j.ok) continue;
             if (j.point.family.empty() && j.point.label != "default") continue;
@@ -489,7 +494,8 @@ void writeDrawnBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
                 << fmt(number(b, {"drawn"}), "%.4f");
             for (double t : terms) out << " | " << fmt(t, "%+.4f");
             out << " | " << fmt(number(b, {"closure"}), "%.3f") << " | " << names[largest]
-                << " | " << fmt(number(b, {"count"}), "%.0f") << " |\n";
+                << " | " << fmt(number(b, {"count"}), "%.0f") << " | "
+                << fmt(number(b, {"perPoint"}), "%.4f") << " |\n";
         }
         out << "\n";
     }

@@ -549,8 +549,10 @@ void printRunSummary(const RunOptions& o, const RunPlan& plan, int frames, const
             if (d.count > 0)
                 std::printf(
                     "error at the drawn normal (mean over %zu terrain witnesses): %.4f = far field "
-                    "%+.4f, patch %+.4f, model %+.4f, truncation %+.4f (closure %.3f)\n",
-                    d.count, d.drawn, d.farField, d.patch, d.model, d.truncation, d.closure());
+                    "%+.4f, patch %+.4f, model %+.4f, truncation %+.4f (closure %.3f); the "
+                    "method at each witness' own point: %.4f\n",
+                    d.count, d.drawn, d.farField, d.patch, d.model, d.truncation, d.closure(),
+                    d.perPoint);
         }
     }
     if (volume) {

@@ -674,7 +674,8 @@ std::string measurementJson(const ErrorMeter& meter) {
             return json{{"count", b.count},      {"drawn", b.drawn},
                         {"farField", b.farField}, {"patch", b.patch},
                         {"model", b.model},       {"truncation", b.truncation},
-                        {"closure", b.closure()}};
+                        {"closure", b.closure()},
+                        {"perPoint", std::isfinite(b.perPoint) ? json(b.perPoint) : json(nullptr)}};
         };
         drawnJson["budget"] = drawnBudgetJson(meter.drawnBudgets());
         drawnJson["budgetOpen"] = drawnBudgetJson(meter.drawnBudgets(-1, 0));
@@ -737,7 +738,7 @@ void writeReferenceCsv(const ErrorMeter& meter, const std::string& path) {
     std::ofstream out(path);
     if (!out) throw InputError(path, "cannot write the reference CSV");
     out << "frame,witness,x,y,z,total,truncation,capture,spacing,schedule,self,drawn,cover,"
-           "placed,drawn_fresh_far,drawn_at_point,drawn_truncation\n";
+           "placed,drawn_fresh_far,drawn_at_point,drawn_truncation,drawn_per_point\n";
     out.precision(9);
     for (const ReferenceWitness& r : meter.referenceWitnesses()) {
         out << r.frame << ','
@@ -754,7 +755,7 @@ void writeReferenceCsv(const ErrorMeter& meter, const std::string& path) {
                                                      : "open")
             << ',' << (r.ring < 0 ? "" : toString(r.placement));
         const DrawnBudget& b = r.drawnBudget;
-        for (const double v : {b.freshFar, b.atPoint, b.truncation}) {
+        for (const double v : {b.freshFar, b.atPoint, b.truncation, b.perPoint}) {
             out << ',';
             if (std::isfinite(v)) out << v;
         }

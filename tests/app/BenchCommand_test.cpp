@@ -223,7 +223,11 @@ TEST(RunMeasure, DrawnBudgetClosesOnTheWorld) {
     std::ifstream csv(dir / "a" / "reference.csv");
     std::string header;
     std::getline(csv, header);
-    EXPECT_NE(header.find(",drawn_fresh_far,drawn_at_point,drawn_truncation"), std::string::npos);
+    EXPECT_NE(header.find(",drawn_fresh_far,drawn_at_point,drawn_truncation,drawn_per_point"),
+              std::string::npos);
+    // The method at the point, beside the chain: a finite error of its own.
+    const double perPoint = b["perPoint"].get<double>();
+    EXPECT_TRUE(std::isfinite(perPoint) && perPoint >= 0.0 && perPoint < 5.0) << perPoint;
 }
 
 // The reference lit by its own bounce field (the default): the report names the light and how

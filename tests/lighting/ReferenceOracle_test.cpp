@@ -225,7 +225,7 @@ TEST(ReferenceOracle, MeterCacheRoundTripsAndRefusesBadFiles) {
 // The drawn-normal budget's summary: each term is a step between two successive errors, so the
 // means add up to the drawn mean exactly; witnesses without every step are left out.
 TEST(DrawnBudget, TermsAreTheStepsAndAddUpToTheDrawnMean) {
-    DrawnBudget a{0.5, 0.3, 0.2, 0.05}, b{0.3, 0.3, 0.1, 0.05}, partial;
+    DrawnBudget a{0.5, 0.3, 0.2, 0.05, 0.25}, b{0.3, 0.3, 0.1, 0.05, 0.15}, partial;
     partial.drawn = 9.0;  // no fresh captures: left out
     const DrawnBudgetSummary s = summarizeDrawnBudget({a, b, partial});
     EXPECT_EQ(s.count, 2u);
@@ -234,6 +234,7 @@ TEST(DrawnBudget, TermsAreTheStepsAndAddUpToTheDrawnMean) {
     EXPECT_NEAR(s.patch, 0.15, 1e-12);      // (0.1 + 0.2) / 2
     EXPECT_NEAR(s.model, 0.1, 1e-12);       // (0.15 + 0.05) / 2
     EXPECT_NEAR(s.truncation, 0.05, 1e-12);
+    EXPECT_NEAR(s.perPoint, 0.2, 1e-12);  // beside the chain: its own mean
     EXPECT_NEAR(s.closure(), 1.0, 1e-12);
     EXPECT_FALSE(partial.complete());
     EXPECT_EQ(summarizeDrawnBudget({partial}).count, 0u);
@@ -309,6 +310,8 @@ TEST(DrawnBudget, FreshCapturesMakeTheFarFieldTermVanish) {
     EXPECT_NEAR(exact.farField, 0.0, 1e-6);
     EXPECT_NEAR(exact.patch, 0.0, 1e-6);  // the witness is corner 0: the blend is that corner
     EXPECT_NEAR(exact.closure(), 1.0, 1e-9);
+    // The method at the point is the fresh capture at the point: the atPoint step itself.
+    EXPECT_NEAR(exact.perPoint, exact.model + exact.truncation, 1e-6);
     EXPECT_GT(exact.truncation, 0.0);
     EXPECT_LT(exact.truncation, 0.05);  // a smooth fake sky: order 2 holds most of it
 
