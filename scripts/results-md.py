@@ -115,6 +115,25 @@ def headline(rows, setting, command):
         best_e, best_m = min(others)
         ratios.append("**%.2f** (%s)" % (ours_e / best_e, best_m))
     lines.append("| ours ÷ best other, mean error | %s |" % " | ".join(ratios))
+    # Where our error at the drawn normal comes from (the budget that adds up to it), and what
+    # the same method gives evaluated at each witness' own point (an ambient per pixel).
+    terms = ("drawn_budget_far_field", "drawn_budget_patch", "drawn_budget_model",
+             "drawn_budget_truncation")
+    budget, per_point = [], []
+    for rp in replays:
+        ours = cell.get((rp, "volume"))
+        values = [number(ours, k) for k in terms] if ours and ours.get("status") == "ok" else []
+        if values and all(v is not None for v in values):
+            budget.append(" + ".join("%.3f" % v for v in values))
+        else:
+            budget.append("—")
+        pp = number(ours, "drawn_per_point_error_mean") if ours else None
+        per_point.append("%.3f" % pp if pp is not None else "—")
+    if drawn and any(b != "—" for b in budget):
+        lines.append("| ours at the drawn normal = far field + patch + model + truncation | %s |"
+                     % " | ".join(budget))
+        lines.append("| ours evaluated at each witness' own point (no patch blend) | %s |"
+                     % " | ".join(per_point))
     return "\n".join(lines)
 
 
