@@ -419,21 +419,23 @@ TEST(SettingsSchema, TheFuzzSeedsAreFilesTheReadersTake) {
 
 // The files the project ships with settings in them read as they always have.
 TEST(SettingsSchema, TheShippedSweepsSettingsStillRead) {
-    std::ifstream in(std::string(AMBIENCE_SOURCE_DIR) + "/sweeps/two-scale.json");
-    ASSERT_TRUE(in);
-    const nlohmann::json sweep = nlohmann::json::parse(in);
     int read = 0;
-    for (const nlohmann::json& point : sweep.at("points")) {
-        if (point.contains("volume")) {
-            EXPECT_NO_THROW(ambienceSettingsFromJson(point.at("volume").dump(), "sweep"));
-            ++read;
-        }
-        if (point.contains("baseline")) {
-            EXPECT_NO_THROW(baselineSettingsFromJson(point.at("baseline").dump(), "sweep"));
-            ++read;
+    for (const char* file : {"two-scale.json", "vertex-ambient.json"}) {
+        std::ifstream in(std::string(AMBIENCE_SOURCE_DIR) + "/sweeps/" + file);
+        ASSERT_TRUE(in) << file;
+        const nlohmann::json sweep = nlohmann::json::parse(in);
+        for (const nlohmann::json& point : sweep.at("points")) {
+            if (point.contains("volume")) {
+                EXPECT_NO_THROW(ambienceSettingsFromJson(point.at("volume").dump(), file));
+                ++read;
+            }
+            if (point.contains("baseline")) {
+                EXPECT_NO_THROW(baselineSettingsFromJson(point.at("baseline").dump(), file));
+                ++read;
+            }
         }
     }
-    EXPECT_GT(read, 5);
+    EXPECT_GT(read, 7);
 }
 
 }  // namespace
