@@ -141,6 +141,11 @@ class AmbienceMethod {
     // True when the draw should scale the terrain's ambient by the per-vertex sky detail of its
     // finest patches (world/TerrainPatch.h; the near field's vertexDetail).
     virtual bool terrainSkyDetail() const { return false; }
+    // Terrain patches nearer the eye than this (horizontal distance to the patch's bounds, m)
+    // are drawn with the ambient evaluated at every mesh vertex (cornerIrradianceAtPoints at
+    // the vertex's point and normal, patch_m the vertex spacing) instead of their corners
+    // blended across the patch; 0: none (the near field's vertexAmbient_m).
+    virtual double terrainVertexRange_m() const { return 0.0; }
 
     virtual MethodStatistics methodStatistics() const = 0;
     // Where the interpolation at (x, z) reads its probes now (see IdealSupport); none by default.

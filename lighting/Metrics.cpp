@@ -236,32 +236,52 @@ DrawnBudget ErrorMeter::drawnTerrainError(int index, double timeOfDay_h,
     const DrawnPatch p = environment_.drawnPatch(w.x_m, w.z_m, camera_m);
     cover = p.cover;
     if (!(p.size_m > 0.0) || p.cover == GroundCover::Hidden) return b;
-    // The four corners as the draw asks them (MethodAmbient::cornerIrradianceBatch: the corner
-    // kShadingHeight_m up, its normal, the patch's size for the near field's patch mean).
+    // The four points whose values the draw interpolates at the witness, asked as the draw asks
+    // them (MethodAmbient::cornerIrradianceBatch: each kShadingHeight_m up, its normal, and the
+    // size the near field's patch mean averages over), with the weights of the interpolation.
+    // A patch nearer the camera than the method's terrainVertexRange_m (horizontally, to its
+    // bounds; RendererScene::buildView's rule) is lit per mesh vertex: the vertices of the
+    // grid cell holding the witness, averaged over the vertex spacing, interpolated as the
+    // cell's triangles interpolate them. Else the patch's corners, averaged over the patch,
+    // blended bilinearly.
+    std::array<glm::dvec3, 4> ground, normal;
+    std::array<double, 4> weight;
+    double patch_m = p.size_m;
+    const double range = method.terrainVertexRange_m();
+    const double dx = std::max({p.x0_m - camera_m.x, 0.0, camera_m.x - p.x0_m - p.size_m});
+    const double dz = std::max({p.z0_m - camera_m.z, 0.0, camera_m.z - p.z0_m - p.size_m});
+    if (range > 0.0 && std::hypot(dx, dz) < range) {
+        const DrawnCell cell = environment_.drawnCell(w.x_m, w.z_m, camera_m);
+        if (!cell.known || p.quads <= 0) return b;  // not known as drawn: not graded
+        ground = cell.vertex_m, normal = cell.normal, weight = cell.weight;
+        patch_m = p.size_m / p.quads;
+    } else {
+        const double u = (w.x_m - p.x0_m) / p.size_m, v = (w.z_m - p.z0_m) / p.size_m;
+        ground = p.corner_m, normal = p.cornerNormal;
+        weight = {(1.0 - u) * (1.0 - v), u * (1.0 - v), (1.0 - u) * v, u * v};
+    }
     std::array<glm::dvec3, 4> at;
     std::array<double, 4> patch;
     std::array<glm::vec3, 4> e;
     for (std::size_t c = 0; c < 4; ++c) {
-        at[c] = p.corner_m[c] + glm::dvec3(0.0, kShadingHeight_m, 0.0);
-        patch[c] = p.size_m;
+        at[c] = ground[c] + glm::dvec3(0.0, kShadingHeight_m, 0.0);
+        patch[c] = patch_m;
     }
-    const double u = (w.x_m - p.x0_m) / p.size_m, v = (w.z_m - p.z0_m) / p.size_m;
     const auto blend = [&] {
-        return glm::dvec3(e[0]) * ((1.0 - u) * (1.0 - v)) + glm::dvec3(e[1]) * (u * (1.0 - v)) +
-               glm::dvec3(e[2]) * ((1.0 - u) * v) + glm::dvec3(e[3]) * (u * v);
+        return glm::dvec3(e[0]) * weight[0] + glm::dvec3(e[1]) * weight[1] +
+               glm::dvec3(e[2]) * weight[2] + glm::dvec3(e[3]) * weight[3];
     };
     const ScreenEntry& ref = surfaceEntry(index, p.surface_m, p.surfaceNormal, timeOfDay_h);
     const glm::dvec3 eRef(ref.irradiance);
-    method.cornerIrradianceAtPoints(4, at.data(), p.cornerNormal.data(), e.data(), patch.data());
+    method.cornerIrradianceAtPoints(4, at.data(), normal.data(), e.data(), patch.data());
     b.drawn = irradianceRelativeError(blend(), eRef);
     if (!budget) return b;
-    // The same path with the far field from fresh captures at the corners' ground points.
+    // The same path with the far field from fresh captures at those points' ground points.
     const double radius = method.farCaptureRadius_m();
     std::array<ShRgb, 4> far;
     for (std::size_t c = 0; c < 4; ++c)
-        far[c] = farOracle(index, p.corner_m[c].x, p.corner_m[c].z, timeOfDay_h, radius);
-    method.irradianceFromFar(4, at.data(), p.cornerNormal.data(), far.data(), e.data(),
-                             patch.data());
+        far[c] = farOracle(index, ground[c].x, ground[c].z, timeOfDay_h, radius);
+    method.irradianceFromFar(4, at.data(), normal.data(), far.data(), e.data(), patch.data());
     b.freshFar = irradianceRelativeError(blend(), eRef);
     // ... and at the witness' own point and surface normal: no blend across the patch.
     const glm::dvec3 point = p.surface_m + glm::dvec3(0.0, kShadingHeight_m, 0.0);

@@ -137,9 +137,12 @@ const char* toString(OracleKind kind);
 //               (spacing, staleness, blending, holes) against fresh captures of the far scene at
 //               the patch's four corners (placed as probes are, the plants the method's captures
 //               leave out left out), the rest of the draw's path (near field, patch mean) kept;
+//               on a patch lit per vertex (AmbienceMethod::terrainVertexRange_m), at the four
+//               vertices of the grid cell holding the witness instead;
 //   patch       freshFar - atPoint: the patch's bilinear blend of its four corners (and the near
 //               field's patch mean) against the same path evaluated at the witness' own point and
-//               surface normal with a fresh far capture there;
+//               surface normal with a fresh far capture there (per vertex: the cell's triangle
+//               interpolation of its vertices, each averaged over the vertex spacing);
 //   model       atPoint - truncation: what the ambience model itself misses at a point (the
 //               coarse capture scene, its surfaces lit by the hemisphere model, the near field's
 //               spheres and ground) against the reference;
@@ -181,7 +184,8 @@ struct ReferenceWitness {
     // A terrain witness as the screen shows it (NaN when not taken: objects, or no patch known):
     // the ambient the draw applies at the ground point, read as the draw reads it (the
     // corners of the terrain patch drawn there, each at its point and normal through
-    // cornerIrradianceAtPoints, interpolated bilinearly), against the reference irradiance at
+    // cornerIrradianceAtPoints, interpolated bilinearly; on a patch lit per vertex, the vertices
+    // of its grid cell, interpolated as its triangles), against the reference irradiance at
     // that surface point and its normal: |E_drawn(n) - E_ref(n)| / |E_ref(n)|, luminance-weighted
     // channels, E_ref from a reference capture kScreenProbeOffset_m along the normal.
     // A witness on ground a bush, a rock or a trunk stands on is not seen: it gets none.

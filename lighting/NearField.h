@@ -210,6 +210,12 @@ struct NearFieldSettings {
     // terrain's own sky visibility there against the patch's corners (world/TerrainPatch.h
     // skyDetail): the gullies that fall between corners. Needs `terrain`.
     bool vertexDetail = true;
+    // Terrain patches whose nearest point (horizontally) lies closer than this to the eye take
+    // the ambient at each mesh vertex, each through its own normal with the near field averaged
+    // over one grid cell (patch mean of the vertex spacing), instead of blending the corners
+    // across the patch (docs/ARCHITECTURE.md "Terrain and objects"). 0: off, every patch blends
+    // its corners.
+    double vertexAmbient_m = 0.0;
 };
 // The near field's weight at distance_m (horizontal) from the camera for a range: 1 out to
 // (1 - kNearFade) range, 0 from range on, smoothstep between (see Range).
@@ -642,6 +648,8 @@ class NearFieldMethod final : public AmbienceMethod {
     }
     bool wantsLookups() const override { return far_->wantsLookups(); }
     bool terrainSkyDetail() const override { return skyDetail_; }
+    // The setting vertexAmbient_m while the near field is enabled, else 0.
+    double terrainVertexRange_m() const override;
     MethodStatistics methodStatistics() const override;
     // None: the error budget's ideal volume (fresh full captures at the lattice points) is not
     // what this method interpolates (far captures and the near field at the point), so its

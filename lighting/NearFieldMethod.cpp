@@ -154,6 +154,11 @@ void NearFieldMethod::irradianceFromFar(std::size_t count, const glm::dvec3* poi
     for (std::size_t j = 0; j < nearIndex_.size(); ++j) out[nearIndex_[j]] = near[j];
 }
 
+double NearFieldMethod::terrainVertexRange_m() const {
+    const NearFieldSettings& s = near_->settings();
+    return s.enabled && s.vertexAmbient_m > 0.0 ? s.vertexAmbient_m : 0.0;
+}
+
 MethodStatistics NearFieldMethod::methodStatistics() const {
     MethodStatistics s = far_->methodStatistics();
     s.nearField_s = near_->seconds();

@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <mutex>
+#include <unordered_map>
 
 #include <glm/geometric.hpp>
 
@@ -223,6 +224,7 @@ DrawnPatch WorldProbeEnvironment::drawnPatch(double x_m, double z_m,
     for (const auto& [x0, z0, size] : leaves_) {
         if (!(x_m >= x0 && x_m < x0 + size && z_m >= z0 && z_m < z0 + size)) continue;
         p.x0_m = x0, p.z0_m = z0, p.size_m = size;
+        p.quads = TerrainPatch::kPatchQuads;
         for (int c = 0; c < 4; ++c) {
             const double x = x0 + ((c & 1) ? size : 0.0), z = z0 + ((c & 2) ? size : 0.0);
             p.corner_m[std::size_t(c)] = glm::dvec3(x, world_.height(x, z), z);
@@ -231,6 +233,58 @@ DrawnPatch WorldProbeEnvironment::drawnPatch(double x_m, double z_m,
         break;
     }
     return p;
+}
+
+struct WorldProbeEnvironment::Mesh {
+    explicit Mesh(const World& world) : patches(world) {}
+    TerrainPatchCache patches;
+    glm::dvec3 camera{std::nan("")};
+    TerrainMesh mesh;
+    std::unordered_map<PatchKey, std::size_t, PatchKeyHash> index;  // into mesh.patches
+};
+
+WorldProbeEnvironment::~WorldProbeEnvironment() = default;
+
+DrawnCell WorldProbeEnvironment::drawnCell(double x_m, double z_m,
+                                           const glm::dvec3& camera_m) const {
+    if (!mesh_) mesh_ = std::make_unique<Mesh>(world_);
+    Mesh& m = *mesh_;
+    if (!(camera_m == m.camera)) {
+        // The origin as the renderer snaps it (RendererScene::updateTerrain): positions are
+        // relative to a point on a 256 m lattice with y 0, so heights round as the draw's do.
+        const double snap = 256.0;
+        const glm::dvec3 origin(std::floor(camera_m.x / snap) * snap, 0.0,
+                                std::floor(camera_m.z / snap) * snap);
+        m.mesh = m.patches.build(m.patches.selectPatches(camera_m), origin);
+        m.index.clear();
+        for (std::size_t i = 0; i < m.mesh.patches.size(); ++i) m.index[m.mesh.patches[i].key] = i;
+        m.camera = camera_m;
+    }
+    DrawnCell cell;
+    for (const auto& [key, i] : m.index) {
+        const double size = TerrainPatch::size_m(key.level);
+        const double x0 = TerrainPatch::originX_m(key), z0 = TerrainPatch::originZ_m(key);
+        if (!(x_m >= x0 && x_m < x0 + size && z_m >= z0 && z_m < z0 + size)) continue;
+        const TerrainPatchDraw& p = m.mesh.patches[i];
+        constexpr int kQ = TerrainPatch::kPatchQuads, kV = TerrainPatch::kVerticesPerSide;
+        const double s = TerrainPatch::spacing_m(key.level);
+        const double u = (x_m - x0) / s, w = (z_m - z0) / s;
+        const int a = std::clamp(int(std::floor(u)), 0, kQ - 1);
+        const int b = std::clamp(int(std::floor(w)), 0, kQ - 1);
+        const auto& pos = m.mesh.mesh.positions;
+        const auto& nrm = m.mesh.mesh.normals;
+        for (int c = 0; c < 4; ++c) {
+            const std::size_t v = p.firstVertex + std::size_t((b + (c >> 1)) * kV + a + (c & 1));
+            cell.vertex_m[std::size_t(c)] =
+                m.mesh.origin_m + glm::dvec3(pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]);
+            cell.normal[std::size_t(c)] = glm::dvec3(nrm[3 * v], nrm[3 * v + 1], nrm[3 * v + 2]);
+        }
+        cell.weight = quadTriangleWeights(u - a, w - b);
+        cell.spacing_m = s;
+        cell.known = true;
+        break;
+    }
+    return cell;
 }
 
 }  // namespace amb

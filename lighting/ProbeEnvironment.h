@@ -59,11 +59,28 @@ const char* toString(ProbePlacement placement);
 
 struct DrawnPatch {
     double x0_m = 0.0, z0_m = 0.0, size_m = 0.0;  // the leaf covers [x0, x0 + size) x [z0, ...)
+    // Its vertex grid: quads x quads cells of size_m / quads (TerrainPatch::kPatchQuads); 0:
+    // not known (a draw lighting it per vertex cannot be graded).
+    int quads = 0;
     std::array<glm::dvec3, 4> corner_m{};        // ground points (x0,z0), (x1,z0), (x0,z1), (x1,z1)
     std::array<glm::dvec3, 4> cornerNormal{};    // unit, World::normal there
     glm::dvec3 surface_m{0.0};                   // the ground at the point itself
     glm::dvec3 surfaceNormal{0.0, 1.0, 0.0};     // unit, World::normal there
     GroundCover cover = GroundCover::Open;         // at the point itself
+};
+
+// The grid cell of a drawn patch that holds a ground point, as the draw meshes it: what a patch
+// lit per vertex (the ambient's terrainVertexRange_m) shows there is the cell's vertex values
+// interpolated as its triangles interpolate them. Its four vertices (a, b), (a + 1, b),
+// (a, b + 1), (a + 1, b + 1) as rendered (heights stitched across LOD boundaries) with the
+// mesh's normals, and the weights of the triangle holding the point (world/TerrainPatch.h
+// quadTriangleWeights: one is 0). `known` false: none.
+struct DrawnCell {
+    bool known = false;
+    double spacing_m = 0.0;  // the patch's vertex spacing
+    std::array<glm::dvec3, 4> vertex_m{};
+    std::array<glm::dvec3, 4> normal{};
+    std::array<double, 4> weight{};
 };
 
 class ProbeEnvironment {
@@ -94,6 +111,11 @@ class ProbeEnvironment {
         (void)x_m, (void)z_m, (void)camera_m;
         return {};
     }
+    // The cell of that patch holding (x, z) (see DrawnCell); none by default.
+    virtual DrawnCell drawnCell(double x_m, double z_m, const glm::dvec3& camera_m) const {
+        (void)x_m, (void)z_m, (void)camera_m;
+        return {};
+    }
 };
 
 struct WorldProbeEnvironmentSettings {
@@ -113,6 +135,10 @@ class WorldProbeEnvironment : public ProbeEnvironment {
                                                double near_m, double far_m, double carHeight_m,
                                                int measuredIndex) const override;
     DrawnPatch drawnPatch(double x_m, double z_m, const glm::dvec3& camera_m) const override;
+    // From the terrain mesh the main view builds for those leaves (TerrainPatchCache::build,
+    // stitched), built once per camera asked.
+    DrawnCell drawnCell(double x_m, double z_m, const glm::dvec3& camera_m) const override;
+    ~WorldProbeEnvironment() override;
 
   private:
     const World& world_;
@@ -121,6 +147,9 @@ class WorldProbeEnvironment : public ProbeEnvironment {
     // terrain witness, all for one camera).
     mutable glm::dvec3 leavesCamera_{std::nan("")};
     mutable std::vector<std::array<double, 3>> leaves_;  // x0, z0, size
+    // drawnCell's: the patches (cached across cameras), the mesh of the last camera asked.
+    struct Mesh;
+    mutable std::unique_ptr<Mesh> mesh_;
 };
 
 }  // namespace amb

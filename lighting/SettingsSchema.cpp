@@ -309,6 +309,11 @@ Keys<NearFieldSettings> nearFieldKeys() {
         "the terrain's ambient scaled by its own sky visibility at each vertex of fine "
         "patches",
         [](T& t) -> bool& { return t.vertexDetail; }, costHigh);
+    k.number(
+        "vertexAmbient_m", "m", 0.0, 2000.0,
+        "terrain patches nearer the eye than this take the ambient at every vertex, not their "
+        "corners blended (0: off)",
+        [](T& t) -> double& { return t.vertexAmbient_m; }, costHighLog);
     return k;
 }
 

@@ -7,7 +7,7 @@
 layout(location = 0) in vec3 aPosition;  // metres, relative to the patch origin
 layout(location = 1) in vec3 aNormal;
 layout(location = 2) in vec3 aAlbedo;
-layout(location = 5) in vec3 aIrradiance;  // road pieces only (uVertexIrradiance)
+layout(location = 5) in vec3 aIrradiance;  // road pieces, near terrain (uVertexIrradiance)
 layout(location = 6) in vec2 aSkyDetail;  // terrain patches only (uSkyDetail): V, Vc
 
 uniform vec3 uOrigin;     // patch origin, camera-relative [m]

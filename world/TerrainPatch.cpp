@@ -580,6 +580,11 @@ TerrainSurface::TerrainSurface(const TerrainMesh& mesh) : mesh_(&mesh) {
     }
 }
 
+std::array<double, 4> quadTriangleWeights(double fu, double fw) {
+    if (fu + fw <= 1.0) return {1.0 - fu - fw, fu, fw, 0.0};
+    return {0.0, 1.0 - fw, 1.0 - fu, fu + fw - 1.0};
+}
+
 // Inside patch `patch` (no check): the quad's triangle holding (x, z), as build() packs them:
 // (v00, v01, v10) below the diagonal from v10 to v01, (v10, v01, v11) above it.
 double TerrainSurface::heightIn(std::size_t patch, double x_m, double z_m) const {

@@ -154,6 +154,13 @@ std::vector<std::uint32_t> cornersToEvaluate(const TerrainMesh& mesh,
 // ones (in list order, so chains along ever coarser edges resolve). O(corners).
 void stitchCornerValues(const std::vector<TerrainCorner>& corners, glm::vec3* values);
 
+// The weights with which a quad's two triangles, as TerrainPatchCache::build packs them,
+// interpolate values given at its vertices (v00, v10, v01, v11) at (fu, fw) in [0, 1]^2 of the
+// quad: (v00, v01, v10) where fu + fw <= 1, (v10, v01, v11) beyond; one weight is 0. What the
+// rasteriser does to a value per vertex across the drawn surface (the heights, and the ambient
+// of a patch lit per vertex).
+std::array<double, 4> quadTriangleWeights(double fu, double fw);
+
 // The drawn terrain surface of a TerrainMesh (stitched heights, two triangles per quad as packed)
 // at any (x, z) inside its leaves: where objects placed on the terrain must stand, since far
 // patches are coarse and their surface lies up to metres off the true height.

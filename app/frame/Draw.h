@@ -51,6 +51,10 @@ class AmbientSource {
     // Whether the terrain's fine patches scale this ambient by their per-vertex sky detail
     // (world/TerrainPatch.h): a method with the near field's terrain; never a capture's.
     virtual bool terrainSkyDetail() const { return false; }
+    // Terrain patches nearer the eye than this [m] take the ambient at every mesh vertex,
+    // asked through cornerIrradianceBatch with the vertex spacing as patch_m, instead of their
+    // corners blended (AmbienceMethod::terrainVertexRange_m); 0: none, never a capture's.
+    virtual double terrainVertexRange_m() const { return 0.0; }
     // The same for `count` objects at once (a frame's plants): index[i] for position i. One by
     // one by default.
     virtual void objectSets(std::size_t count, const glm::dvec3* positions_m,

@@ -43,6 +43,7 @@ class MethodAmbient final : public AmbientSource {
     std::uint32_t objectSet(const glm::dvec3& position_m,
                             std::vector<AmbientSet>& sets) const override;
     bool terrainSkyDetail() const override { return method_.terrainSkyDetail(); }
+    double terrainVertexRange_m() const override { return method_.terrainVertexRange_m(); }
     // The batch through the method's batch shAt (one timing, one lock of the near field).
     void objectSets(std::size_t count, const glm::dvec3* positions_m,
                     std::vector<AmbientSet>& sets, std::uint32_t* index) const override;

@@ -104,6 +104,7 @@ SceneDrawer::SceneDrawer()
     terrainCorners_ = terrain_.uniform("uCornerIrradiance");
     terrainPerVertex_ = terrain_.uniform("uVertexIrradiance");
     terrainSkyDetail_ = terrain_.uniform("uSkyDetail");
+    terrainRoad_ = terrain_.uniform("uRoad");
     objectSimplified_ = object_.uniform("uSimplified");
     casterOrigin_ = caster_.uniform("uOrigin");
     casterInstanced_ = caster_.uniform("uInstanced");
@@ -207,7 +208,8 @@ std::size_t SceneDrawer::draw(const DrawList& list, const FrameConstants& consta
     }
 
     // Terrain patches (and road pieces): one draw each, corner irradiance per patch (or, for
-    // road pieces, irradiance per vertex from one buffer for the frame).
+    // road pieces and terrain patches lit per vertex, irradiance per vertex from one buffer for
+    // the frame).
     terrain_.use();
     if (!list.vertexIrradiance.empty()) {
         if (list.vertexIrradiance.size() > vertexIrradianceCapacity_) {
@@ -226,8 +228,8 @@ std::size_t SceneDrawer::draw(const DrawList& list, const FrameConstants& consta
     std::size_t passTriangles = 0;
     for (int roads = 1; roads >= 0; --roads)
     for (const TerrainDraw& d : list.terrain) {
-        if ((d.firstVertexIrradiance >= 0) != (roads == 1)) continue;
-        const RenderPass dp = d.firstVertexIrradiance >= 0 ? RenderPass::Roads : RenderPass::Terrain;
+        if (d.road != (roads == 1)) continue;
+        const RenderPass dp = d.road ? RenderPass::Roads : RenderPass::Terrain;
         if (timer_ && int(dp) != pass) {
             if (pass >= 0) timer_->end(passTriangles);
             timer_->begin(dp);
@@ -241,6 +243,7 @@ std::size_t SceneDrawer::draw(const DrawList& list, const FrameConstants& consta
         const GLuint vao = d.mesh->vao.id();
         const bool perVertex = d.firstVertexIrradiance >= 0;
         glUniform1i(terrainPerVertex_, perVertex ? 1 : 0);
+        glUniform1i(terrainRoad_, d.road ? 1 : 0);
         glUniform1i(terrainSkyDetail_, d.skyDetail && d.mesh->skyDetail.id() != 0 ? 1 : 0);
         if (perVertex) {
             glVertexArrayVertexBuffer(vao, 5, vertexIrradiance_.id(),

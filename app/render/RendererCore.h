@@ -90,9 +90,14 @@ struct TerrainDraw {
     glm::vec3 origin{0.0f};                        // patch origin, camera-relative [m]
     glm::vec4 rect{0, 0, 1, 1};  // (x0, z0) relative to the origin [m], 1/size [1/m]
     std::array<glm::vec3, 4> cornerIrradiance{};  // (x0,z0), (x1,z0), (x0,z1), (x1,z1)
-    // Road pieces: the irradiance of mesh vertex v is DrawList::vertexIrradiance[this + v]
-    // (the corners and rect are then unused); -1: the corners, bilinear across the rect.
+    // Road pieces, and terrain patches lit per vertex (RendererScene::buildView, the ambient's
+    // terrainVertexRange_m): the irradiance of mesh vertex v is
+    // DrawList::vertexIrradiance[this + v] (the corners and rect are then unused); -1: the
+    // corners, bilinear across the rect.
     std::int64_t firstVertexIrradiance = -1;
+    // A road piece: drawn in the roads' pass, before the terrain, and marked as surface kind 2
+    // (road) in the screen witnesses' outputs; else terrain (kind 1), lit per vertex or not.
+    bool road = false;
     // Terrain patches: scale the ambient by the mesh's per-vertex sky detail (attribute 6).
     bool skyDetail = false;
 };
@@ -165,7 +170,7 @@ class SceneDrawer {
     GlTexture skyTexture_;
     GlVertexArray emptyVao_;
     GLint terrainOrigin_ = -1, terrainRect_ = -1, terrainCorners_ = -1, terrainPerVertex_ = -1;
-    GLint terrainSkyDetail_ = -1;
+    GLint terrainSkyDetail_ = -1, terrainRoad_ = -1;
     GLint objectSimplified_ = -1;
     GLint casterOrigin_ = -1, casterInstanced_ = -1;
 };

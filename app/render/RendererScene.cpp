@@ -214,11 +214,24 @@ void RendererScene::buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj
         visible.emplace_back(glm::length(nearest - eye_m), i);
     }
     std::sort(visible.begin(), visible.end());
-    // The visible patches' corners in one batch (the frame's largest set of lookups), each
-    // shared corner once; a corner inside a coarser neighbour's edge is not looked up but takes
-    // that edge's interpolation, so colours meet across LOD boundaries (world/TerrainPatch.h).
-    std::vector<std::size_t> visiblePatches;
-    for (const auto& [distance, i] : visible) visiblePatches.push_back(i);
+    // Patches nearer the eye (horizontally, to their bounds) than the ambient's vertex range are
+    // lit per mesh vertex (nearField.vertexAmbient_m; docs/ARCHITECTURE.md "Terrain and
+    // objects"); the others blend their corners.
+    const double vertexRange = ambient.terrainVertexRange_m();
+    std::vector<std::size_t> visiblePatches, vertexPatches;
+    for (const auto& [distance, i] : visible) {
+        const PatchBounds& b = terrainBounds_[i];
+        const double dx = std::max({b.min.x - eye_m.x, 0.0, eye_m.x - b.max.x});
+        const double dz = std::max({b.min.z - eye_m.z, 0.0, eye_m.z - b.max.z});
+        if (vertexRange > 0.0 && std::hypot(dx, dz) < vertexRange)
+            vertexPatches.push_back(i);
+        else
+            visiblePatches.push_back(i);
+    }
+    // The corner-blended patches' corners in one batch (the frame's largest set of lookups),
+    // each shared corner once; a corner inside a coarser neighbour's edge is not looked up but
+    // takes that edge's interpolation, so colours meet across LOD boundaries
+    // (world/TerrainPatch.h).
     const std::vector<std::uint32_t> evaluate = cornersToEvaluate(terrainMesh_, visiblePatches);
     std::vector<glm::dvec3> cornerAt, cornerNormal;
     std::vector<double> cornerPatch;
@@ -234,15 +247,41 @@ void RendererScene::buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj
     for (std::size_t j = 0; j < evaluate.size(); ++j) cornerValue[evaluate[j]] = irradiance[j];
     stitchCornerValues(terrainMesh_.corners, cornerValue.data());
     const bool skyDetail = ambient.terrainSkyDetail();
-    for (std::size_t i : visiblePatches) {
+    // In the draw order (nearest first), each patch lit per vertex or by its corners.
+    std::vector<char> perVertex(terrainMesh_.patches.size(), 0);
+    for (std::size_t i : vertexPatches) perVertex[i] = 1;
+    for (const auto& [distance, i] : visible) {
         const TerrainPatchDraw& p = terrainMesh_.patches[i];
         glm::vec3 corners[4];
         for (int k = 0; k < 4; ++k) corners[k] = cornerValue[p.cornerIndex[k]];
         out.terrain.push_back(patchDraw(terrainGl_, p, terrainMesh_.origin_m, eye_m, corners));
-        out.terrain.back().skyDetail = skyDetail;
+        if (perVertex[i]) {
+            // Mesh vertex v reads vertexIrradiance[v] (the layout: addRoads). The sky detail
+            // scales a blend of corners; a vertex's own value needs none.
+            out.terrain.back().firstVertexIrradiance = 0;
+        } else {
+            out.terrain.back().skyDetail = skyDetail;
+        }
+    }
+    // The per-vertex patches' vertices: world position, the mesh's (stitched) normal, and the
+    // vertex spacing, over which the near field averages its answer (one grid cell).
+    VertexPoints terrainVertices;
+    const auto& pos = terrainMesh_.mesh.positions;
+    const auto& nrm = terrainMesh_.mesh.normals;
+    for (std::size_t i : vertexPatches) {
+        const TerrainPatchDraw& p = terrainMesh_.patches[i];
+        const double spacing = TerrainPatch::spacing_m(p.key.level);
+        for (std::uint32_t v = p.firstVertex; v < p.firstVertex + p.vertexCount; ++v) {
+            terrainVertices.index.push_back(v);
+            terrainVertices.at.push_back(terrainMesh_.origin_m +
+                                         glm::dvec3(pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]));
+            terrainVertices.normal.emplace_back(nrm[3 * v], nrm[3 * v + 1], nrm[3 * v + 2]);
+            terrainVertices.patch.push_back(spacing);
+        }
     }
     const std::size_t drawnPatches = visible.size();
-    addRoads(eye_m, &viewProj, settings_.terrain.viewRadius_m, ambient, out);
+    addRoads(eye_m, &viewProj, settings_.terrain.viewRadius_m, ambient, out,
+             vertexPatches.empty() ? nullptr : &terrainVertices);
     std::size_t objects = 0;
     // The car's set is asked with the plants': new points in one batch are built together.
     std::uint32_t vehicleSet = 0;
@@ -274,7 +313,8 @@ void RendererScene::buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj
 }
 
 void RendererScene::addRoads(const glm::dvec3& eye_m, const glm::mat4* viewProj, double range_m,
-                             const AmbientSource& ambient, DrawList& out) {
+                             const AmbientSource& ambient, DrawList& out,
+                             const VertexPoints* terrain) {
     Frustum frustum{};
     if (viewProj) frustum = frustumOf(*viewProj);
     // The ambient at every vertex of the visible pieces, with the vertex's own normal, in one
@@ -292,16 +332,47 @@ void RendererScene::addRoads(const glm::dvec3& eye_m, const glm::mat4* viewProj,
         at.insert(at.end(), c.vertices_m.begin(), c.vertices_m.end());
         normal.insert(normal.end(), c.normals.begin(), c.normals.end());
     }
-    const std::size_t first = out.vertexIrradiance.size();
-    out.vertexIrradiance.resize(first + at.size());
-    ambient.cornerIrradianceBatch(at.size(), at.data(), normal.data(),
-                                  out.vertexIrradiance.data() + first);
+    std::size_t first = out.vertexIrradiance.size();
+    if (!terrain) {
+        out.vertexIrradiance.resize(first + at.size());
+        ambient.cornerIrradianceBatch(at.size(), at.data(), normal.data(),
+                                      out.vertexIrradiance.data() + first);
+    } else {
+        // Terrain vertices lit per vertex, and the road vertices after them, in one batch: the
+        // terrain's each with its vertex spacing as patch_m, the roads' as points (0). The
+        // buffer is bound at a byte offset, which cannot be negative, and a patch's indices
+        // are absolute into the shared terrain mesh: so the terrain's part is laid out by mesh
+        // vertex, vertexIrradiance[first + v] for mesh vertex v (firstVertexIrradiance = first
+        // for every such patch), up to the last one used; the vertices of patches blending their
+        // corners stay zero there, unread. The roads' part follows.
+        const std::size_t terrainCount = terrain->at.size();
+        std::uint32_t end = 0;
+        for (std::uint32_t v : terrain->index) end = std::max(end, v + 1);
+        std::vector<glm::dvec3> allAt(terrain->at), allNormal(terrain->normal);
+        std::vector<double> patch(terrain->patch);
+        allAt.insert(allAt.end(), at.begin(), at.end());
+        allNormal.insert(allNormal.end(), normal.begin(), normal.end());
+        patch.resize(allAt.size(), 0.0);
+        std::vector<glm::vec3> values(allAt.size());
+        ambient.cornerIrradianceBatch(allAt.size(), allAt.data(), allNormal.data(), values.data(),
+                                      patch.data());
+        out.vertexIrradiance.resize(first + end + at.size(), glm::vec3(0.0f));
+        for (std::size_t j = 0; j < terrainCount; ++j)
+            out.vertexIrradiance[first + terrain->index[j]] = values[j];
+        for (TerrainDraw& d : out.terrain)
+            if (!d.road && d.firstVertexIrradiance >= 0)
+                d.firstVertexIrradiance = std::int64_t(first);
+        std::copy(values.begin() + std::ptrdiff_t(terrainCount), values.end(),
+                  out.vertexIrradiance.begin() + std::ptrdiff_t(first + end));
+        first += end;
+    }
     std::size_t offset = first;
     for (const RoadChunk* c : drawn) {
         TerrainDraw d;
         d.mesh = &c->mesh;
         d.origin = glm::vec3(c->origin_m - eye_m);
         d.firstVertexIrradiance = std::int64_t(offset);
+        d.road = true;
         offset += c->vertices_m.size();
         out.terrain.push_back(d);
     }
@@ -492,6 +563,7 @@ void RendererScene::buildCasters(const glm::dvec3& eye_m, const glm::mat4& light
         TerrainDraw d;
         d.mesh = &c.mesh;
         d.origin = glm::vec3(c.origin_m - eye_m);
+        d.road = true;
         out.terrain.push_back(d);
     }
     if (withPlants) addPlantCasters(eye_m, lightViewProj, texel_m, false, out);

@@ -51,7 +51,9 @@ class RendererScene {
     RendererScene(const World& world, const RendererSceneSettings& settings = {});
     ~RendererScene();
 
-    // Main view: `viewProj` maps camera-relative positions (world - eye) to clip space.
+    // Main view: `viewProj` maps camera-relative positions (world - eye) to clip space. Terrain
+    // patches blend the ambient of their corners, or, nearer the eye than the ambient's
+    // terrainVertexRange_m, take it at every mesh vertex.
     void buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj, const AmbientSource& ambient,
                    DrawList& out, SceneStats* stats = nullptr);
     // The car drawn by the next buildView calls (lit like any object: its own SH set), or none.
@@ -81,9 +83,19 @@ class RendererScene {
 
   private:
     struct RoadChunk;
+    // Terrain mesh vertices whose ambient the draw asks for (patches lit per vertex): the mesh
+    // vertex, its world position and normal, and the patch_m the near field averages over.
+    struct VertexPoints {
+        std::vector<std::uint32_t> index;
+        std::vector<glm::dvec3> at, normal;
+        std::vector<double> patch;
+    };
     void updateTerrain(const glm::dvec3& eye_m);
+    // With `terrain`, those vertices are asked in the roads' batch, and the terrain draws
+    // already in `out` with firstVertexIrradiance >= 0 are pointed at their values.
     void addRoads(const glm::dvec3& eye_m, const glm::mat4* viewProj, double range_m,
-                  const AmbientSource& ambient, DrawList& out);
+                  const AmbientSource& ambient, DrawList& out,
+                  const VertexPoints* terrain = nullptr);
     // With `alsoAt`, that point's set (the car's) is asked in the plants' batch, into *alsoSet.
     void addPlants(const glm::dvec3& centre_m, const glm::mat4* viewProj, bool capture,
                    const AmbientSource& ambient, DrawList& out, std::size_t* drawn,

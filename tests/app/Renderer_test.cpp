@@ -270,6 +270,155 @@ TEST(Renderer, RoadsAreLitAtTheirOwnVerticesAndNormals) {
     EXPECT_LT(worst, 1e-4);
 }
 
+// An ambient that varies within a patch (a few metres across), turns with the normal, and asks
+// for patches nearer the eye than range_m to be lit per vertex; it remembers the sizes the
+// batches asked it to average over.
+class VertexFieldAmbient final : public AmbientSource {
+  public:
+    explicit VertexFieldAmbient(double range_m) : range_m_(range_m) {}
+    static glm::vec3 field(const glm::dvec3& p, const glm::dvec3& n) {
+        return glm::vec3(float(1.0 + 0.5 * std::sin(p.x / 3.0)),
+                         float(1.0 + 0.5 * std::cos(p.z / 4.0)), float(1.0 + 0.5 * (n.x + n.z)));
+    }
+    glm::vec3 cornerIrradiance(const glm::dvec3& p, const glm::dvec3& n) const override {
+        return field(p, n);
+    }
+    void cornerIrradianceBatch(std::size_t count, const glm::dvec3* p, const glm::dvec3* n,
+                               glm::vec3* out, const double* patch_m = nullptr) const override {
+        for (std::size_t i = 0; i < count; ++i) {
+            out[i] = field(p[i], n[i]);
+            if (patch_m) patches.push_back(patch_m[i]);
+        }
+    }
+    std::uint32_t objectSet(const glm::dvec3&, std::vector<AmbientSet>& sets) const override {
+        sets.emplace_back();
+        return std::uint32_t(sets.size() - 1);
+    }
+    double terrainVertexRange_m() const override { return range_m_; }
+    mutable std::vector<double> patches;
+
+  private:
+    double range_m_;
+};
+
+// nearField.vertexAmbient_m (the ambient's terrainVertexRange_m): looking down over open ground,
+// the patches nearer the eye than the range take the ambient at their own vertices. Their
+// pixels' applied ambient follows a field that varies over metres (within 0.06 of it at the
+// pixel, where the corner blend of a 32 m patch misses it by far more), stays surface kind 1
+// (terrain, not road) pixel for pixel, and the far terrain is drawn exactly as before; each
+// vertex's value is the field at its own position and normal, asked with the 2 m vertex spacing
+// as the size to average over (road vertices with 0). With the range 0 nothing is lit per vertex
+// and the frame is the same, byte for byte, as the one drawn by an ambient without the setting.
+TEST(Renderer, NearTerrainIsLitPerVertexWithinTheRange) {
+    AMB_REQUIRE_PLATFORM(platform, Backend::Auto, kW, kH);
+    const World world(WorldSettings{});
+    Renderer renderer(world, testSettings());
+    renderer.setTimeOfDay(12.0);
+    const CameraSample cam = viewAt(world, -0.35);
+    const VertexFieldAmbient off(0.0), on(40.0);
+    renderer.render(cam, off, RenderOutput::AmbientIrradiance);
+    const SurfaceImage offAov = renderer.readSurface(cam);
+    renderer.render(cam, on, RenderOutput::AmbientIrradiance);
+    const SurfaceImage onAov = renderer.readSurface(cam);
+    renderer.render(cam, on, RenderOutput::Normal);
+    const SurfaceImage normals = renderer.readSurface(cam);
+    int near = 0, far = 0, nearDiffers = 0;
+    double onMiss = 0.0, offMiss = 0.0;
+    for (std::size_t p = 0; p < std::size_t(kW) * kH; ++p) {
+        const float kind = onAov.rgba[4 * p + 3];
+        ASSERT_EQ(kind, offAov.rgba[4 * p + 3]) << "pixel " << p;
+        if (kind != 1.0f) continue;
+        const glm::dvec3 at = cam.position_m + glm::dvec3(onAov.position[p]);
+        const double d = std::hypot(at.x - cam.position_m.x, at.z - cam.position_m.z);
+        const glm::vec3 got(onAov.rgba[4 * p], onAov.rgba[4 * p + 1], onAov.rgba[4 * p + 2]);
+        const glm::vec3 old(offAov.rgba[4 * p], offAov.rgba[4 * p + 1], offAov.rgba[4 * p + 2]);
+        if (d < 25.0) {
+            ++near;
+            const glm::dvec3 n(normals.rgba[4 * p], normals.rgba[4 * p + 1],
+                               normals.rgba[4 * p + 2]);
+            const glm::vec3 want = VertexFieldAmbient::field(at, n);
+            const double miss = glm::length(got - want), oldMiss = glm::length(old - want);
+            EXPECT_LT(miss, 0.06) << "at " << d << " m";
+            onMiss += miss, offMiss += oldMiss;
+            nearDiffers += glm::length(got - old) > 0.05f;
+        } else if (d > 300.0) {
+            ++far;
+            EXPECT_EQ(got, old) << "at " << d << " m";
+        }
+    }
+    ASSERT_GT(near, 500);
+    EXPECT_GT(far, 50);
+    EXPECT_GT(offMiss / near, 0.1);
+    EXPECT_LT(onMiss, offMiss / 4.0);
+    EXPECT_GT(nearDiffers, near / 2);
+
+    // The draw list: the per-vertex patches read the field at their vertices, the roads' and the
+    // other patches' draws are as before.
+    RendererScene scene(world);
+    const glm::vec3 forward(cam.forward), up(cam.up);
+    const glm::mat4 viewProj = reversedInfinitePerspective(1.0471976f, float(kW) / kH, 0.1f) *
+                               glm::lookAt(glm::vec3(0.0f), forward, up);
+    for (const VertexFieldAmbient* ambient : {&off, &on}) {
+        DrawList list;
+        ambient->patches.clear();
+        scene.buildView(cam.position_m, viewProj, *ambient, list);
+        std::size_t roadVertices = 0;
+        int perVertex = 0;
+        double worst = 0.0;
+        for (const TerrainDraw& d : list.terrain) {
+            if (d.road) {
+                EXPECT_GE(d.firstVertexIrradiance, 0);
+                roadVertices += readBack<glm::vec3>(d.mesh->positions).size();
+                continue;
+            }
+            if (d.firstVertexIrradiance < 0) continue;
+            ++perVertex;
+            EXPECT_FALSE(d.skyDetail);
+            const std::vector<glm::vec3> pos = readBack<glm::vec3>(d.mesh->positions);
+            const std::vector<glm::vec3> nrm = readBack<glm::vec3>(d.mesh->normals);
+            const std::vector<std::uint32_t> index = readBack<std::uint32_t>(d.mesh->indices);
+            for (std::uint32_t i = d.firstIndex; i < d.firstIndex + d.indexCount; ++i) {
+                const std::uint32_t v = index[i];
+                ASSERT_LT(std::size_t(d.firstVertexIrradiance) + v, list.vertexIrradiance.size());
+                const glm::dvec3 at = cam.position_m + glm::dvec3(d.origin) + glm::dvec3(pos[v]);
+                const glm::vec3 got =
+                    list.vertexIrradiance[std::size_t(d.firstVertexIrradiance) + v];
+                worst = std::max(
+                    worst,
+                    double(glm::length(got - VertexFieldAmbient::field(at, glm::dvec3(nrm[v])))));
+            }
+        }
+        if (ambient == &off) {
+            EXPECT_EQ(perVertex, 0);
+            EXPECT_EQ(list.vertexIrradiance.size(), roadVertices);
+        } else {
+            EXPECT_GT(perVertex, 2);
+            EXPECT_LT(worst, 1e-4);  // positions read back relative to the eye in float
+            EXPECT_GT(std::count(ambient->patches.begin(), ambient->patches.end(), 2.0), 1000);
+        }
+    }
+
+    // The range 0 draws what an ambient that knows nothing of it draws, byte for byte.
+    class Plain final : public AmbientSource {
+      public:
+        glm::vec3 cornerIrradiance(const glm::dvec3& p, const glm::dvec3& n) const override {
+            return VertexFieldAmbient::field(p, n);
+        }
+        std::uint32_t objectSet(const glm::dvec3&, std::vector<AmbientSet>& sets) const override {
+            sets.emplace_back();
+            return std::uint32_t(sets.size() - 1);
+        }
+    } plain;
+    renderer.render(cam, plain, RenderOutput::Shaded);
+    const std::vector<unsigned char> plainFrame = renderer.readRgb8();
+    const std::vector<float> plainHdr = renderer.readHdr();
+    renderer.render(cam, off, RenderOutput::Shaded);
+    EXPECT_EQ(renderer.readRgb8(), plainFrame);
+    EXPECT_EQ(renderer.readHdr(), plainHdr);
+    renderer.render(cam, on, RenderOutput::Shaded);
+    EXPECT_NE(renderer.readHdr(), plainHdr);
+}
+
 // The screen witnesses' outputs: with the constant ambient (E(n) = pi x mean radiance for every
 // normal) the ambient-irradiance output is that constant at every surface pixel, for terrain and
 // plants alike; the normal output is unit length and faces the camera; the positions read back

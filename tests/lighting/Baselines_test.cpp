@@ -639,12 +639,36 @@ TEST(Baselines, FactoryWrapsTheNearFieldWhereTheMethodsOwnSettingsAskForIt) {
                     EXPECT_EQ(near->far().methodName(), name) << where;
                     EXPECT_EQ(dynamic_cast<const NearFieldMethod*>(&near->far()), nullptr) << where;
                     EXPECT_EQ(near->terrainSkyDetail(), ours) << where;
+                    // The vertex range is off unless the settings ask for it.
+                    EXPECT_EQ(near->terrainVertexRange_m(), 0.0) << where;
                 }
                 // Without a scene to read, the bare method whatever the settings.
                 const auto bare = makeCapturingMethod(name, capture, environment, vs, bs, nullptr);
                 EXPECT_EQ(dynamic_cast<const NearFieldMethod*>(bare.get()), nullptr) << where;
             }
         }
+    }
+}
+
+// The terrain's vertex range (nearField.vertexAmbient_m) reaches the draw through the method
+// with the near field whose settings name it (ours from the volume's file, a baseline from the
+// baselines'), and only while that near field is enabled; a bare method has none.
+TEST(Baselines, TheVertexRangeIsTheNearFieldsSetting) {
+    FakeCubeCapture capture(kFace);
+    FlatProbeEnvironment environment;
+    const NearFieldSceneMaker scene = [] { return std::make_unique<EmptyNearScene>(); };
+    for (const char* name : {"volume", "grid"}) {
+        const bool ours = std::string(name) == "volume";
+        AmbienceVolumeSettings vs;
+        BaselineSettings bs;
+        vs.capture.nearField.vertexAmbient_m = 64.0;
+        bs.capture.nearField.vertexAmbient_m = 160.0;
+        const auto method = makeCapturingMethod(name, capture, environment, vs, bs, nullptr, scene);
+        EXPECT_EQ(method->terrainVertexRange_m(), ours ? 64.0 : 160.0) << name;
+        vs.capture.nearField.enabled = bs.capture.nearField.enabled = false;
+        const auto without =
+            makeCapturingMethod(name, capture, environment, vs, bs, nullptr, scene);
+        EXPECT_EQ(without->terrainVertexRange_m(), 0.0) << name;
     }
 }
 

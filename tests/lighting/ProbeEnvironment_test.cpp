@@ -1,5 +1,6 @@
 // ProbeEnvironment_test.cpp — probe placement in the generated world (never inside terrain or a
-// plant: moved aside, else lifted) and the fallback cube map (finite, day brighter than night).
+// plant: moved aside, else lifted), the fallback cube map (finite, day brighter than night), and
+// the grid cell of the drawn terrain around a point (the mesh the main view builds).
 #include "lighting/ProbeEnvironment.h"
 
 #include <algorithm>
@@ -7,8 +8,11 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <glm/geometric.hpp>
 
 #include "world/Conventions.h"
+#include "world/Road.h"
+#include "world/TerrainPatch.h"
 #include "world/Vegetation.h"
 #include "world/World.h"
 
@@ -99,6 +103,57 @@ TEST(WorldProbeEnvironment, FallbackCubeMapFiniteAndFollowsTheDay) {
     EXPECT_GT(noon[zenith + 2], noon[zenith + 0]);
     EXPECT_GT(env.sunAngularSpeed_radPerHour(), 0.0);
     EXPECT_LE(env.sunAngularSpeed_radPerHour(), kPi / 12.0 + 1e-12);
+}
+
+// The cell a patch lit per vertex interpolates at a point is the drawn mesh's: over a field of
+// points around a camera on the highway (across LOD boundaries, where the edges are stitched),
+// its vertices lie on the leaf's grid of size / quads, its weights are a triangle's (non-negative,
+// one of them 0, summing to 1), and the vertex heights interpolated with them are the drawn
+// surface's height there (TerrainSurface over the mesh TerrainPatchCache builds for the camera).
+TEST(WorldProbeEnvironment, DrawnCellsAreTheDrawnMeshs) {
+    const World& world = defaultWorld();
+    const WorldProbeEnvironment env(world);
+    const Road* road = world.roads().find("highway");
+    ASSERT_NE(road, nullptr);
+    const glm::dvec3 camera =
+        road->centreline[road->centreline.size() / 3] + glm::dvec3(0.0, 2.0, 0.0);
+    TerrainPatchCache cache(world);
+    const TerrainMesh mesh = cache.build(camera, glm::dvec3(camera.x, 0.0, camera.z));
+    const TerrainSurface surface(mesh);
+    int checked = 0, stitched = 0;
+    for (double dz = -150.0; dz <= 150.0; dz += 7.3) {
+        for (double dx = -150.0; dx <= 150.0; dx += 6.1) {
+            const double x = camera.x + dx, z = camera.z + dz;
+            const DrawnPatch patch = env.drawnPatch(x, z, camera);
+            const DrawnCell cell = env.drawnCell(x, z, camera);
+            ASSERT_TRUE(patch.size_m > 0.0 && cell.known);
+            ASSERT_EQ(patch.quads, TerrainPatch::kPatchQuads);
+            const double spacing = patch.size_m / patch.quads;
+            EXPECT_EQ(cell.spacing_m, spacing);
+            double sum = 0.0, height = 0.0;
+            int zeros = 0;
+            for (int c = 0; c < 4; ++c) {
+                const glm::dvec3& v = cell.vertex_m[c];
+                const double i = (v.x - patch.x0_m) / spacing, k = (v.z - patch.z0_m) / spacing;
+                EXPECT_NEAR(i, std::round(i), 1e-6);
+                EXPECT_NEAR(k, std::round(k), 1e-6);
+                EXPECT_TRUE(i >= -1e-6 && i <= patch.quads + 1e-6 && k >= -1e-6 &&
+                            k <= patch.quads + 1e-6);
+                EXPECT_NEAR(glm::length(cell.normal[c]), 1.0, 1e-5);
+                EXPECT_GE(cell.weight[c], 0.0);
+                zeros += cell.weight[c] == 0.0;
+                sum += cell.weight[c];
+                height += cell.weight[c] * v.y;
+                stitched += std::fabs(v.y - world.height(v.x, v.z)) > 1e-3;
+            }
+            EXPECT_GE(zeros, 1);
+            EXPECT_NEAR(sum, 1.0, 1e-12);
+            EXPECT_NEAR(height, surface.heightAt(x, z), 1e-3) << x << ", " << z;
+            ++checked;
+        }
+    }
+    EXPECT_GT(checked, 1500);
+    EXPECT_GT(stitched, 0);  // some vertices lie on a coarser neighbour's edge
 }
 
 }  // namespace

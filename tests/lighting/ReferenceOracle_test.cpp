@@ -2,12 +2,15 @@
 // environment, the sun left out as the methods leave it out, the quadrature equal to the closed
 // form on SH inputs, budget terms that add up as squares on a synthetic case, and a cache that
 // round-trips and refuses bad files.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
+#include <glm/geometric.hpp>
 
 #include "FakeCubeCapture.h"
 #include "lighting/AmbienceMethod.h"
@@ -16,6 +19,7 @@
 #include "lighting/SH.h"
 #include "world/Conventions.h"
 #include "world/Error.h"
+#include "world/TerrainPatch.h"
 
 using namespace amb;
 
@@ -325,4 +329,192 @@ TEST(DrawnBudget, FreshCapturesMakeTheFarFieldTermVanish) {
     EXPECT_NEAR(off.model, exact.model, 1e-6);  // the steps after the far field do not see it
     EXPECT_NEAR(off.truncation, exact.truncation, 1e-9);
     EXPECT_NEAR(off.closure(), 1.0, 1e-9);
+}
+
+namespace {
+
+// A flat-lattice world whose drawn patches are 32 m across with 16 x 16 quads, placed so that the
+// witness falls at (u, v) of its patch, u and v varying from witness to witness; the vertices
+// rise and tilt with a closed-form relief, so each has its own point and normal.
+class VertexGridEnvironment final : public testing_support::FlatProbeEnvironment {
+  public:
+    static constexpr double kSize_m = 32.0;
+    static constexpr int kQuads = 16;
+    static double fraction(double s) { return s - std::floor(s); }
+    static double u(double x, double z) { return fraction(0.37 + 0.0131 * x + 0.0077 * z); }
+    static double v(double x, double z) { return fraction(0.61 + 0.0059 * x - 0.0113 * z); }
+    static double height(double x, double z) {
+        return 0.4 * std::sin(x / 5.0) + 0.3 * std::cos(z / 3.0);
+    }
+    static glm::dvec3 normal(double x, double z) {
+        return glm::normalize(glm::dvec3(-0.08 * std::cos(x / 5.0), 1.0, 0.1 * std::sin(z / 3.0)));
+    }
+    DrawnPatch drawnPatch(double x_m, double z_m, const glm::dvec3&) const override {
+        DrawnPatch p;
+        p.size_m = kSize_m;
+        p.quads = kQuads;
+        p.x0_m = x_m - u(x_m, z_m) * kSize_m, p.z0_m = z_m - v(x_m, z_m) * kSize_m;
+        for (int c = 0; c < 4; ++c) {
+            const double x = p.x0_m + (c & 1 ? kSize_m : 0.0), z = p.z0_m + (c & 2 ? kSize_m : 0.0);
+            p.corner_m[c] = {x, height(x, z), z};
+            p.cornerNormal[c] = normal(x, z);
+        }
+        p.surface_m = {x_m, 0.0, z_m};
+        return p;
+    }
+    DrawnCell drawnCell(double x_m, double z_m, const glm::dvec3& camera_m) const override {
+        const DrawnPatch p = drawnPatch(x_m, z_m, camera_m);
+        const double s = kSize_m / kQuads;
+        const double fu = (x_m - p.x0_m) / s, fw = (z_m - p.z0_m) / s;
+        const int a = std::min(int(fu), kQuads - 1), b = std::min(int(fw), kQuads - 1);
+        DrawnCell cell;
+        cell.known = true;
+        cell.spacing_m = s;
+        for (int c = 0; c < 4; ++c) {
+            const double x = p.x0_m + (a + (c & 1)) * s, z = p.z0_m + (b + (c >> 1)) * s;
+            cell.vertex_m[c] = {x, height(x, z), z};
+            cell.normal[c] = normal(x, z);
+        }
+        cell.weight = quadTriangleWeights(fu - a, fw - b);
+        return cell;
+    }
+};
+
+// A method whose far field is the fresh capture at the point, and whose answer at a terrain
+// point varies with the point and with the size it is averaged over (patch_m), so that a value
+// at a vertex, at a corner and averaged over another size all differ. Patches nearer the camera
+// than range_m are lit per vertex.
+struct VertexLitMethod final : AmbienceMethod {
+    CubeCapture* capture = nullptr;
+    const ProbeEnvironment* environment = nullptr;
+    MeasureSettings settings;
+    double range_m = 0.0;
+    static double factor(const glm::dvec3& p, double patch_m) {
+        return 1.0 + 0.3 * std::sin(p.x / 3.0) * std::cos(p.z / 5.0) + 0.01 * patch_m +
+               0.05 * (p.y - kShadingHeight_m);
+    }
+    std::string methodName() const override { return "vertex-lit"; }
+    void predictStage(const glm::dvec3&, const glm::dvec3&, double, double) override {}
+    void captureStage() override {}
+    void storeStage() override {}
+    ShRgb shAt(double x_m, double z_m) const override {
+        return oracleSh(*capture, *environment, settings, x_m, z_m, 12.0);
+    }
+    void cornerIrradianceAtPoints(std::size_t count, const glm::dvec3* points_m,
+                                  const glm::dvec3* normals, glm::vec3* out,
+                                  const double* patch_m) const override {
+        std::vector<ShRgb> far(count);
+        cornerShAtPoints(count, points_m, far.data());
+        irradianceFromFar(count, points_m, normals, far.data(), out, patch_m);
+    }
+    void irradianceFromFar(std::size_t count, const glm::dvec3* points_m, const glm::dvec3* normals,
+                           const ShRgb* far, glm::vec3* out, const double* patch_m) const override {
+        for (std::size_t i = 0; i < count; ++i)
+            out[i] = glm::max(shIrradiance(far[i], glm::vec3(normals[i])), glm::vec3(0.0f)) *
+                     float(factor(points_m[i], patch_m ? patch_m[i] : 0.0));
+    }
+    double terrainVertexRange_m() const override { return range_m; }
+    MethodStatistics methodStatistics() const override { return {}; }
+};
+
+}  // namespace
+
+// With the method's vertex range on, a terrain witness on a patch nearer the camera than the
+// range is graded as a patch lit per vertex draws it: the method at the four vertices of the grid
+// cell holding it (2 m up, their normals, averaged over the 2 m vertex spacing), interpolated as
+// the cell's two triangles interpolate, here computed apart from the meter. Witnesses on patches
+// beyond the range keep the corner blend exactly; the budget still closes, and with the far
+// field the fresh capture it has no far-field term (fresh captures at the same vertices).
+TEST(DrawnBudget, PatchesLitPerVertexAreGradedAtTheirCellsVertices) {
+    using testing_support::FakeCubeCapture;
+    constexpr double kRange_m = 40.0;
+    const auto camera = [](int f) { return glm::dvec3(40.0 * f, 0.0, 25.0); };
+    struct Run {
+        std::vector<ReferenceWitness> witnesses;
+        std::vector<double> expected;  // per witness: the per-vertex value's error, or NaN
+        DrawnBudgetSummary budget;
+    };
+    const auto run = [&](double range_m) {
+        FakeCubeCapture coarse(8), full(16);
+        VertexGridEnvironment environment;
+        MeasureSettings ms;
+        ms.every = 1;
+        ErrorMeter meter(coarse, environment, ms);
+        ReferenceSettings rs;
+        rs.every = 1;
+        rs.objectTrees = 0;
+        meter.attachReference(full, rs, true);
+        VertexLitMethod method;
+        method.capture = &coarse, method.environment = &environment, method.settings = ms;
+        method.range_m = range_m;
+        for (int f = 0; f < 3; ++f) meter.frame(f, f / 30.0, 12.0, camera(f), 10.0, method);
+        Run r;
+        r.witnesses = meter.referenceWitnesses();
+        r.budget = summarizeDrawnBudget(meter.drawnBudgets());
+        for (const ReferenceWitness& w : r.witnesses) {
+            double expected = std::nan("");
+            const double x = w.position_m.x, z = w.position_m.z;
+            const glm::dvec3 cam = camera(w.frame);
+            const double x0 = x - VertexGridEnvironment::u(x, z) * 32.0;
+            const double z0 = z - VertexGridEnvironment::v(x, z) * 32.0;
+            const double dx = std::max({x0 - cam.x, 0.0, cam.x - x0 - 32.0});
+            const double dz = std::max({z0 - cam.z, 0.0, cam.z - z0 - 32.0});
+            if (w.ring >= 0 && std::hypot(dx, dz) < range_m) {
+                // The cell (a, b) of 2 m holding the witness and its triangle: (v00, v01, v10)
+                // where fu + fw <= 1, else (v10, v01, v11).
+                const double gu = (x - x0) / 2.0, gw = (z - z0) / 2.0;
+                const int a = std::min(int(gu), 15), b = std::min(int(gw), 15);
+                const double fu = gu - a, fw = gw - b;
+                glm::dvec3 sum(0.0);
+                for (int c = 0; c < 4; ++c) {
+                    const double vx = x0 + 2.0 * (a + (c & 1)), vz = z0 + 2.0 * (b + (c >> 1));
+                    const glm::dvec3 at(
+                        vx, VertexGridEnvironment::height(vx, vz) + kShadingHeight_m, vz);
+                    const glm::dvec3 n = VertexGridEnvironment::normal(vx, vz);
+                    const double spacing = 2.0;
+                    glm::vec3 e;
+                    method.cornerIrradianceAtPoints(1, &at, &n, &e, &spacing);
+                    const bool upper = fu + fw > 1.0;
+                    const double weight = c == 0   ? (upper ? 0.0 : 1.0 - fu - fw)
+                                          : c == 1 ? (upper ? 1.0 - fw : fu)
+                                          : c == 2 ? (upper ? 1.0 - fu : fw)
+                                                   : (upper ? fu + fw - 1.0 : 0.0);
+                    sum += glm::dvec3(e) * weight;
+                }
+                expected = irradianceRelativeError(
+                    sum, meter.surfaceReference(w.frame, {x, 0.0, z}, {0.0, 1.0, 0.0}, 12.0));
+            }
+            r.expected.push_back(expected);
+        }
+        return r;
+    };
+    const Run off = run(0.0), on = run(kRange_m);
+    ASSERT_EQ(off.witnesses.size(), on.witnesses.size());
+    int perVertex = 0, beyond = 0, changed = 0;
+    for (std::size_t i = 0; i < on.witnesses.size(); ++i) {
+        const ReferenceWitness& w = on.witnesses[i];
+        if (w.ring < 0) continue;
+        SCOPED_TRACE("witness " + std::to_string(i) + " ring " + std::to_string(w.ring));
+        EXPECT_TRUE(std::isnan(off.expected[i]));
+        ASSERT_TRUE(std::isfinite(w.drawnError));
+        if (std::isfinite(on.expected[i])) {
+            ++perVertex;
+            EXPECT_NEAR(w.drawnError, on.expected[i], 1e-6);
+            changed += std::fabs(w.drawnError - off.witnesses[i].drawnError) > 1e-4;
+        } else {
+            ++beyond;
+            EXPECT_EQ(w.drawnError, off.witnesses[i].drawnError);
+            EXPECT_EQ(w.drawnBudget.freshFar, off.witnesses[i].drawnBudget.freshFar);
+        }
+        // The steps at the point do not depend on how the patch is drawn.
+        EXPECT_EQ(w.drawnBudget.atPoint, off.witnesses[i].drawnBudget.atPoint);
+        EXPECT_EQ(w.drawnBudget.perPoint, off.witnesses[i].drawnBudget.perPoint);
+    }
+    EXPECT_GE(perVertex, 6);
+    EXPECT_GE(beyond, 12);
+    EXPECT_GE(changed, perVertex / 2);
+    // The method's far field is the fresh capture wherever it is asked, per vertex too.
+    EXPECT_NEAR(on.budget.farField, 0.0, 1e-6);
+    EXPECT_NEAR(on.budget.closure(), 1.0, 1e-9);
+    EXPECT_NE(on.budget.drawn, off.budget.drawn);
 }

@@ -122,7 +122,7 @@ TEST(SettingsSchema, KeysAreUniqueAndTheCaptureKeysAreShared) {
         EXPECT_EQ(v->hi, b.hi) << b.key;
         EXPECT_EQ(v->kind, b.kind) << b.key;
     }
-    EXPECT_EQ(shared, 8 + 17);  // CaptureSettings' eight and the near field's seventeen
+    EXPECT_EQ(shared, 8 + 18);  // CaptureSettings' eight and the near field's eighteen
     // The files' defaults lie in their ranges.
     const AmbienceVolumeSettings v;
     for (const auto& f : volumeSettingsSchema().fields()) {
@@ -191,6 +191,45 @@ TEST(SettingsSchema, WhatTheWriterWritesReadsBackEqual) {
     EXPECT_EQ(j.at("facesPerFrame").get<int>(), 1);
     EXPECT_TRUE(j.at("relightBySkyLevel").get<bool>());
     EXPECT_EQ(j.size(), 3u + 8u + 3u);  // three objects, the capture keys, the volume's own
+}
+
+// nearField.vertexAmbient_m (terrain patches lit per vertex near the eye): in both files, in
+// metres over [0, 2000], off (0) by default; a file with it reads into the near field's settings,
+// writes back with it and reads back equal, as does a KEY=VALUE assignment; beyond the range it
+// is refused naming the key.
+TEST(SettingsSchema, TheVertexAmbientRangeRoundTrips) {
+    for (const auto* f :
+         {static_cast<const SettingSpec*>(volumeSettingsSchema().find("nearField.vertexAmbient_m")),
+          static_cast<const SettingSpec*>(
+              baselineSettingsSchema().find("nearField.vertexAmbient_m"))}) {
+        ASSERT_NE(f, nullptr);
+        EXPECT_EQ(f->kind, Kind::Number);
+        EXPECT_EQ(f->unit, "m");
+        EXPECT_EQ(f->lo, 0.0);
+        EXPECT_EQ(f->hi, 2000.0);
+        EXPECT_TRUE(f->rebuilds);
+        EXPECT_FALSE(f->help.empty());
+    }
+    EXPECT_EQ(AmbienceVolumeSettings{}.capture.nearField.vertexAmbient_m, 0.0);
+    EXPECT_EQ(BaselineSettings{}.capture.nearField.vertexAmbient_m, 0.0);
+    const std::string file = R"({"nearField": {"vertexAmbient_m": 64}})";
+    const AmbienceVolumeSettings v = ambienceSettingsFromJson(file, "v.json");
+    EXPECT_EQ(v.capture.nearField.vertexAmbient_m, 64.0);
+    const std::string written = volumeSettingsSchema().write(v);
+    EXPECT_EQ(nlohmann::json::parse(written).at("nearField").at("vertexAmbient_m").get<double>(),
+              64.0);
+    EXPECT_TRUE(volumeSettingsSchema().equal(ambienceSettingsFromJson(written, "w"), v));
+    EXPECT_FALSE(volumeSettingsSchema().equal(v, AmbienceVolumeSettings{}));
+    const BaselineSettings b = baselineSettingsFromJson(file, "b.json");
+    EXPECT_EQ(b.capture.nearField.vertexAmbient_m, 64.0);
+    EXPECT_TRUE(baselineSettingsSchema().equal(
+        baselineSettingsFromJson(baselineSettingsSchema().write(b), "w"), b));
+    AmbienceVolumeSettings assigned;
+    volumeSettingsSchema().assign(assigned, "nearField.vertexAmbient_m=160", "--set");
+    EXPECT_EQ(assigned.capture.nearField.vertexAmbient_m, 160.0);
+    const std::string said =
+        refusal(volumeSettingsSchema(), R"({"nearField": {"vertexAmbient_m": 2000.5}})");
+    EXPECT_NE(said.find("'vertexAmbient_m' must be in [0, 2000]"), std::string::npos) << said;
 }
 
 TEST(SettingsSchema, TheReadersKeepTheChecksThatBindKeys) {
@@ -380,21 +419,23 @@ TEST(SettingsSchema, TheFuzzSeedsAreFilesTheReadersTake) {
 
 // The files the project ships with settings in them read as they always have.
 TEST(SettingsSchema, TheShippedSweepsSettingsStillRead) {
-    std::ifstream in(std::string(AMBIENCE_SOURCE_DIR) + "/sweeps/two-scale.json");
-    ASSERT_TRUE(in);
-    const nlohmann::json sweep = nlohmann::json::parse(in);
     int read = 0;
-    for (const nlohmann::json& point : sweep.at("points")) {
-        if (point.contains("volume")) {
-            EXPECT_NO_THROW(ambienceSettingsFromJson(point.at("volume").dump(), "sweep"));
-            ++read;
-        }
-        if (point.contains("baseline")) {
-            EXPECT_NO_THROW(baselineSettingsFromJson(point.at("baseline").dump(), "sweep"));
-            ++read;
+    for (const char* file : {"two-scale.json", "vertex-ambient.json"}) {
+        std::ifstream in(std::string(AMBIENCE_SOURCE_DIR) + "/sweeps/" + file);
+        ASSERT_TRUE(in) << file;
+        const nlohmann::json sweep = nlohmann::json::parse(in);
+        for (const nlohmann::json& point : sweep.at("points")) {
+            if (point.contains("volume")) {
+                EXPECT_NO_THROW(ambienceSettingsFromJson(point.at("volume").dump(), file));
+                ++read;
+            }
+            if (point.contains("baseline")) {
+                EXPECT_NO_THROW(baselineSettingsFromJson(point.at("baseline").dump(), file));
+                ++read;
+            }
         }
     }
-    EXPECT_GT(read, 5);
+    EXPECT_GT(read, 7);
 }
 
 }  // namespace
