@@ -376,6 +376,14 @@ void writeBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
     }
 }
 
+// True for a job whose budgets the budget sections show: the default point of `replay` (at the
+// ideal budget when the bench ran several capture budgets), run to the end.
+bool budgetPoint(const Job& j, const std::string& replay, int idealBudget) {
+    if (j.replay.name != replay || !j.ok) return false;
+    if (j.point.family.empty()) return j.point.label == "default";
+    return j.point.family == "default" && j.point.facesPerFrame == idealBudget;
+}
+
 // With the reference oracle: per replay, the error budget of each method at the default point
 // of the ideal budget (RMS over the terrain witnesses of the reference frames), the errors on
 // objects, and the pop along the car.
@@ -406,11 +414,7 @@ void writeErrorBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
                "pop moving p99 / max |\n"
                "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
         for (const Job& j : jobs) {
-            if (j.replay.name != replay || !j.ok) continue;
-            if (j.point.family.empty() && j.point.label != "default") continue;
-            if (!j.point.family.empty() &&
-                (j.point.family != "default" || j.point.facesPerFrame != idealBudget))
-                continue;
+            if (!budgetPoint(j, replay, idealBudget)) continue;
             const json m = objectAt(j.report, "measurement");
             if (!m.contains("reference")) continue;
             const json& ref = m["reference"];
@@ -475,11 +479,7 @@ void writeDrawnBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
                "truncation | closure | largest | witnesses | per point |\n"
                "|---|---|---|---|---|---|---|---|---|---|\n";
         for (const Job& j : jobs) {
-            if (j.replay.name != replay || !j.ok) continue;
-            if (j.point.family.empty() && j.point.label != "default") continue;
-            if (!j.point.family.empty() &&
-                (j.point.family != "default" || j.point.facesPerFrame != idealBudget))
-                continue;
+            if (!budgetPoint(j, replay, idealBudget)) continue;
             const json b = objectAt(objectAt(objectAt(objectAt(j.report, "measurement"),
                                                       "reference"),
                                              "drawn"),
