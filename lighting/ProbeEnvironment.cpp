@@ -6,7 +6,6 @@
 #include <array>
 #include <cmath>
 #include <mutex>
-#include <unordered_map>
 
 #include <glm/geometric.hpp>
 
@@ -240,7 +239,6 @@ struct WorldProbeEnvironment::Mesh {
     TerrainPatchCache patches;
     glm::dvec3 camera{std::nan("")};
     TerrainMesh mesh;
-    std::unordered_map<PatchKey, std::size_t, PatchKeyHash> index;  // into mesh.patches
 };
 
 WorldProbeEnvironment::~WorldProbeEnvironment() = default;
@@ -250,22 +248,15 @@ DrawnCell WorldProbeEnvironment::drawnCell(double x_m, double z_m,
     if (!mesh_) mesh_ = std::make_unique<Mesh>(world_);
     Mesh& m = *mesh_;
     if (!(camera_m == m.camera)) {
-        // The origin as the renderer snaps it (RendererScene::updateTerrain): positions are
-        // relative to a point on a 256 m lattice with y 0, so heights round as the draw's do.
-        const double snap = 256.0;
-        const glm::dvec3 origin(std::floor(camera_m.x / snap) * snap, 0.0,
-                                std::floor(camera_m.z / snap) * snap);
-        m.mesh = m.patches.build(m.patches.selectPatches(camera_m), origin);
-        m.index.clear();
-        for (std::size_t i = 0; i < m.mesh.patches.size(); ++i) m.index[m.mesh.patches[i].key] = i;
+        m.mesh = m.patches.build(m.patches.selectPatches(camera_m), terrainMeshOrigin(camera_m));
         m.camera = camera_m;
     }
     DrawnCell cell;
-    for (const auto& [key, i] : m.index) {
+    for (const TerrainPatchDraw& p : m.mesh.patches) {
+        const PatchKey& key = p.key;
         const double size = TerrainPatch::size_m(key.level);
         const double x0 = TerrainPatch::originX_m(key), z0 = TerrainPatch::originZ_m(key);
         if (!(x_m >= x0 && x_m < x0 + size && z_m >= z0 && z_m < z0 + size)) continue;
-        const TerrainPatchDraw& p = m.mesh.patches[i];
         constexpr int kQ = TerrainPatch::kPatchQuads, kV = TerrainPatch::kVerticesPerSide;
         const double s = TerrainPatch::spacing_m(key.level);
         const double u = (x_m - x0) / s, w = (z_m - z0) / s;

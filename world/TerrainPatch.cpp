@@ -599,8 +599,8 @@ double TerrainSurface::heightIn(std::size_t patch, double x_m, double z_m) const
         return double(mesh_->mesh.positions[3 * (p.firstVertex + (b + db) * kV + a + da) + 1]) +
                mesh_->origin_m.y;
     };
-    if (fu + fw <= 1.0) return y(0, 0) + fu * (y(1, 0) - y(0, 0)) + fw * (y(0, 1) - y(0, 0));
-    return y(1, 1) + (1.0 - fu) * (y(0, 1) - y(1, 1)) + (1.0 - fw) * (y(1, 0) - y(1, 1));
+    const std::array<double, 4> k = quadTriangleWeights(fu, fw);
+    return k[0] * y(0, 0) + k[1] * y(1, 0) + k[2] * y(0, 1) + k[3] * y(1, 1);
 }
 
 double TerrainSurface::heightAt(double x_m, double z_m) const {

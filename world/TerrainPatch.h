@@ -22,6 +22,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -160,6 +161,14 @@ void stitchCornerValues(const std::vector<TerrainCorner>& corners, glm::vec3* va
 // rasteriser does to a value per vertex across the drawn surface (the heights, and the ambient
 // of a patch lit per vertex).
 std::array<double, 4> quadTriangleWeights(double fu, double fw);
+
+// The origin the main view's terrain mesh is built about for an eye at `eye_m`: the eye snapped
+// to a 256 m lattice, y 0, so float positions stay small and exact enough (the meter builds the
+// same mesh about the same origin: its heights round as the draw's do).
+inline glm::dvec3 terrainMeshOrigin(const glm::dvec3& eye_m) {
+    constexpr double kSnap_m = 256.0;
+    return {std::floor(eye_m.x / kSnap_m) * kSnap_m, 0.0, std::floor(eye_m.z / kSnap_m) * kSnap_m};
+}
 
 // The drawn terrain surface of a TerrainMesh (stitched heights, two triangles per quad as packed)
 // at any (x, z) inside its leaves: where objects placed on the terrain must stand, since far

@@ -163,11 +163,7 @@ void RendererScene::updateTerrain(const glm::dvec3& eye_m) {
     std::vector<PatchKey> leaves = terrainCache_.selectPatches(eye_m);
     if (leaves == terrainLeaves_ && terrainGl_.indexCount > 0) return;
     terrainLeaves_ = std::move(leaves);
-    // Origin on a coarse lattice near the eye: float positions stay small and exact enough.
-    const double snap = 256.0;
-    const glm::dvec3 origin(std::floor(eye_m.x / snap) * snap, 0.0,
-                            std::floor(eye_m.z / snap) * snap);
-    terrainMesh_ = terrainCache_.build(terrainLeaves_, origin);
+    terrainMesh_ = terrainCache_.build(terrainLeaves_, terrainMeshOrigin(eye_m));
     terrainGl_ = uploadMesh(terrainMesh_.mesh);
     terrainSurface_ = TerrainSurface(terrainMesh_);
     terrainBounds_.clear();
