@@ -512,21 +512,28 @@ void RendererScene::buildCapture(const glm::dvec3& probe_m, const AmbientSource&
     // The proxy grid is finest at its centre, so it is rebuilt when the probe moves off it.
     if (horizontalDistance(probe_m, captureCentre_) > 1e-3 || captureTerrain_.indexCount == 0) {
         captureCentre_ = glm::dvec3(probe_m.x, 0.0, probe_m.z);
-        captureTerrain_ =
-            uploadMesh(makeTerrainProxy(world_, captureCentre_, settings_.captureTerrainRadius_m));
+        captureProxy_ = makeTerrainProxy(world_, captureCentre_, settings_.captureTerrainRadius_m);
+        captureTerrain_ = uploadMesh(captureProxy_);
     }
     TerrainDraw d;
     d.mesh = &captureTerrain_;
     d.origin = glm::vec3(captureCentre_ - probe_m);
-    const double r = settings_.captureTerrainRadius_m;
-    d.rect = glm::vec4(float(-r), float(-r), float(0.5 / r), float(0.5 / r));
-    const auto cornerAt = [&](double x, double z) {
-        const glm::dvec3 p(captureCentre_.x + x,
-                           world_.height(captureCentre_.x + x, captureCentre_.z + z),
-                           captureCentre_.z + z);
-        return ambient.cornerIrradiance(p, world_.normal(p.x, p.z));
-    };
-    d.cornerIrradiance = {cornerAt(-r, -r), cornerAt(r, -r), cornerAt(-r, r), cornerAt(r, r)};
+    // The proxy lit at every vertex, with the vertex's own point and normal (1089 of them by
+    // default): the ambient where a surface light varies over the ground, and the hemisphere's
+    // own dependence on the normal, at the ground the probe sees.
+    const std::size_t vertices = captureProxy_.vertexCount();
+    captureAt_.resize(vertices);
+    captureNormal_.resize(vertices);
+    for (std::size_t v = 0; v < vertices; ++v) {
+        const float* p = &captureProxy_.positions[3 * v];
+        const float* n = &captureProxy_.normals[3 * v];
+        captureAt_[v] = captureCentre_ + glm::dvec3(p[0], p[1], p[2]);
+        captureNormal_[v] = glm::dvec3(n[0], n[1], n[2]);
+    }
+    d.firstVertexIrradiance = std::int64_t(out.vertexIrradiance.size());
+    out.vertexIrradiance.resize(out.vertexIrradiance.size() + vertices);
+    ambient.cornerIrradianceBatch(vertices, captureAt_.data(), captureNormal_.data(),
+                                  out.vertexIrradiance.data() + d.firstVertexIrradiance);
     out.terrain.push_back(d);
     addRoads(probe_m, nullptr, settings_.captureTerrainRadius_m, ambient, out);
     addPlants(probe_m, nullptr, true, ambient, out, nullptr, nearRadius_m);

@@ -118,6 +118,8 @@ class RendererScene {
     std::vector<PatchBounds> terrainBounds_;
     // Proxy terrain of the last capture and where it was centred.
     GlMesh captureTerrain_;
+    WorldMesh captureProxy_;  // captureTerrain_'s vertices, lit per capture
+    std::vector<glm::dvec3> captureAt_, captureNormal_;
     glm::dvec3 captureCentre_{1e300};
     // Proxy terrain of the capture shadow map's region and its centre.
     GlMesh shadowTerrain_;
