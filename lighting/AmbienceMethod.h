@@ -20,6 +20,8 @@
 
 namespace amb {
 
+class SurfaceLight;
+
 // The height above the ground at which terrain corners and objects take their ambience: the
 // height of the probes and of the witnesses that measure them (ProbeEnvironment.h).
 inline constexpr double kShadingHeight_m = 2.0;
@@ -130,6 +132,11 @@ class AmbienceMethod {
     // The radius (horizontal, metres) of the plants the method's captures leave out around a
     // probe (the near field puts them back); 0: its captures see the whole coarse scene.
     virtual double farCaptureRadius_m() const { return 0.0; }
+    // What the method's captures light their surfaces with now besides the sun (CaptureSettings
+    // ownLight: its own field); null: the capture's fixed hemisphere. The error budget's fresh
+    // captures (lighting/Metrics.h, DrawnBudget) use the same, so its far-field term compares
+    // like with like.
+    virtual const SurfaceLight* captureSurfaceLight() const { return nullptr; }
 
     // Where the draw looked up ambience this frame (terrain corners, objects). Only methods that
     // place probes by demand use it; called once per frame before the next predictStage.

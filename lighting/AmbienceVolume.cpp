@@ -50,6 +50,7 @@ AmbienceVolume::AmbienceVolume(CubeCapture& capture, const ProbeEnvironment& env
       core_(capture, environment, settings.capture) {
     scheduler_.setRoads(roads);
     frameTime_s_ = settings.nominalFrameTime_s;
+    core_.setOwnField([this](double x_m, double z_m) { return store_.interpolate(x_m, z_m); });
 }
 
 AmbienceVolume::~AmbienceVolume() = default;

@@ -130,6 +130,7 @@ class AmbienceVolume final : public AmbienceMethod {
         store_.interpolateFixedMany(count, x_m, z_m, out);
     }
     MethodStatistics methodStatistics() const override;
+    const SurfaceLight* captureSurfaceLight() const override { return core_.surfaceLight(); }
 
     const AmbienceStatistics& statistics() const { return stats_; }
     const AnchorStore& store() const { return store_; }

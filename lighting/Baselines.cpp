@@ -128,6 +128,7 @@ CapturingBaseline::CapturingBaseline(CubeCapture& capture, const ProbeEnvironmen
                                      const BaselineSettings& settings)
     : environment_(environment), settings_(settings), core_(capture, environment, settings.capture) {
     lifetime_s_ = currentLifetime_s();
+    core_.setOwnField([this](double x_m, double z_m) { return shAt(x_m, z_m); });
 }
 
 CapturingBaseline::~CapturingBaseline() = default;

@@ -106,6 +106,7 @@ class CapturingBaseline : public AmbienceMethod {
     void captureStage() final;
     void storeStage() final;
     MethodStatistics methodStatistics() const final;
+    const SurfaceLight* captureSurfaceLight() const final { return core_.surfaceLight(); }
 
     const BaselineSettings& settings() const { return settings_; }
     double simulationTime_s() const { return core_.time_s(); }

@@ -49,7 +49,7 @@ struct FacesResult {
 FacesResult captureProbeFaces(CubeCapture& capture, CubeMapProjector& projector,
                               std::vector<float>& cube, const glm::dvec3& position_m,
                               double timeOfDay_h, int facesDone, int budget, double nearRadius_m,
-                              bool& bad) {
+                              const SurfaceLight* light, bool& bad) {
     FacesResult result;
     const int count = std::min(budget, kCubeFaces - facesDone);
     if (count <= 0) return result;
@@ -57,7 +57,10 @@ FacesResult captureProbeFaces(CubeCapture& capture, CubeMapProjector& projector,
     for (int f = facesDone; f < facesDone + count; ++f) mask |= cubeFaceBit(f);
 
     auto t0 = Clock::now();
+    // The method's own light for its own captures only: a capture may serve others.
+    capture.setSurfaceLight(light);
     capture.captureFar(position_m, timeOfDay_h, mask, cube, nearRadius_m);
+    capture.setSurfaceLight(nullptr);
     result.capture_s = secondsSince(t0);
     const std::size_t faceFloats = 3 * std::size_t(capture.faceSize()) * capture.faceSize();
     AMB_CHECK(cube.size() == faceFloats * kCubeFaces);
@@ -197,7 +200,8 @@ void CaptureCore::captureFaces(const NextProbe& next) {
         }
         const FacesResult r = captureProbeFaces(capture_, *projector_, cube_, job_->position_m,
                                                 timeOfDay_h_, job_->facesDone, budget,
-                                                settings_.nearRadius_m(), job_->bad);
+                                                settings_.nearRadius_m(), surfaceLight(),
+                                                job_->bad);
         stats_.capture_s += r.capture_s;
         stats_.project_s += r.project_s;
         job_->facesDone += r.faces;

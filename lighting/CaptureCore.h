@@ -44,6 +44,7 @@
 #include <glm/vec3.hpp>
 
 #include "lighting/AmbienceMethod.h"
+#include "lighting/CubeCapture.h"
 #include "lighting/NearField.h"
 #include "lighting/SH.h"
 #include "world/Conventions.h"
@@ -73,6 +74,13 @@ struct CaptureSettings {
     double teleportDistance_m = 100.0;  // a camera step longer than this + 3 x speed x dt [m]
     int fallbackFaceSize = 16;          // cube map size of the fallback SH
     double fallbackRefresh_h = 1.0 / 60.0;  // recompute the fallback after this much day time
+    // What lights the surfaces the method's captures draw, besides the sun: false, the fixed
+    // sky/ground hemisphere (world/SkyGround.h); true, the method's own field (its shAt at the
+    // surface's ground point, the fallback where it holds nothing), so that each probe sees the
+    // bounces its predecessors measured and the store converges towards the scene's own
+    // multi-bounce light over probe generations (docs/METHOD.md "What the captures light their
+    // surfaces with").
+    bool ownLight = false;
     // The two-scale ambience (lighting/NearField.h; JSON key "nearField"): when enabled, probes
     // leave the plants within nearField.captureRadius_m out and the method's decorator puts those
     // within nearField.radius_m of each shading point back there.
@@ -141,6 +149,15 @@ class CaptureCore {
     FrameEvents beginFrame(const glm::dvec3& cameraPosition_m, const glm::dvec3& cameraVelocity_mps,
                            double timeOfDay_h, double dt_s);
 
+    // The method's own field, read by its captures' surfaces when settings().ownLight is on
+    // (the method sets it once, at construction; until then captures use the hemisphere).
+    using OwnField = std::function<ShRgb(double x_m, double z_m)>;
+    void setOwnField(OwnField field) { ownLight_.field = std::move(field); }
+    // The surface light the method's captures use now: the own field, or null (the hemisphere).
+    const SurfaceLight* surfaceLight() const {
+        return settings_.ownLight && ownLight_.field ? &ownLight_ : nullptr;
+    }
+
     // Stage 3: spends the face budget. When no probe is in progress, `next(busy)` names the
     // next one (or nothing: the rest of the budget stays unused); `busy` lists the keys
     // completed this frame and not yet taken. The time `next` takes counts as predict time.
@@ -188,6 +205,13 @@ class CaptureCore {
   private:
     void updateFallback(double timeOfDay_h);
 
+    struct OwnLight final : SurfaceLight {
+        OwnField field;
+        ShRgb shAt(const glm::dvec3& position_m) const override {
+            return field(position_m.x, position_m.z);
+        }
+    };
+
     CubeCapture& capture_;
     const ProbeEnvironment& environment_;
     CaptureSettings settings_;
@@ -213,6 +237,7 @@ class CaptureCore {
     double fallbackTimeOfDay_h_ = 0.0;
     MethodStatistics stats_;
     std::int64_t probesCompleted_ = 0, abortedProbes_ = 0;
+    OwnLight ownLight_;
 };
 
 // Signed difference b - a of two times of day, in (-12, 12] hours (the wrap at 24 h).

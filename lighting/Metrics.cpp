@@ -278,14 +278,15 @@ DrawnBudget ErrorMeter::drawnTerrainError(int index, double timeOfDay_h,
     if (!budget) return b;
     // The same path with the far field from fresh captures at those points' ground points.
     const double radius = method.farCaptureRadius_m();
+    const SurfaceLight* light = method.captureSurfaceLight();
     std::array<ShRgb, 4> far;
     for (std::size_t c = 0; c < 4; ++c)
-        far[c] = farOracle(index, ground[c].x, ground[c].z, timeOfDay_h, radius);
+        far[c] = farOracle(index, ground[c].x, ground[c].z, timeOfDay_h, radius, light);
     method.irradianceFromFar(4, at.data(), normal.data(), far.data(), e.data(), patch.data());
     b.freshFar = irradianceRelativeError(blend(), eRef);
     // ... and at the witness' own point and surface normal: no blend across the patch.
     const glm::dvec3 point = p.surface_m + glm::dvec3(0.0, kShadingHeight_m, 0.0);
-    const ShRgb farHere = farOracle(index, w.x_m, w.z_m, timeOfDay_h, radius);
+    const ShRgb farHere = farOracle(index, w.x_m, w.z_m, timeOfDay_h, radius, light);
     const double noPatch = 0.0;
     glm::vec3 here;
     method.irradianceFromFar(1, &point, &p.surfaceNormal, &farHere, &here, &noPatch);
@@ -297,9 +298,9 @@ DrawnBudget ErrorMeter::drawnTerrainError(int index, double timeOfDay_h,
 }
 
 ShRgb ErrorMeter::farOracle(int frameIndex, double x_m, double z_m, double timeOfDay_h,
-                            double radius_m) {
-    if (!(radius_m > 0.0)) return oracle(frameIndex, x_m, z_m, timeOfDay_h);
-    const Key key{frameIndex, x_m, z_m, radius_m};
+                            double radius_m, const SurfaceLight* light) {
+    if (!(radius_m > 0.0) && !light) return oracle(frameIndex, x_m, z_m, timeOfDay_h);
+    const std::pair<const SurfaceLight*, Key> key{light, Key{frameIndex, x_m, z_m, radius_m}};
     const auto it = farCache_.find(key);
     if (it != farCache_.end()) {
         ++oracleHits_;
@@ -307,8 +308,10 @@ ShRgb ErrorMeter::farOracle(int frameIndex, double x_m, double z_m, double timeO
     }
     const auto t0 = std::chrono::steady_clock::now();
     std::vector<float> cube;
+    capture_.setSurfaceLight(light);
     capture_.captureFar(environment_.placeProbe(x_m, z_m, settings_.maxAside_m), timeOfDay_h,
                         kAllCubeFaces, cube, radius_m);
+    capture_.setSurfaceLight(nullptr);
     const ShRgb sh = toFloat(
         projectCubeMap(capture_.faceSize(), cube, {}, capture_.sunDirection(timeOfDay_h)).sh);
     oracle_s_ += secondsSince(t0);

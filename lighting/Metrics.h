@@ -50,11 +50,13 @@
 #include <limits>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/vec3.hpp>
 #include <nlohmann/json_fwd.hpp>
 
+#include "lighting/CubeCapture.h"
 #include "lighting/ProbeEnvironment.h"
 #include "lighting/ReferenceOracle.h"
 #include "lighting/SH.h"
@@ -376,9 +378,12 @@ class ErrorMeter {
     const ScreenEntry& surfaceEntry(int frameIndex, const glm::dvec3& surface_m,
                                     const glm::dvec3& normal, double timeOfDay_h);
     // Fresh captures of the far scene (the plants within `radius_m` left out) placed as probes
-    // are at ground point (x, z): the ideal far field of DrawnBudget (radius 0: oracle()).
-    ShRgb farOracle(int frameIndex, double x_m, double z_m, double timeOfDay_h, double radius_m);
-    std::map<Key, ShRgb> farCache_;
+    // are at ground point (x, z): the ideal far field of DrawnBudget (radius 0 and no light:
+    // oracle()). Their surfaces lit by `light` (the method's own, captureSurfaceLight) when
+    // not null.
+    ShRgb farOracle(int frameIndex, double x_m, double z_m, double timeOfDay_h, double radius_m,
+                    const SurfaceLight* light);
+    std::map<std::pair<const SurfaceLight*, Key>, ShRgb> farCache_;
     std::map<Key, ScreenEntry> screenCache_;
     std::vector<ScreenResult> screenResults_;
     bool referenceNow_ = false;

@@ -643,6 +643,9 @@ class NearFieldMethod final : public AmbienceMethod {
                            const glm::dvec3* normals, const ShRgb* far, glm::vec3* out,
                            const double* patch_m = nullptr) const override;
     double farCaptureRadius_m() const override;
+    const SurfaceLight* captureSurfaceLight() const override {
+        return far_->captureSurfaceLight();
+    }
     void noteLookups(std::size_t count, const double* x_m, const double* z_m) override {
         far_->noteLookups(count, x_m, z_m);
     }

@@ -245,6 +245,9 @@ Keys<CaptureSettings> captureKeys() {
     k.number(
         "fallbackRefresh_h", "h", 0.0, 24.0, "recompute the fallback after this much day time",
         [](T& t) -> double& { return t.fallbackRefresh_h; }, kCostLowLog);
+    k.boolean(
+        "ownLight", "captures light their surfaces with the method's own field, not the hemisphere",
+        [](T& t) -> bool& { return t.ownLight; }, kCostHigh);
     return k;
 }
 

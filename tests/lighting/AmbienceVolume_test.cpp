@@ -62,6 +62,50 @@ TEST(AmbienceVolume, OneFacePerFrameOneProbePerSixFrames) {
     EXPECT_GT(s.store.bytes(), 0u);
 }
 
+// With ownLight the volume's captures light their surfaces with its own field: during every
+// capture the surface light answers what the volume's shAt answers there at that moment (the
+// fallback before any anchor, then the blended anchors), and the capture is left without a light
+// after it. Off, no capture sees a light.
+class LightRecordingCapture final : public FakeCubeCapture {
+  public:
+    LightRecordingCapture() : FakeCubeCapture(8) {}
+    CubeCaptureStats capture(const glm::dvec3& p, double timeOfDay_h, CubeFaceMask faces,
+                             std::vector<float>& cube) override {
+        if (light_) {
+            ++lit;
+            worst = std::max(worst, maxDiff(light_->shAt(p), volume->shAt(p.x, p.z)));
+            if (volume->store().size() == 0)
+                worst = std::max(worst, maxDiff(light_->shAt(p), volume->store().fallback()));
+        }
+        return FakeCubeCapture::capture(p, timeOfDay_h, faces, cube);
+    }
+    void setSurfaceLight(const SurfaceLight* light) override { light_ = light; }
+    const SurfaceLight* light_ = nullptr;
+    const AmbienceVolume* volume = nullptr;
+    int lit = 0;
+    double worst = 0.0;
+};
+
+TEST(AmbienceVolume, OwnLightLightsItsCapturesWithItsOwnField) {
+    for (const bool own : {false, true}) {
+        SCOPED_TRACE(own);
+        AmbienceVolumeSettings s;
+        s.capture.ownLight = own;
+        LightRecordingCapture capture;
+        FlatProbeEnvironment environment;
+        AmbienceVolume volume(capture, environment, s);
+        capture.volume = &volume;
+        EXPECT_EQ(volume.captureSurfaceLight() != nullptr, own);
+        for (int f = 0; f < 120; ++f)
+            volume.update({10.0 + 3.0 * f, 1.7, 20.0}, {180.0, 0.0, 0.0}, 12.0, kDt);
+        EXPECT_EQ(volume.statistics().facesCaptured, 120);
+        EXPECT_EQ(capture.lit, own ? 120 : 0);
+        EXPECT_EQ(capture.worst, 0.0);  // the very same values
+        EXPECT_EQ(capture.light_, nullptr);
+        EXPECT_GE(volume.store().size(), 15u);
+    }
+}
+
 TEST(AmbienceVolume, RetuneAppliesNewSettingsToTheRunningVolume) {
     Rig rig;
     rig.run(60, {10.0, 1.7, 20.0});

@@ -29,6 +29,7 @@ using testing_support::maxDiff;
 
 using testing_support::FakeCubeCapture;
 using testing_support::FlatProbeEnvironment;
+using testing_support::FurnaceCapture;
 using testing_support::Poison;
 
 constexpr double kDt = 1.0 / 60.0;
@@ -164,6 +165,35 @@ TEST(ScrollingGridMethod, HysteresisClosedForm) {
         EXPECT_LT(maxDiff(p->value, expected), 2.0 * tolerance(a)) << cell.i << ", " << cell.k;
         // Still visibly away from c: the closed form is not trivially met.
         EXPECT_GT(maxDiff(p->value, c), 10.0 * tolerance(a));
+    }
+}
+
+// With ownLight the grid's captures light their surfaces with the grid's own field. In a furnace
+// (FurnaceCapture: uniform albedo rho, direct irradiance E_d) an update of a probe that reads
+// itself is one bounce more: with hysteresis h its upward irradiance v follows
+// v' = h v + (1 - h) rho (E_d + v), a contraction by h + (1 - h) rho towards the geometric
+// series' limit rho E_d / (1 - rho). Without it every capture holds one bounce, rho E_d.
+TEST(ScrollingGridMethod, OwnLightConvergesToTheFurnacesBounces) {
+    const double rho = 0.5, direct = 100.0;
+    for (const bool own : {false, true}) {
+        SCOPED_TRACE(own);
+        BaselineSettings s = testLayout();
+        s.gridSize = 2;
+        s.capture.facesPerFrame = 6;
+        s.hysteresis = 0.5;
+        s.capture.ownLight = own;
+        FurnaceCapture capture(rho, direct);
+        FlatProbeEnvironment environment;
+        ScrollingGridMethod grid(capture, environment, s);
+        // Four probes, one a frame: 60 updates each (0.75^60 < 1e-7 of the start left).
+        for (int f = 0; f < 4 * 61; ++f) frame(grid, {5.0, 1.7, 7.0});
+        const auto p = grid.probe({0, 0});  // the probe at (0, 0) reads itself alone
+        ASSERT_TRUE(p);
+        const double up = double(luminance(shIrradiance(p->value, glm::vec3(0, 1, 0))));
+        const double limit = own ? rho * direct / (1.0 - rho) : rho * direct;
+        EXPECT_NEAR(up, limit, 1e-4 * limit);
+        EXPECT_EQ(capture.litCaptures, own ? capture.captures : 0);
+        EXPECT_EQ(capture.light(), nullptr);  // left as it was
     }
 }
 

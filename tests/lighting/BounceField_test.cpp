@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "FakeCubeCapture.h"
 #include "lighting/Metrics.h"
 #include "lighting/SH.h"
 #include "world/Conventions.h"
@@ -16,33 +17,7 @@
 namespace amb {
 namespace {
 
-// A closed scene of uniform albedo rho (a furnace): every texel sees a surface lit by a direct
-// irradiance E_d and by the surface light's irradiance there, L = rho / pi (E_d + E_amb). The
-// field's SH of a uniform radiance L gives E = pi L for every normal, so pass k holds the
-// partial sum E_k = rho E_d (1 + rho + ... + rho^(k-1)).
-class FurnaceCapture final : public CubeCapture {
-  public:
-    FurnaceCapture(double rho, double direct) : rho_(rho), direct_(direct) {}
-    int faceSize() const override { return 8; }
-    CubeCaptureStats capture(const glm::dvec3& p, double, CubeFaceMask faces,
-                             std::vector<float>& cube) override {
-        const double ambient =
-            light_ ? double(luminance(shIrradiance(light_->shAt(p), glm::vec3(0, 1, 0)))) : 0.0;
-        const float l = float(rho_ / kPi * (direct_ + ambient));
-        cube.assign(6 * 8 * 8 * 3, l);
-        ++captures;
-        CubeCaptureStats s;
-        s.faces = __builtin_popcount(faces & kAllCubeFaces);
-        return s;
-    }
-    void setSurfaceLight(const SurfaceLight* light) override { light_ = light; }
-    const SurfaceLight* light() const { return light_; }
-    int captures = 0;
-
-  private:
-    double rho_, direct_;
-    const SurfaceLight* light_ = nullptr;
-};
+using testing_support::FurnaceCapture;
 
 // A capture whose uniform radiance is 1 + x / 100 of its position (ignores the surface light):
 // converges on its second pass, and shows where the field reads.

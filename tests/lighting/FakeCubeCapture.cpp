@@ -6,6 +6,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "lighting/SH.h"
 #include "world/Conventions.h"
 #include "world/Sky.h"
 #include "world/WorldSettings.h"
@@ -115,6 +116,20 @@ void FlatProbeEnvironment::fallbackCubeMap(double timeOfDay_h, int n,
             }
         }
     }
+}
+
+CubeCaptureStats FurnaceCapture::capture(const glm::dvec3& position_m, double, CubeFaceMask faces,
+                                         std::vector<float>& cube) {
+    lastAmbient = light_ ? double(luminance(shIrradiance(light_->shAt(position_m),
+                                                         glm::vec3(0.0f, 1.0f, 0.0f))))
+                         : 0.0;
+    const float l = float(rho_ / kPi * (direct_ + lastAmbient));
+    cube.assign(std::size_t(6) * n_ * n_ * 3, l);
+    ++captures;
+    if (light_) ++litCaptures;
+    CubeCaptureStats s;
+    s.faces = __builtin_popcount(faces & kAllCubeFaces);
+    return s;
 }
 
 }  // namespace testing_support

@@ -4,6 +4,8 @@
 // model of world/Sky.h or, for speed, a cheap analytic gradient), below it a ground whose colour
 // depends on the probe's position (so neighbouring anchors differ). It can poison chosen probes
 // with NaN, +Inf or negative texels, and logs every call.
+// FurnaceCapture: a closed scene of uniform albedo lit by a direct irradiance and by the surface
+// light it is given, for tests of multiple bounces.
 // FlatProbeEnvironment: flat ground at y = 0, probes probeHeight_m above it, no plants.
 // (Kept in its own translation unit: it needs world/Sky.h but not lighting/SH.h.)
 #pragma once
@@ -66,6 +68,30 @@ class FakeCubeCapture : public CubeCapture {
     int poisonFace_ = 3;
     bool poisonThisProbe_ = false;
     std::int64_t poisoned_ = 0;
+};
+
+// A closed scene of uniform albedo rho (a furnace): every texel sees a surface lit by a direct
+// irradiance E_d and by the surface light's irradiance there for an upward normal, so its
+// radiance is L = rho / pi (E_d + E_amb(p)), p the capture's position. The SH of a uniform
+// radiance L gives E = pi L for every normal: a field read back as the surface light makes each
+// capture one bounce more, E_k = rho (E_d + E_k-1), whose limit is rho E_d / (1 - rho).
+class FurnaceCapture final : public CubeCapture {
+  public:
+    FurnaceCapture(double rho, double direct, int faceSize = 8)
+        : rho_(rho), direct_(direct), n_(faceSize) {}
+    int faceSize() const override { return n_; }
+    CubeCaptureStats capture(const glm::dvec3& position_m, double timeOfDay_h, CubeFaceMask faces,
+                             std::vector<float>& cube) override;
+    void setSurfaceLight(const SurfaceLight* light) override { light_ = light; }
+    const SurfaceLight* light() const { return light_; }
+    int captures = 0;      // calls
+    int litCaptures = 0;   // calls made with a surface light set
+    double lastAmbient = 0.0;  // E_amb of the latest call (0 without a light)
+
+  private:
+    double rho_, direct_;
+    int n_;
+    const SurfaceLight* light_ = nullptr;
 };
 
 class FlatProbeEnvironment : public ProbeEnvironment {
