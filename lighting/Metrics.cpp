@@ -275,6 +275,7 @@ DrawnBudget ErrorMeter::drawnTerrainError(int index, double timeOfDay_h,
     const glm::dvec3 eRef(ref.irradiance);
     method.cornerIrradianceAtPoints(4, at.data(), normal.data(), e.data(), patch.data());
     b.drawn = irradianceRelativeError(blend(), eRef);
+    b.drawnBias = irradianceBias(blend(), eRef);
     if (!budget) return b;
     // The same path with the far field from fresh captures at those points' ground points.
     const double radius = method.farCaptureRadius_m();
@@ -291,6 +292,7 @@ DrawnBudget ErrorMeter::drawnTerrainError(int index, double timeOfDay_h,
     glm::vec3 here;
     method.irradianceFromFar(1, &point, &p.surfaceNormal, &farHere, &here, &noPatch);
     b.atPoint = irradianceRelativeError(glm::dvec3(here), eRef);
+    b.atPointBias = irradianceBias(glm::dvec3(here), eRef);
     b.truncation = irradianceRelativeError(glm::dvec3(ref.truncated), eRef);
     method.cornerIrradianceAtPoints(1, &point, &p.surfaceNormal, &here, &noPatch);
     b.perPoint = irradianceRelativeError(glm::dvec3(here), eRef);
@@ -330,11 +332,12 @@ DrawnBudgetSummary summarizeDrawnBudget(const std::vector<DrawnBudget>& budgets)
         s.model += b.atPoint - b.truncation;
         s.truncation += b.truncation;
         s.perPoint += b.perPoint;  // NaN spreads: a budget without it says so
+        s.drawnBias += b.drawnBias, s.atPointBias += b.atPointBias;
     }
     if (s.count > 0) {
         const double n = double(s.count);
         s.drawn /= n, s.farField /= n, s.patch /= n, s.model /= n, s.truncation /= n;
-        s.perPoint /= n;
+        s.perPoint /= n, s.drawnBias /= n, s.atPointBias /= n;
     }
     return s;
 }

@@ -160,6 +160,11 @@ struct DrawnBudget {
     // draw that evaluated the ambient per pixel would show, so drawn - perPoint is what such a
     // draw could gain. Taken with the rest of the budget.
     double perPoint = std::numeric_limits<double>::quiet_NaN();
+    // Signed, beside the chain (irradianceBias: lum / lum_ref - 1): the drawn answer's and the
+    // answer at the point with fresh far captures (the model step's start), so the budget says
+    // whether what is left is too bright or too dark.
+    double drawnBias = std::numeric_limits<double>::quiet_NaN();
+    double atPointBias = std::numeric_limits<double>::quiet_NaN();
     bool complete() const {
         return std::isfinite(drawn) && std::isfinite(freshFar) && std::isfinite(atPoint) &&
                std::isfinite(truncation);
@@ -170,6 +175,7 @@ struct DrawnBudgetSummary {
     std::size_t count = 0;
     double drawn = 0.0, farField = 0.0, patch = 0.0, model = 0.0, truncation = 0.0;
     double perPoint = 0.0;  // the mean of DrawnBudget::perPoint (NaN when one lacks it)
+    double drawnBias = 0.0, atPointBias = 0.0;  // the means of DrawnBudget's (NaN as perPoint)
     // (farField + patch + model + truncation) / drawn: 1 up to rounding, by construction.
     double closure() const;
 };

@@ -60,6 +60,13 @@ double irradianceRelativeError(const glm::dvec3& applied, const glm::dvec3& ref)
     return std::sqrt(weightedSquare(applied - ref) / std::max(weightedSquare(ref), 1e-18));
 }
 
+double irradianceBias(const glm::dvec3& applied, const glm::dvec3& ref) {
+    const auto lum = [](const glm::dvec3& e) {
+        return kLuminanceWeights[0] * e.x + kLuminanceWeights[1] * e.y + kLuminanceWeights[2] * e.z;
+    };
+    return lum(applied) / std::max(lum(ref), 1e-18) - 1.0;
+}
+
 double referenceDistance(const ReferenceSample& ref, const ShRgb& sh, const SphereRule& rule) {
     AMB_CHECK(ref.irradiance.size() == rule.directions.size());
     const ShRgbD d = toDouble(sh);

@@ -78,6 +78,9 @@ glm::dvec3 referenceIrradianceAt(int faceSize, std::vector<float> cube,
                                  const glm::dvec3& normal);
 // |a - ref| / |ref| with luminance-weighted channels (one normal: a screen witness).
 double irradianceRelativeError(const glm::dvec3& applied, const glm::dvec3& ref);
+// lum(a) / lum(ref) - 1, signed (luminance with the same weights): whether the error is too
+// bright (> 0) or too dark.
+double irradianceBias(const glm::dvec3& applied, const glm::dvec3& ref);
 
 // ||E_sh - E_ref|| and ||E_ref|| by the rule.
 double referenceDistance(const ReferenceSample& ref, const ShRgb& sh, const SphereRule& rule);

@@ -119,6 +119,8 @@ const std::vector<std::string> kColumns = {"replay",
                                            "drawn_budget_truncation",
                                            "drawn_budget_closure",
                                            "drawn_per_point_error_mean",
+                                           "drawn_bias_mean",
+                                           "drawn_at_point_bias_mean",
                                            "reference_s",
                                            "wall_s",
                                            "run_dir"};
@@ -190,6 +192,8 @@ std::map<std::string, std::string> resultRow(const Job& job) {
                 put("drawn_budget_truncation", number(ref, {"drawn", "budget", "truncation"}));
                 put("drawn_budget_closure", number(ref, {"drawn", "budget", "closure"}));
                 put("drawn_per_point_error_mean", number(ref, {"drawn", "budget", "perPoint"}));
+                put("drawn_bias_mean", number(ref, {"drawn", "budget", "drawnBias"}));
+                put("drawn_at_point_bias_mean", number(ref, {"drawn", "budget", "atPointBias"}));
             }
         }
         if (number(ref, {"screen", "error", "count"}) > 0) {

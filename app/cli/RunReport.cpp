@@ -675,7 +675,10 @@ std::string measurementJson(const ErrorMeter& meter) {
                         {"farField", b.farField}, {"patch", b.patch},
                         {"model", b.model},       {"truncation", b.truncation},
                         {"closure", b.closure()},
-                        {"perPoint", std::isfinite(b.perPoint) ? json(b.perPoint) : json(nullptr)}};
+                        {"perPoint", std::isfinite(b.perPoint) ? json(b.perPoint) : json(nullptr)},
+                        {"drawnBias", std::isfinite(b.drawnBias) ? json(b.drawnBias) : json(nullptr)},
+                        {"atPointBias",
+                         std::isfinite(b.atPointBias) ? json(b.atPointBias) : json(nullptr)}};
         };
         drawnJson["budget"] = drawnBudgetJson(meter.drawnBudgets());
         drawnJson["budgetOpen"] = drawnBudgetJson(meter.drawnBudgets(-1, 0));
@@ -738,7 +741,8 @@ void writeReferenceCsv(const ErrorMeter& meter, const std::string& path) {
     std::ofstream out(path);
     if (!out) throw InputError(path, "cannot write the reference CSV");
     out << "frame,witness,x,y,z,total,truncation,capture,spacing,schedule,self,drawn,cover,"
-           "placed,drawn_fresh_far,drawn_at_point,drawn_truncation,drawn_per_point\n";
+           "placed,drawn_fresh_far,drawn_at_point,drawn_truncation,drawn_per_point,drawn_bias,"
+           "drawn_at_point_bias\n";
     out.precision(9);
     for (const ReferenceWitness& r : meter.referenceWitnesses()) {
         out << r.frame << ','
@@ -755,7 +759,8 @@ void writeReferenceCsv(const ErrorMeter& meter, const std::string& path) {
                                                      : "open")
             << ',' << (r.ring < 0 ? "" : toString(r.placement));
         const DrawnBudget& b = r.drawnBudget;
-        for (const double v : {b.freshFar, b.atPoint, b.truncation, b.perPoint}) {
+        for (const double v :
+             {b.freshFar, b.atPoint, b.truncation, b.perPoint, b.drawnBias, b.atPointBias}) {
             out << ',';
             if (std::isfinite(v)) out << v;
         }

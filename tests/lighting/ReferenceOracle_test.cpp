@@ -226,6 +226,19 @@ TEST(ReferenceOracle, MeterCacheRoundTripsAndRefusesBadFiles) {
     std::remove(path.c_str());
 }
 
+// The signed error: luminance ratio less one, so twice as bright is +1, half as bright -0.5, and
+// a change of colour at the same luminance is no bias though it is an error.
+TEST(DrawnBudget, BiasIsTheSignedLuminanceRatio) {
+    const glm::dvec3 ref(2.0, 3.0, 1.0);
+    EXPECT_NEAR(irradianceBias(2.0 * ref, ref), 1.0, 1e-12);
+    EXPECT_NEAR(irradianceBias(0.5 * ref, ref), -0.5, 1e-12);
+    EXPECT_NEAR(irradianceRelativeError(0.5 * ref, ref), 0.5, 1e-12);
+    // Red up, blue down by the ratio of their weights: the same luminance.
+    const glm::dvec3 shifted = ref + glm::dvec3(kLuminanceWeights[2], 0.0, -kLuminanceWeights[0]);
+    EXPECT_NEAR(irradianceBias(shifted, ref), 0.0, 1e-12);
+    EXPECT_GT(irradianceRelativeError(shifted, ref), 0.01);
+}
+
 // The drawn-normal budget's summary: each term is a step between two successive errors, so the
 // means add up to the drawn mean exactly; witnesses without every step are left out.
 TEST(DrawnBudget, TermsAreTheStepsAndAddUpToTheDrawnMean) {
@@ -239,6 +252,7 @@ TEST(DrawnBudget, TermsAreTheStepsAndAddUpToTheDrawnMean) {
     EXPECT_NEAR(s.model, 0.1, 1e-12);       // (0.15 + 0.05) / 2
     EXPECT_NEAR(s.truncation, 0.05, 1e-12);
     EXPECT_NEAR(s.perPoint, 0.2, 1e-12);  // beside the chain: its own mean
+    EXPECT_TRUE(std::isnan(s.drawnBias));  // a and b lack it: said, not taken as 0
     EXPECT_NEAR(s.closure(), 1.0, 1e-12);
     EXPECT_FALSE(partial.complete());
     EXPECT_EQ(summarizeDrawnBudget({partial}).count, 0u);
@@ -324,7 +338,12 @@ TEST(DrawnBudget, FreshCapturesMakeTheFarFieldTermVanish) {
     EXPECT_GT(std::fabs(inside.patch), 1e-4);  // the fake's ground colour varies across 32 m
     EXPECT_NEAR(inside.closure(), 1.0, 1e-9);
 
+    // The signed figures: with the witness on corner 0 the drawn answer is the one at the point
+    // (the same bias); scaled by 1.5 it is 1.5 times as bright: 1 + bias scales by 1.5.
+    EXPECT_NEAR(exact.drawnBias, exact.atPointBias, 1e-6);
     const DrawnBudgetSummary off = run(0.0, 0.0, 0.5f);
+    EXPECT_NEAR(off.atPointBias, exact.atPointBias, 1e-6);
+    EXPECT_NEAR(off.drawnBias + 1.0, 1.5 * (exact.atPointBias + 1.0), 1e-5);
     EXPECT_NEAR(off.farField, 0.5, 0.05);
     EXPECT_NEAR(off.model, exact.model, 1e-6);  // the steps after the far field do not see it
     EXPECT_NEAR(off.truncation, exact.truncation, 1e-9);
