@@ -56,10 +56,10 @@ struct BaselineSettings {
     // (why these values: docs/TUNING.md "Baselines")
     // ScrollingGridMethod.
     int gridSize = 16;             // G: the grid holds G x G probes
-    double gridSpacing_m = 128.0;  // s: probe spacing, also the lattice the grid snaps to [m]
+    double gridSpacing_m = 256.0;  // s: probe spacing, also the lattice the grid snaps to [m]
     double hysteresis = 0.97;      // h: an update keeps h of the old value
     // ReactiveCacheMethod.
-    double cacheSpacing_m = 96.0;  // lattice of the cached probes [m]
+    double cacheSpacing_m = 192.0;  // lattice of the cached probes [m]
     double unusedTimeout_s = 4.0;  // a probe not looked up for this long is dropped [s]
     // PerObjectMethod.
     double objectSize_m = 256.0;   // objects are terrain squares of this size [m]
