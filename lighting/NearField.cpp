@@ -119,9 +119,14 @@ std::vector<SphereOccluder> NearField::occluders(const glm::dvec3& p) const {
     return out;
 }
 
-std::unique_ptr<NearFieldTransfer> NearField::build(const glm::dvec3& p, double selfRadius_m,
+std::unique_ptr<NearFieldTransfer> NearField::build(const glm::dvec3& point_m, double selfRadius_m,
                                                     const GroundTerm* objectGroundTerm,
                                                     const glm::dvec3* drawnNormal) const {
+    // A surface point (asked with its normal) sees its near field from surfaceHeight_m.
+    const glm::dvec3 p =
+        drawnNormal && selfRadius_m <= 0.0
+            ? point_m - glm::dvec3(0.0, kShadingHeight_m - settings_.surfaceHeight_m, 0.0)
+            : point_m;
     std::vector<HorizonWedge> horizon;
     if (settings_.terrain && selfRadius_m <= 0.0)
         scene_.terrainNear(p, settings_.terrainRadius_m, horizon);

@@ -188,6 +188,11 @@ struct NearFieldSettings {
     // a flight's ground point 60 m below it: the distance is in three dimensions) take their
     // own, as corners do (see Ground).
     double latticeRange_m = 16.0;
+    // Terrain corners and road vertices (points asked with their normal) are shaded at a
+    // surface: the near field puts its plants, terrain walls and ground back as seen from this
+    // height above the ground, not from the probes' kShadingHeight_m, whose far field it
+    // completes (see Surface height).
+    double surfaceHeight_m = kShadingHeight_m;
     // Points the draw asks for (terrain corners, objects) are cached with their transfer; when a
     // cache holds this many, the half of it used least recently is dropped (the view's points,
     // asked every frame, stay).

@@ -289,6 +289,10 @@ Keys<NearFieldSettings> nearFieldKeys() {
         "latticeRange_m", "m", 0.0, 1000.0,
         "objects first built this close to the camera blend the lattice's ground terms",
         [](T& t) -> double& { return t.latticeRange_m; }, costHighLog);
+    k.number(
+        "surfaceHeight_m", "m", 0.05, kShadingHeight_m,
+        "terrain corners and road vertices see the near field from this height above the ground",
+        [](T& t) -> double& { return t.surfaceHeight_m; }, rebuilding(kPlain));
     k.integer(
         "cacheEntries", "", 4096, 1 << 18,
         "points cached with their transfer before the cache is emptied (about 2.5 kB each)",

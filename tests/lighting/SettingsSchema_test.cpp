@@ -122,7 +122,7 @@ TEST(SettingsSchema, KeysAreUniqueAndTheCaptureKeysAreShared) {
         EXPECT_EQ(v->hi, b.hi) << b.key;
         EXPECT_EQ(v->kind, b.kind) << b.key;
     }
-    EXPECT_EQ(shared, 8 + 18);  // CaptureSettings' eight and the near field's eighteen
+    EXPECT_EQ(shared, 9 + 19);  // CaptureSettings' nine and the near field's nineteen
     // The files' defaults lie in their ranges.
     const AmbienceVolumeSettings v;
     for (const auto& f : volumeSettingsSchema().fields()) {
@@ -190,7 +190,7 @@ TEST(SettingsSchema, WhatTheWriterWritesReadsBackEqual) {
     EXPECT_EQ(j.at("nearField").at("radius_m").get<double>(), 20.0);
     EXPECT_EQ(j.at("facesPerFrame").get<int>(), 1);
     EXPECT_TRUE(j.at("relightBySkyLevel").get<bool>());
-    EXPECT_EQ(j.size(), 3u + 8u + 3u);  // three objects, the capture keys, the volume's own
+    EXPECT_EQ(j.size(), 3u + 9u + 3u);  // three objects, the capture keys, the volume's own
 }
 
 // nearField.vertexAmbient_m (terrain patches lit per vertex near the eye): in both files, in
