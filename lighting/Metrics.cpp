@@ -294,6 +294,13 @@ DrawnBudget ErrorMeter::drawnTerrainError(int index, double timeOfDay_h,
     b.atPoint = irradianceRelativeError(glm::dvec3(here), eRef);
     b.atPointBias = irradianceBias(glm::dvec3(here), eRef);
     b.truncation = irradianceRelativeError(glm::dvec3(ref.truncated), eRef);
+    const auto plain = [&](const ShRgb& sh) {
+        return glm::dvec3(glm::max(shIrradiance(sh, glm::vec3(p.surfaceNormal)), glm::vec3(0.0f)));
+    };
+    const glm::dvec3 refPoint =
+        p.surface_m + kScreenProbeOffset_m * glm::normalize(p.surfaceNormal);
+    b.sceneBias = irradianceBias(plain(oracleAt(index, refPoint, timeOfDay_h)), eRef);
+    b.placedBias = irradianceBias(plain(oracle(index, w.x_m, w.z_m, timeOfDay_h)), eRef);
     method.cornerIrradianceAtPoints(1, &point, &p.surfaceNormal, &here, &noPatch);
     b.perPoint = irradianceRelativeError(glm::dvec3(here), eRef);
     return b;
@@ -333,11 +340,13 @@ DrawnBudgetSummary summarizeDrawnBudget(const std::vector<DrawnBudget>& budgets)
         s.truncation += b.truncation;
         s.perPoint += b.perPoint;  // NaN spreads: a budget without it says so
         s.drawnBias += b.drawnBias, s.atPointBias += b.atPointBias;
+        s.sceneBias += b.sceneBias, s.placedBias += b.placedBias;
     }
     if (s.count > 0) {
         const double n = double(s.count);
         s.drawn /= n, s.farField /= n, s.patch /= n, s.model /= n, s.truncation /= n;
         s.perPoint /= n, s.drawnBias /= n, s.atPointBias /= n;
+        s.sceneBias /= n, s.placedBias /= n;
     }
     return s;
 }

@@ -165,6 +165,15 @@ struct DrawnBudget {
     // whether what is left is too bright or too dark.
     double drawnBias = std::numeric_limits<double>::quiet_NaN();
     double atPointBias = std::numeric_limits<double>::quiet_NaN();
+    // Signed, beside the chain, splitting the model step where its light comes from: the coarse
+    // capture scene with every plant, unlit by the near field, read through its order-2 SH at
+    // the surface normal, captured (scene) at the reference's own point and (placed) where the
+    // method's probes stand there (placeProbe: up and out of solids). scene says what the
+    // capture scene and its surface light give; placed - scene what the probes' height adds;
+    // atPoint - placed what the near field (plants left out of the capture and put back as
+    // spheres, the terrain's horizon, the ground) adds.
+    double sceneBias = std::numeric_limits<double>::quiet_NaN();
+    double placedBias = std::numeric_limits<double>::quiet_NaN();
     bool complete() const {
         return std::isfinite(drawn) && std::isfinite(freshFar) && std::isfinite(atPoint) &&
                std::isfinite(truncation);
@@ -176,6 +185,7 @@ struct DrawnBudgetSummary {
     double drawn = 0.0, farField = 0.0, patch = 0.0, model = 0.0, truncation = 0.0;
     double perPoint = 0.0;  // the mean of DrawnBudget::perPoint (NaN when one lacks it)
     double drawnBias = 0.0, atPointBias = 0.0;  // the means of DrawnBudget's (NaN as perPoint)
+    double sceneBias = 0.0, placedBias = 0.0;   // the same
     // (farField + patch + model + truncation) / drawn: 1 up to rounding, by construction.
     double closure() const;
 };

@@ -678,7 +678,10 @@ std::string measurementJson(const ErrorMeter& meter) {
                         {"perPoint", std::isfinite(b.perPoint) ? json(b.perPoint) : json(nullptr)},
                         {"drawnBias", std::isfinite(b.drawnBias) ? json(b.drawnBias) : json(nullptr)},
                         {"atPointBias",
-                         std::isfinite(b.atPointBias) ? json(b.atPointBias) : json(nullptr)}};
+                         std::isfinite(b.atPointBias) ? json(b.atPointBias) : json(nullptr)},
+                        {"sceneBias", std::isfinite(b.sceneBias) ? json(b.sceneBias) : json(nullptr)},
+                        {"placedBias",
+                         std::isfinite(b.placedBias) ? json(b.placedBias) : json(nullptr)}};
         };
         drawnJson["budget"] = drawnBudgetJson(meter.drawnBudgets());
         drawnJson["budgetOpen"] = drawnBudgetJson(meter.drawnBudgets(-1, 0));
@@ -742,7 +745,7 @@ void writeReferenceCsv(const ErrorMeter& meter, const std::string& path) {
     if (!out) throw InputError(path, "cannot write the reference CSV");
     out << "frame,witness,x,y,z,total,truncation,capture,spacing,schedule,self,drawn,cover,"
            "placed,drawn_fresh_far,drawn_at_point,drawn_truncation,drawn_per_point,drawn_bias,"
-           "drawn_at_point_bias\n";
+           "drawn_at_point_bias,drawn_scene_bias,drawn_placed_bias\n";
     out.precision(9);
     for (const ReferenceWitness& r : meter.referenceWitnesses()) {
         out << r.frame << ','
@@ -760,7 +763,8 @@ void writeReferenceCsv(const ErrorMeter& meter, const std::string& path) {
             << ',' << (r.ring < 0 ? "" : toString(r.placement));
         const DrawnBudget& b = r.drawnBudget;
         for (const double v :
-             {b.freshFar, b.atPoint, b.truncation, b.perPoint, b.drawnBias, b.atPointBias}) {
+             {b.freshFar, b.atPoint, b.truncation, b.perPoint, b.drawnBias, b.atPointBias,
+              b.sceneBias, b.placedBias}) {
             out << ',';
             if (std::isfinite(v)) out << v;
         }

@@ -348,6 +348,14 @@ TEST(DrawnBudget, FreshCapturesMakeTheFarFieldTermVanish) {
     EXPECT_NEAR(off.model, exact.model, 1e-6);  // the steps after the far field do not see it
     EXPECT_NEAR(off.truncation, exact.truncation, 1e-9);
     EXPECT_NEAR(off.closure(), 1.0, 1e-9);
+
+    // The model step's split: with no near field the answer at the point is the plain capture
+    // where the probe stands; neither plain capture sees the method (its gain).
+    EXPECT_NEAR(exact.placedBias, exact.atPointBias, 1e-6);
+    EXPECT_TRUE(std::isfinite(exact.sceneBias));
+    EXPECT_LT(std::fabs(exact.sceneBias), 0.05);  // the fakes differ only in face size
+    EXPECT_NEAR(off.sceneBias, exact.sceneBias, 1e-9);
+    EXPECT_NEAR(off.placedBias, exact.placedBias, 1e-9);
 }
 
 namespace {
