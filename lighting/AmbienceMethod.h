@@ -153,6 +153,10 @@ class AmbienceMethod {
     // the vertex's point and normal, patch_m the vertex spacing) instead of their corners
     // blended across the patch; 0: none (the near field's vertexAmbient_m).
     virtual double terrainVertexRange_m() const { return 0.0; }
+    // At most this many new mesh vertices a frame become lit per vertex (nearest patches first,
+    // the others blend their corners until their turn); 0: no bound (the near field's
+    // vertexPointsPerFrame).
+    virtual int terrainVertexPointsPerFrame() const { return 0; }
 
     virtual MethodStatistics methodStatistics() const = 0;
     // Where the interpolation at (x, z) reads its probes now (see IdealSupport); none by default.

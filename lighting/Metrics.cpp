@@ -241,7 +241,7 @@ DrawnBudget ErrorMeter::drawnTerrainError(int index, double timeOfDay_h,
     // size the near field's patch mean averages over), with the weights of the interpolation.
     // A patch nearer the camera than the method's terrainVertexRange_m (horizontally, to its
     // bounds; RendererScene::buildView's rule) is lit per mesh vertex: the vertices of the
-    // grid cell holding the witness, averaged over the vertex spacing, interpolated as the
+    // grid cell holding the witness, each at its own point (no patch mean), interpolated as the
     // cell's triangles interpolate them. Else the patch's corners, averaged over the patch,
     // blended bilinearly.
     std::array<glm::dvec3, 4> ground, normal;
@@ -254,7 +254,7 @@ DrawnBudget ErrorMeter::drawnTerrainError(int index, double timeOfDay_h,
         const DrawnCell cell = environment_.drawnCell(w.x_m, w.z_m, camera_m);
         if (!cell.known || p.quads <= 0) return b;  // not known as drawn: not graded
         ground = cell.vertex_m, normal = cell.normal, weight = cell.weight;
-        patch_m = p.size_m / p.quads;
+        patch_m = 0.0;
     } else {
         const double u = (w.x_m - p.x0_m) / p.size_m, v = (w.z_m - p.z0_m) / p.size_m;
         ground = p.corner_m, normal = p.cornerNormal;

@@ -223,11 +223,15 @@ struct NearFieldSettings {
     // skyDetail): the gullies that fall between corners. Needs `terrain`.
     bool vertexDetail = true;
     // Terrain patches whose nearest point (horizontally) lies closer than this to the eye take
-    // the ambient at each mesh vertex, each through its own normal with the near field averaged
-    // over one grid cell (patch mean of the vertex spacing), instead of blending the corners
-    // across the patch (docs/ARCHITECTURE.md "Terrain and objects"). 0: off, every patch blends
-    // its corners.
-    double vertexAmbient_m = 0.0;
+    // the ambient at each mesh vertex, each at its own point and through its own normal, instead of blending the corners across the patch (docs/ARCHITECTURE.md
+    // "Terrain and objects"). 0: off, every patch blends its corners. (why this value:
+    // docs/TUNING.md "Near field")
+    double vertexAmbient_m = 160.0;
+    // The draw lights at most this many new mesh vertices a frame per vertex (nearest patches
+    // first, at least one patch); a patch entering the range whose turn has not come blends its
+    // corners meanwhile, so a frame's near-field builds stay bounded (docs/ARCHITECTURE.md
+    // "Terrain and objects"). 0: no bound, every patch in range at once.
+    int vertexPointsPerFrame = 600;
 };
 // The near field's weight at distance_m (horizontal) from the camera for a range: 1 out to
 // (1 - kNearFade) range, 0 from range on, smoothstep between (see Range).
@@ -665,6 +669,8 @@ class NearFieldMethod final : public AmbienceMethod {
     bool terrainSkyDetail() const override { return skyDetail_; }
     // The setting vertexAmbient_m while the near field is enabled, else 0.
     double terrainVertexRange_m() const override;
+    // The setting vertexPointsPerFrame.
+    int terrainVertexPointsPerFrame() const override;
     MethodStatistics methodStatistics() const override;
     // None: the error budget's ideal volume (fresh full captures at the lattice points) is not
     // what this method interpolates (far captures and the near field at the point), so its

@@ -159,6 +159,10 @@ double NearFieldMethod::terrainVertexRange_m() const {
     return s.enabled && s.vertexAmbient_m > 0.0 ? s.vertexAmbient_m : 0.0;
 }
 
+int NearFieldMethod::terrainVertexPointsPerFrame() const {
+    return std::max(0, near_->settings().vertexPointsPerFrame);
+}
+
 MethodStatistics NearFieldMethod::methodStatistics() const {
     MethodStatistics s = far_->methodStatistics();
     s.nearField_s = near_->seconds();

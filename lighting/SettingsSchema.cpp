@@ -321,6 +321,11 @@ Keys<NearFieldSettings> nearFieldKeys() {
         "terrain patches nearer the eye than this take the ambient at every vertex, not their "
         "corners blended (0: off)",
         [](T& t) -> double& { return t.vertexAmbient_m; }, costHighLog);
+    k.integer(
+        "vertexPointsPerFrame", "points", 0, 1 << 20,
+        "new terrain vertices lit per vertex a frame, nearest patches first; the others blend "
+        "their corners until their turn (0: no bound)",
+        [](T& t) -> int& { return t.vertexPointsPerFrame; }, costHigh);
     return k;
 }
 

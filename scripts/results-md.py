@@ -119,7 +119,7 @@ def headline(rows, setting, command):
     # the same method gives evaluated at each witness' own point (an ambient per pixel).
     terms = ("drawn_budget_far_field", "drawn_budget_patch", "drawn_budget_model",
              "drawn_budget_truncation")
-    budget, per_point = [], []
+    budget, per_point, bias = [], [], []
     for rp in replays:
         ours = cell.get((rp, "volume"))
         values = [number(ours, k) for k in terms] if ours and ours.get("status") == "ok" else []
@@ -129,11 +129,20 @@ def headline(rows, setting, command):
             budget.append("—")
         pp = number(ours, "drawn_per_point_error_mean") if ours else None
         per_point.append("%.3f" % pp if pp is not None else "—")
+        # Signed: the drawn answer's luminance over the reference's, less one; then the coarse
+        # capture scene's at the reference's own point and where the probe stands.
+        signed = [number(ours, k) if ours else None
+                  for k in ("drawn_bias_mean", "drawn_scene_bias_mean", "drawn_placed_bias_mean")]
+        bias.append("%+.3f (scene %+.3f, placed %+.3f)" % tuple(signed)
+                    if all(v is not None for v in signed) else "—")
     if drawn and any(b != "—" for b in budget):
         lines.append("| ours at the drawn normal = far field + patch + model + truncation | %s |"
                      % " | ".join(budget))
         lines.append("| ours evaluated at each witness' own point (no patch blend) | %s |"
                      % " | ".join(per_point))
+        if any(b != "—" for b in bias):
+            lines.append("| ours' signed bias at the drawn normal (the capture scene's alone) | %s |"
+                         % " | ".join(bias))
     return "\n".join(lines)
 
 

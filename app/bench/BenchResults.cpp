@@ -121,6 +121,8 @@ const std::vector<std::string> kColumns = {"replay",
                                            "drawn_per_point_error_mean",
                                            "drawn_bias_mean",
                                            "drawn_at_point_bias_mean",
+                                           "drawn_scene_bias_mean",
+                                           "drawn_placed_bias_mean",
                                            "reference_s",
                                            "wall_s",
                                            "run_dir"};
@@ -194,6 +196,8 @@ std::map<std::string, std::string> resultRow(const Job& job) {
                 put("drawn_per_point_error_mean", number(ref, {"drawn", "budget", "perPoint"}));
                 put("drawn_bias_mean", number(ref, {"drawn", "budget", "drawnBias"}));
                 put("drawn_at_point_bias_mean", number(ref, {"drawn", "budget", "atPointBias"}));
+                put("drawn_scene_bias_mean", number(ref, {"drawn", "budget", "sceneBias"}));
+                put("drawn_placed_bias_mean", number(ref, {"drawn", "budget", "placedBias"}));
             }
         }
         if (number(ref, {"screen", "error", "count"}) > 0) {

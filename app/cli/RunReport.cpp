@@ -348,6 +348,16 @@ void addTimingsJson(json& j, const std::vector<FrameRecord>& frames) {
         stages[toString(FrameStage(s))] = statsJson(v);
     }
     std::vector<double> frame_ms, scene_ms, tris, shadow_ms, shadowTris;
+    // Drawn patches in the vertex range (nearField.vertexAmbient_m): lit per vertex, and those
+    // blending their corners until their turn (nearField.vertexPointsPerFrame).
+    std::vector<double> vertexPatches, waitingPatches;
+    std::size_t vertexLit = 0, vertexInRange = 0;
+    for (const FrameRecord& f : frames) {
+        vertexPatches.push_back(double(f.render.terrainPatchesVertex));
+        waitingPatches.push_back(double(f.render.terrainPatchesWaiting));
+        vertexLit += f.render.terrainPatchesVertex;
+        vertexInRange += f.render.terrainPatchesVertex + f.render.terrainPatchesWaiting;
+    }
     for (const FrameRecord& f : frames) {
         frame_ms.push_back(f.frame_ms);
         scene_ms.push_back(f.render.scene_ms);
@@ -359,6 +369,12 @@ void addTimingsJson(json& j, const std::vector<FrameRecord>& frames) {
     j["frame_ms"] = statsJson(frame_ms);
     j["drawListBuild_ms"] = statsJson(scene_ms);
     j["triangles"] = statsJson(tris);
+    j["terrainVertexPatches"] = statsJson(vertexPatches);
+    j["terrainWaitingPatches"] = statsJson(waitingPatches);
+    // Of the patch draws in the vertex range over the run, the share lit per vertex (1 with
+    // no range).
+    j["terrainVertexLitShare"] =
+        vertexInRange ? double(vertexLit) / double(vertexInRange) : 1.0;
     // The main view's shadow pass: casters built and submitted (CPU; the rasteriser may finish
     // the maps later, inside the draw), and the triangles drawn into the maps.
     j["shadowPass_ms"] = statsJson(shadow_ms);
@@ -511,7 +527,9 @@ json frameRowJson(const FrameRecord& f, bool volume) {
            {"terrainPatches", f.render.terrainPatches},
            {"terrainPatchesDrawn", f.render.terrainPatchesDrawn},
            {"objectsDrawn", f.render.objectsDrawn},
-           {"terrainRebuilt", f.render.terrainRebuilt}};
+           {"terrainRebuilt", f.render.terrainRebuilt},
+           {"terrainPatchesVertex", f.render.terrainPatchesVertex},
+           {"terrainPatchesWaiting", f.render.terrainPatchesWaiting}};
     for (int s = 0; s < kFrameStages; ++s)
         r[std::string(toString(FrameStage(s))) + "_ms"] = f.stage_ms[s];
     if (volume) {

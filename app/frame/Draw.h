@@ -55,6 +55,9 @@ class AmbientSource {
     // asked through cornerIrradianceBatch with the vertex spacing as patch_m, instead of their
     // corners blended (AmbienceMethod::terrainVertexRange_m); 0: none, never a capture's.
     virtual double terrainVertexRange_m() const { return 0.0; }
+    // Of those, at most this many new vertices a frame (AmbienceMethod::
+    // terrainVertexPointsPerFrame); 0: no bound.
+    virtual int terrainVertexPointsPerFrame() const { return 0; }
     // The same for `count` objects at once (a frame's plants): index[i] for position i. One by
     // one by default.
     virtual void objectSets(std::size_t count, const glm::dvec3* positions_m,
@@ -97,6 +100,9 @@ struct RenderStats {
     std::size_t triangles = 0;
     std::size_t terrainPatches = 0, terrainPatchesDrawn = 0, objectsDrawn = 0;
     bool terrainRebuilt = false;
+    // Drawn patches in the vertex range lit per vertex, and those still blending their corners
+    // (AmbientSource::terrainVertexPointsPerFrame).
+    std::size_t terrainPatchesVertex = 0, terrainPatchesWaiting = 0;
     double scene_ms = 0.0;  // building the draw list (CPU)
     double draw_ms = 0.0;   // submitting GL commands (CPU), the shadow pass included
     std::size_t shadowTriangles = 0;  // drawn into the shadow maps

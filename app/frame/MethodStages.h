@@ -44,6 +44,9 @@ class MethodAmbient final : public AmbientSource {
                             std::vector<AmbientSet>& sets) const override;
     bool terrainSkyDetail() const override { return method_.terrainSkyDetail(); }
     double terrainVertexRange_m() const override { return method_.terrainVertexRange_m(); }
+    int terrainVertexPointsPerFrame() const override {
+        return method_.terrainVertexPointsPerFrame();
+    }
     // The batch through the method's batch shAt (one timing, one lock of the near field).
     void objectSets(std::size_t count, const glm::dvec3* positions_m,
                     std::vector<AmbientSet>& sets, std::uint32_t* index) const override;

@@ -203,6 +203,8 @@ RenderStats Renderer::render(const CameraSample& camera, const AmbientSource& am
     stats.terrainPatchesDrawn = ss.terrainPatchesDrawn;
     stats.objectsDrawn = ss.objectsDrawn;
     stats.terrainRebuilt = ss.terrainRebuilt;
+    stats.terrainPatchesVertex = ss.terrainPatchesVertex;
+    stats.terrainPatchesWaiting = ss.terrainPatchesWaiting;
     stats.scene_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
     stats.draw_ms = std::chrono::duration<double, std::milli>(t2 - t1).count();
     stats.shadow_ms = std::chrono::duration<double, std::milli>(t1s - t1).count();

@@ -213,16 +213,41 @@ void RendererScene::buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj
     // Patches nearer the eye (horizontally, to their bounds) than the ambient's vertex range are
     // lit per mesh vertex (nearField.vertexAmbient_m; docs/ARCHITECTURE.md "Terrain and
     // objects"); the others blend their corners.
+    // With a bound on the new vertices a frame (terrainVertexPointsPerFrame), a patch entering
+    // the range takes its turn nearest first and blends its corners until then; a patch once
+    // lit per vertex stays so while it is in range, seen or not (its values stay cached).
     const double vertexRange = ambient.terrainVertexRange_m();
-    std::vector<std::size_t> visiblePatches, vertexPatches;
-    for (const auto& [distance, i] : visible) {
+    const int vertexBudget = ambient.terrainVertexPointsPerFrame();
+    const auto inVertexRange = [&](std::size_t i) {
         const PatchBounds& b = terrainBounds_[i];
         const double dx = std::max({b.min.x - eye_m.x, 0.0, eye_m.x - b.max.x});
         const double dz = std::max({b.min.z - eye_m.z, 0.0, eye_m.z - b.max.z});
-        if (vertexRange > 0.0 && std::hypot(dx, dz) < vertexRange)
-            vertexPatches.push_back(i);
-        else
-            visiblePatches.push_back(i);
+        return vertexRange > 0.0 && std::hypot(dx, dz) < vertexRange;
+    };
+    {
+        std::unordered_set<PatchKey, PatchKeyHash> kept;
+        for (std::size_t i = 0; i < terrainMesh_.patches.size(); ++i)
+            if (inVertexRange(i) && vertexLit_.count(terrainMesh_.patches[i].key))
+                kept.insert(terrainMesh_.patches[i].key);
+        vertexLit_.swap(kept);
+    }
+    std::vector<std::size_t> visiblePatches, vertexPatches;
+    std::size_t newVertices = 0;
+    vertexWaiting_ = 0;
+    for (const auto& [distance, i] : visible) {
+        const TerrainPatchDraw& p = terrainMesh_.patches[i];
+        bool lit = false;
+        if (inVertexRange(i)) {
+            lit = vertexLit_.count(p.key) > 0;
+            if (!lit && (vertexBudget <= 0 || newVertices == 0 ||
+                         newVertices + p.vertexCount <= std::size_t(vertexBudget))) {
+                newVertices += p.vertexCount;
+                vertexLit_.insert(p.key);
+                lit = true;
+            }
+            if (!lit) ++vertexWaiting_;
+        }
+        (lit ? vertexPatches : visiblePatches).push_back(i);
     }
     // The corner-blended patches' corners in one batch (the frame's largest set of lookups),
     // each shared corner once; a corner inside a coarser neighbour's edge is not looked up but
@@ -259,20 +284,19 @@ void RendererScene::buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj
             out.terrain.back().skyDetail = skyDetail;
         }
     }
-    // The per-vertex patches' vertices: world position, the mesh's (stitched) normal, and the
-    // vertex spacing, over which the near field averages its answer (one grid cell).
+    // The per-vertex patches' vertices: world position and the mesh's (stitched) normal, each
+    // asked as a point (no patch mean: the vertex spacing is a few metres, and a mean over the
+    // cell cost four times the near-field builds for 0.01 of error; docs/TUNING.md).
     VertexPoints terrainVertices;
     const auto& pos = terrainMesh_.mesh.positions;
     const auto& nrm = terrainMesh_.mesh.normals;
     for (std::size_t i : vertexPatches) {
         const TerrainPatchDraw& p = terrainMesh_.patches[i];
-        const double spacing = TerrainPatch::spacing_m(p.key.level);
         for (std::uint32_t v = p.firstVertex; v < p.firstVertex + p.vertexCount; ++v) {
             terrainVertices.index.push_back(v);
             terrainVertices.at.push_back(terrainMesh_.origin_m +
                                          glm::dvec3(pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]));
             terrainVertices.normal.emplace_back(nrm[3 * v], nrm[3 * v + 1], nrm[3 * v + 2]);
-            terrainVertices.patch.push_back(spacing);
         }
     }
     const std::size_t drawnPatches = visible.size();
@@ -305,6 +329,8 @@ void RendererScene::buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj
         stats->terrainPatchesDrawn = drawnPatches;
         stats->objectsDrawn = objects;
         stats->terrainRebuilt = before != terrainLeaves_;
+        stats->terrainPatchesVertex = vertexPatches.size();
+        stats->terrainPatchesWaiting = vertexWaiting_;
     }
 }
 
@@ -334,8 +360,8 @@ void RendererScene::addRoads(const glm::dvec3& eye_m, const glm::mat4* viewProj,
         ambient.cornerIrradianceBatch(at.size(), at.data(), normal.data(),
                                       out.vertexIrradiance.data() + first);
     } else {
-        // Terrain vertices lit per vertex, and the road vertices after them, in one batch: the
-        // terrain's each with its vertex spacing as patch_m, the roads' as points (0). The
+        // Terrain vertices lit per vertex, and the road vertices after them, in one batch, all
+        // as points (no patch_m). The
         // buffer is bound at a byte offset, which cannot be negative, and a patch's indices
         // are absolute into the shared terrain mesh: so the terrain's part is laid out by mesh
         // vertex, vertexIrradiance[first + v] for mesh vertex v (firstVertexIrradiance = first
@@ -345,13 +371,11 @@ void RendererScene::addRoads(const glm::dvec3& eye_m, const glm::mat4* viewProj,
         std::uint32_t end = 0;
         for (std::uint32_t v : terrain->index) end = std::max(end, v + 1);
         std::vector<glm::dvec3> allAt(terrain->at), allNormal(terrain->normal);
-        std::vector<double> patch(terrain->patch);
         allAt.insert(allAt.end(), at.begin(), at.end());
         allNormal.insert(allNormal.end(), normal.begin(), normal.end());
-        patch.resize(allAt.size(), 0.0);
         std::vector<glm::vec3> values(allAt.size());
-        ambient.cornerIrradianceBatch(allAt.size(), allAt.data(), allNormal.data(), values.data(),
-                                      patch.data());
+        ambient.cornerIrradianceBatch(allAt.size(), allAt.data(), allNormal.data(),
+                                      values.data());
         out.vertexIrradiance.resize(first + end + at.size(), glm::vec3(0.0f));
         for (std::size_t j = 0; j < terrainCount; ++j)
             out.vertexIrradiance[first + terrain->index[j]] = values[j];

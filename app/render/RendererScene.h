@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <memory>
 #include <optional>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -44,6 +45,9 @@ struct SceneStats {
     std::size_t terrainPatches = 0, terrainPatchesDrawn = 0;
     std::size_t objectsDrawn = 0;
     bool terrainRebuilt = false;
+    // Visible patches in the ambient's vertex range: lit per vertex, and waiting their turn
+    // (blending their corners; terrainVertexPointsPerFrame).
+    std::size_t terrainPatchesVertex = 0, terrainPatchesWaiting = 0;
 };
 
 class RendererScene {
@@ -84,11 +88,10 @@ class RendererScene {
   private:
     struct RoadChunk;
     // Terrain mesh vertices whose ambient the draw asks for (patches lit per vertex): the mesh
-    // vertex, its world position and normal, and the patch_m the near field averages over.
+    // vertex, its world position and normal (asked as points, no patch mean).
     struct VertexPoints {
         std::vector<std::uint32_t> index;
         std::vector<glm::dvec3> at, normal;
-        std::vector<double> patch;
     };
     void updateTerrain(const glm::dvec3& eye_m);
     // With `terrain`, those vertices are asked in the roads' batch, and the terrain draws
@@ -116,6 +119,11 @@ class RendererScene {
         glm::dvec3 min, max;
     };
     std::vector<PatchBounds> terrainBounds_;
+    // The patches lit per vertex (terrainVertexRange_m), kept while in range; of the visible
+    // ones in range, how many blended their corners in the last buildView, waiting their turn
+    // (terrainVertexPointsPerFrame).
+    std::unordered_set<PatchKey, PatchKeyHash> vertexLit_;
+    std::size_t vertexWaiting_ = 0;
     // Proxy terrain of the last capture and where it was centred.
     GlMesh captureTerrain_;
     WorldMesh captureProxy_;  // captureTerrain_'s vertices, lit per capture

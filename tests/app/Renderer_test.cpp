@@ -271,11 +271,12 @@ TEST(Renderer, RoadsAreLitAtTheirOwnVerticesAndNormals) {
 }
 
 // An ambient that varies within a patch (a few metres across), turns with the normal, and asks
-// for patches nearer the eye than range_m to be lit per vertex; it remembers the sizes the
-// batches asked it to average over.
+// for patches nearer the eye than range_m to be lit per vertex, at most `budget` new vertices a
+// frame (0: no bound); it remembers the sizes the batches asked it to average over.
 class VertexFieldAmbient final : public AmbientSource {
   public:
-    explicit VertexFieldAmbient(double range_m) : range_m_(range_m) {}
+    explicit VertexFieldAmbient(double range_m, int budget = 0)
+        : range_m_(range_m), budget_(budget) {}
     static glm::vec3 field(const glm::dvec3& p, const glm::dvec3& n) {
         return glm::vec3(float(1.0 + 0.5 * std::sin(p.x / 3.0)),
                          float(1.0 + 0.5 * std::cos(p.z / 4.0)), float(1.0 + 0.5 * (n.x + n.z)));
@@ -288,6 +289,7 @@ class VertexFieldAmbient final : public AmbientSource {
         for (std::size_t i = 0; i < count; ++i) {
             out[i] = field(p[i], n[i]);
             if (patch_m) patches.push_back(patch_m[i]);
+            else ++asPoints;
         }
     }
     std::uint32_t objectSet(const glm::dvec3&, std::vector<AmbientSet>& sets) const override {
@@ -295,10 +297,13 @@ class VertexFieldAmbient final : public AmbientSource {
         return std::uint32_t(sets.size() - 1);
     }
     double terrainVertexRange_m() const override { return range_m_; }
+    int terrainVertexPointsPerFrame() const override { return budget_; }
     mutable std::vector<double> patches;
+    mutable std::size_t asPoints = 0;  // asked without a size to average over
 
   private:
     double range_m_;
+    int budget_;
 };
 
 // nearField.vertexAmbient_m (the ambient's terrainVertexRange_m): looking down over open ground,
@@ -306,8 +311,8 @@ class VertexFieldAmbient final : public AmbientSource {
 // pixels' applied ambient follows a field that varies over metres (within 0.06 of it at the
 // pixel, where the corner blend of a 32 m patch misses it by far more), stays surface kind 1
 // (terrain, not road) pixel for pixel, and the far terrain is drawn exactly as before; each
-// vertex's value is the field at its own position and normal, asked with the 2 m vertex spacing
-// as the size to average over (road vertices with 0). With the range 0 nothing is lit per vertex
+// vertex's value is the field at its own position and normal, asked as a point (no size to
+// average over, as road vertices are). With the range 0 nothing is lit per vertex
 // and the frame is the same, byte for byte, as the one drawn by an ambient without the setting.
 TEST(Renderer, NearTerrainIsLitPerVertexWithinTheRange) {
     AMB_REQUIRE_PLATFORM(platform, Backend::Auto, kW, kH);
@@ -361,6 +366,7 @@ TEST(Renderer, NearTerrainIsLitPerVertexWithinTheRange) {
     for (const VertexFieldAmbient* ambient : {&off, &on}) {
         DrawList list;
         ambient->patches.clear();
+        ambient->asPoints = 0;
         scene.buildView(cam.position_m, viewProj, *ambient, list);
         std::size_t roadVertices = 0;
         int perVertex = 0;
@@ -394,7 +400,9 @@ TEST(Renderer, NearTerrainIsLitPerVertexWithinTheRange) {
         } else {
             EXPECT_GT(perVertex, 2);
             EXPECT_LT(worst, 1e-4);  // positions read back relative to the eye in float
-            EXPECT_GT(std::count(ambient->patches.begin(), ambient->patches.end(), 2.0), 1000);
+            // Every vertex asked as a point, none with the 2 m vertex spacing to average over.
+            EXPECT_GE(ambient->asPoints, roadVertices + std::size_t(perVertex) * 17 * 17);
+            EXPECT_EQ(std::count(ambient->patches.begin(), ambient->patches.end(), 2.0), 0);
         }
     }
 
@@ -422,6 +430,87 @@ TEST(Renderer, NearTerrainIsLitPerVertexWithinTheRange) {
 // The screen witnesses' outputs: with the constant ambient (E(n) = pi x mean radiance for every
 // normal) the ambient-irradiance output is that constant at every surface pixel, for terrain and
 // plants alike; the normal output is unit length and faces the camera; the positions read back
+
+// nearField.vertexPointsPerFrame (the ambient's terrainVertexPointsPerFrame): with the eye
+// still, the patches in range are lit per vertex a few a frame, never more new vertices than the
+// bound (or one patch, when a patch alone is larger), nearest first; the others blend their
+// corners meanwhile. Once every one has had its turn the draw list is the unbounded one's, value
+// for value; a patch lit stays lit, and the bound of one vertex lights one patch a frame.
+TEST(Renderer, PatchesEnteringTheVertexRangeTakeTurnsWithinTheBound) {
+    AMB_REQUIRE_PLATFORM(platform, Backend::Auto, kW, kH);
+    const World world(WorldSettings{});
+    const CameraSample cam = viewAt(world, -0.35);
+    const glm::vec3 forward(cam.forward), up(cam.up);
+    const glm::mat4 viewProj = reversedInfinitePerspective(1.0471976f, float(kW) / kH, 0.1f) *
+                               glm::lookAt(glm::vec3(0.0f), forward, up);
+    // The per-vertex patches' first vertex and their values, in draw order.
+    const auto litPatches = [](const DrawList& list) {
+        std::vector<std::pair<std::uint32_t, std::vector<glm::vec3>>> lit;
+        for (const TerrainDraw& d : list.terrain) {
+            if (d.road || d.firstVertexIrradiance < 0) continue;
+            const std::vector<std::uint32_t> index = readBack<std::uint32_t>(d.mesh->indices);
+            std::vector<glm::vec3> values;
+            for (std::uint32_t i = d.firstIndex; i < d.firstIndex + d.indexCount; ++i)
+                values.push_back(
+                    list.vertexIrradiance[std::size_t(d.firstVertexIrradiance) + index[i]]);
+            lit.emplace_back(index[d.firstIndex], values);
+        }
+        return lit;
+    };
+    const VertexFieldAmbient unbounded(80.0);
+    RendererScene all(world);
+    DrawList want;
+    SceneStats wantStats;
+    all.buildView(cam.position_m, viewProj, unbounded, want, &wantStats);
+    ASSERT_GE(wantStats.terrainPatchesVertex, 6u);
+    EXPECT_EQ(wantStats.terrainPatchesWaiting, 0u);
+    constexpr std::size_t kPatchVertices = 17 * 17;
+    for (int budget : {int(2 * kPatchVertices), 1}) {
+        const VertexFieldAmbient bounded(80.0, budget);
+        RendererScene scene(world);
+        std::size_t lit = 0;
+        int frames = 0;
+        DrawList list;
+        SceneStats stats;
+        do {
+            list.clear();
+            scene.buildView(cam.position_m, viewProj, bounded, list, &stats);
+            ++frames;
+            ASSERT_GE(stats.terrainPatchesVertex, lit + 1) << "frame " << frames;
+            ASSERT_LE(stats.terrainPatchesVertex, lit + std::max<std::size_t>(
+                                                            1, std::size_t(budget) / kPatchVertices))
+                << "frame " << frames;
+            EXPECT_EQ(stats.terrainPatchesVertex + stats.terrainPatchesWaiting,
+                      wantStats.terrainPatchesVertex);
+            // Nearest first: in the draw list (nearest first), no patch in range waits before
+            // one lit per vertex.
+            bool waitingSeen = false;
+            for (const TerrainDraw& d : list.terrain) {
+                if (d.road) continue;
+                const double x0 = double(d.origin.x) + d.rect.x, z0 = double(d.origin.z) + d.rect.y;
+                const double size = 1.0 / d.rect.z;
+                const double dx = std::max({x0, 0.0, -x0 - size});
+                const double dz = std::max({z0, 0.0, -z0 - size});
+                const bool perVertex = d.firstVertexIrradiance >= 0;
+                if (perVertex) EXPECT_FALSE(waitingSeen) << "frame " << frames;
+                if (!perVertex && std::hypot(dx, dz) < 79.9) waitingSeen = true;
+            }
+            lit = stats.terrainPatchesVertex;
+        } while (stats.terrainPatchesWaiting > 0 && frames < 100);
+        EXPECT_EQ(stats.terrainPatchesWaiting, 0u) << budget;
+        EXPECT_GE(frames, budget == 1 ? int(wantStats.terrainPatchesVertex) : 3) << budget;
+        const auto got = litPatches(list), expected = litPatches(want);
+        ASSERT_EQ(got.size(), expected.size()) << budget;
+        for (std::size_t k = 0; k < got.size(); ++k) {
+            EXPECT_EQ(got[k].first, expected[k].first) << budget;
+            EXPECT_EQ(got[k].second, expected[k].second) << budget;
+        }
+        // Lit patches stay lit.
+        list.clear();
+        scene.buildView(cam.position_m, viewProj, bounded, list, &stats);
+        EXPECT_EQ(stats.terrainPatchesVertex, wantStats.terrainPatchesVertex);
+    }
+}
 // from depth lie on the terrain under terrain pixels (within 0.5 m), and the sky is alpha 0.
 TEST(Renderer, ScreenWitnessOutputsAreWhatTheDrawApplies) {
     AMB_REQUIRE_PLATFORM(platform, Backend::Auto, kW, kH);

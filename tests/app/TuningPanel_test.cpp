@@ -138,7 +138,8 @@ TEST(TuningPanel, EveryKeyOfTheSettingsFileIsInTheTable) {
                           "nearField.patchMean",
                           "nearField.patchSamples",
                           "nearField.vertexDetail",
-                          "nearField.vertexAmbient_m"};
+                          "nearField.vertexAmbient_m",
+                          "nearField.vertexPointsPerFrame"};
     EXPECT_EQ(tunableSettings().size(), std::size(keys));
     for (const char* key : keys) EXPECT_NE(findSetting(key), nullptr) << key;
     // The saved file nests them as the reader expects.

@@ -669,8 +669,13 @@ TEST(Baselines, FactoryWrapsTheNearFieldWhereTheMethodsOwnSettingsAskForIt) {
                     EXPECT_EQ(near->far().methodName(), name) << where;
                     EXPECT_EQ(dynamic_cast<const NearFieldMethod*>(&near->far()), nullptr) << where;
                     EXPECT_EQ(near->terrainSkyDetail(), ours) << where;
-                    // The vertex range is off unless the settings ask for it.
-                    EXPECT_EQ(near->terrainVertexRange_m(), 0.0) << where;
+                    // The vertex range and its bound are the near field's defaults unless the
+                    // settings ask otherwise.
+                    EXPECT_EQ(near->terrainVertexRange_m(), NearFieldSettings{}.vertexAmbient_m)
+                        << where;
+                    EXPECT_EQ(near->terrainVertexPointsPerFrame(),
+                              NearFieldSettings{}.vertexPointsPerFrame)
+                        << where;
                 }
                 // Without a scene to read, the bare method whatever the settings.
                 const auto bare = makeCapturingMethod(name, capture, environment, vs, bs, nullptr);

@@ -448,8 +448,8 @@ struct VertexLitMethod final : AmbienceMethod {
 
 // With the method's vertex range on, a terrain witness on a patch nearer the camera than the
 // range is graded as a patch lit per vertex draws it: the method at the four vertices of the grid
-// cell holding it (2 m up, their normals, averaged over the 2 m vertex spacing), interpolated as
-// the cell's two triangles interpolate, here computed apart from the meter. Witnesses on patches
+// cell holding it (2 m up, their normals, each as a point: no size to average over),
+// interpolated as the cell's two triangles interpolate, here computed apart from the meter. Witnesses on patches
 // beyond the range keep the corner blend exactly; the budget still closes, and with the far
 // field the fresh capture it has no far-field term (fresh captures at the same vertices).
 TEST(DrawnBudget, PatchesLitPerVertexAreGradedAtTheirCellsVertices) {
@@ -498,9 +498,9 @@ TEST(DrawnBudget, PatchesLitPerVertexAreGradedAtTheirCellsVertices) {
                     const glm::dvec3 at(
                         vx, VertexGridEnvironment::height(vx, vz) + kShadingHeight_m, vz);
                     const glm::dvec3 n = VertexGridEnvironment::normal(vx, vz);
-                    const double spacing = 2.0;
+                    const double point = 0.0;  // asked as a point, as the draw asks a vertex
                     glm::vec3 e;
-                    method.cornerIrradianceAtPoints(1, &at, &n, &e, &spacing);
+                    method.cornerIrradianceAtPoints(1, &at, &n, &e, &point);
                     const bool upper = fu + fw > 1.0;
                     const double weight = c == 0   ? (upper ? 0.0 : 1.0 - fu - fw)
                                           : c == 1 ? (upper ? 1.0 - fw : fu)

@@ -122,7 +122,7 @@ TEST(SettingsSchema, KeysAreUniqueAndTheCaptureKeysAreShared) {
         EXPECT_EQ(v->hi, b.hi) << b.key;
         EXPECT_EQ(v->kind, b.kind) << b.key;
     }
-    EXPECT_EQ(shared, 9 + 19);  // CaptureSettings' nine and the near field's nineteen
+    EXPECT_EQ(shared, 9 + 20);  // CaptureSettings' nine and the near field's twenty
     // The files' defaults lie in their ranges.
     const AmbienceVolumeSettings v;
     for (const auto& f : volumeSettingsSchema().fields()) {
@@ -194,7 +194,7 @@ TEST(SettingsSchema, WhatTheWriterWritesReadsBackEqual) {
 }
 
 // nearField.vertexAmbient_m (terrain patches lit per vertex near the eye): in both files, in
-// metres over [0, 2000], off (0) by default; a file with it reads into the near field's settings,
+// metres over [0, 2000], 160 m by default (the new vertices a frame bounded at 600); a file with it reads into the near field's settings,
 // writes back with it and reads back equal, as does a KEY=VALUE assignment; beyond the range it
 // is refused naming the key.
 TEST(SettingsSchema, TheVertexAmbientRangeRoundTrips) {
@@ -210,8 +210,10 @@ TEST(SettingsSchema, TheVertexAmbientRangeRoundTrips) {
         EXPECT_TRUE(f->rebuilds);
         EXPECT_FALSE(f->help.empty());
     }
-    EXPECT_EQ(AmbienceVolumeSettings{}.capture.nearField.vertexAmbient_m, 0.0);
-    EXPECT_EQ(BaselineSettings{}.capture.nearField.vertexAmbient_m, 0.0);
+    EXPECT_EQ(AmbienceVolumeSettings{}.capture.nearField.vertexAmbient_m, 160.0);
+    EXPECT_EQ(BaselineSettings{}.capture.nearField.vertexAmbient_m, 160.0);
+    EXPECT_EQ(AmbienceVolumeSettings{}.capture.nearField.vertexPointsPerFrame, 600);
+    EXPECT_EQ(BaselineSettings{}.capture.nearField.vertexPointsPerFrame, 600);
     const std::string file = R"({"nearField": {"vertexAmbient_m": 64}})";
     const AmbienceVolumeSettings v = ambienceSettingsFromJson(file, "v.json");
     EXPECT_EQ(v.capture.nearField.vertexAmbient_m, 64.0);
@@ -225,8 +227,13 @@ TEST(SettingsSchema, TheVertexAmbientRangeRoundTrips) {
     EXPECT_TRUE(baselineSettingsSchema().equal(
         baselineSettingsFromJson(baselineSettingsSchema().write(b), "w"), b));
     AmbienceVolumeSettings assigned;
-    volumeSettingsSchema().assign(assigned, "nearField.vertexAmbient_m=160", "--set");
-    EXPECT_EQ(assigned.capture.nearField.vertexAmbient_m, 160.0);
+    volumeSettingsSchema().assign(assigned, "nearField.vertexAmbient_m=96", "--set");
+    EXPECT_EQ(assigned.capture.nearField.vertexAmbient_m, 96.0);
+    volumeSettingsSchema().assign(assigned, "nearField.vertexPointsPerFrame=0", "--set");
+    EXPECT_EQ(assigned.capture.nearField.vertexPointsPerFrame, 0);
+    const std::string negative =
+        refusal(volumeSettingsSchema(), R"({"nearField": {"vertexPointsPerFrame": -1}})");
+    EXPECT_NE(negative.find("vertexPointsPerFrame"), std::string::npos) << negative;
     const std::string said =
         refusal(volumeSettingsSchema(), R"({"nearField": {"vertexAmbient_m": 2000.5}})");
     EXPECT_NE(said.find("'vertexAmbient_m' must be in [0, 2000]"), std::string::npos) << said;
