@@ -141,8 +141,8 @@ def headline(rows, setting, command):
         lines.append("| ours evaluated at each witness' own point (no patch blend) | %s |"
                      % " | ".join(per_point))
         if any(b != "—" for b in bias):
-            lines.append("| ours' signed bias at the drawn normal (the capture scene's alone) | %s |"
-                         % " | ".join(bias))
+            lines.append("| ours' signed bias at the drawn normal (the coarse capture scene's "
+                         "alone: at the point, where the probe stands) | %s |" % " | ".join(bias))
     return "\n".join(lines)
 
 
