@@ -299,11 +299,37 @@ DrawnBudget ErrorMeter::drawnTerrainError(int index, double timeOfDay_h,
     };
     const glm::dvec3 refPoint =
         p.surface_m + kScreenProbeOffset_m * glm::normalize(p.surfaceNormal);
-    b.sceneBias = irradianceBias(plain(oracleAt(index, refPoint, timeOfDay_h)), eRef);
-    b.placedBias = irradianceBias(plain(oracle(index, w.x_m, w.z_m, timeOfDay_h)), eRef);
+    // The split's captures light their surfaces as the method's own captures do.
+    b.sceneBias = irradianceBias(
+        plain(litOracle({index, refPoint.x, refPoint.z, refPoint.y}, timeOfDay_h,
+                        [&] { return refPoint; }, light)),
+        eRef);
+    b.placedBias = irradianceBias(
+        plain(litOracle({index, w.x_m, w.z_m}, timeOfDay_h,
+                        [&] { return environment_.placeProbe(w.x_m, w.z_m, settings_.maxAside_m); },
+                        light)),
+        eRef);
     method.cornerIrradianceAtPoints(1, &point, &p.surfaceNormal, &here, &noPatch);
     b.perPoint = irradianceRelativeError(glm::dvec3(here), eRef);
     return b;
+}
+
+ShRgb ErrorMeter::litOracle(const Key& key, double timeOfDay_h,
+                             const std::function<glm::dvec3()>& position,
+                             const SurfaceLight* light) {
+    if (!light) return cachedOracle(key, timeOfDay_h, position);
+    const auto it = litCache_.find({light, key});
+    if (it != litCache_.end()) {
+        ++oracleHits_;
+        return it->second;
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    capture_.setSurfaceLight(light);
+    const ShRgb sh = oracleShAt(capture_, position(), timeOfDay_h);
+    capture_.setSurfaceLight(nullptr);
+    oracle_s_ += secondsSince(t0);
+    ++oracleCaptures_;
+    return litCache_.emplace(std::make_pair(light, key), sh).first->second;
 }
 
 ShRgb ErrorMeter::farOracle(int frameIndex, double x_m, double z_m, double timeOfDay_h,

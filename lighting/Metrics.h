@@ -400,6 +400,12 @@ class ErrorMeter {
     ShRgb farOracle(int frameIndex, double x_m, double z_m, double timeOfDay_h, double radius_m,
                     const SurfaceLight* light);
     std::map<std::pair<const SurfaceLight*, Key>, ShRgb> farCache_;
+    // The coarse capture scene with every plant at position() (the entry of `key`), its
+    // surfaces lit by `light` as the method's captures light theirs (captureSurfaceLight): the
+    // split of DrawnBudget's model step. Without a light, cachedOracle.
+    ShRgb litOracle(const Key& key, double timeOfDay_h,
+                    const std::function<glm::dvec3()>& position, const SurfaceLight* light);
+    std::map<std::pair<const SurfaceLight*, Key>, ShRgb> litCache_;
     std::map<Key, ScreenEntry> screenCache_;
     std::vector<ScreenResult> screenResults_;
     bool referenceNow_ = false;

@@ -288,7 +288,9 @@ struct FreshCaptureMethod final : AmbienceMethod {
     const ProbeEnvironment* environment = nullptr;
     MeasureSettings settings;
     float gain = 0.0f;
+    const SurfaceLight* light = nullptr;  // what its captures light their surfaces with
     std::string methodName() const override { return "fresh"; }
+    const SurfaceLight* captureSurfaceLight() const override { return light; }
     void predictStage(const glm::dvec3&, const glm::dvec3&, double, double) override {}
     void captureStage() override {}
     void storeStage() override {}
@@ -356,6 +358,52 @@ TEST(DrawnBudget, FreshCapturesMakeTheFarFieldTermVanish) {
     EXPECT_LT(std::fabs(exact.sceneBias), 0.05);  // the fakes differ only in face size
     EXPECT_NEAR(off.sceneBias, exact.sceneBias, 1e-9);
     EXPECT_NEAR(off.placedBias, exact.placedBias, 1e-9);
+}
+
+// The model step's split lights its coarse captures as the method's own captures light their
+// surfaces (captureSurfaceLight): in a furnace of albedo rho lit by E_d, a capture whose surfaces
+// also take a light of irradiance E_L is (E_d + E_L) / E_d times as bright, so 1 + each split
+// figure scales by that against the same method without a light; the reference does not change.
+TEST(DrawnBudget, TheModelSplitLightsItsCapturesAsTheMethodDoes) {
+    using testing_support::FakeCubeCapture;
+    using testing_support::FurnaceCapture;
+    struct Constant final : SurfaceLight {
+        ShRgb sh;
+        ShRgb shAt(const glm::dvec3&) const override { return sh; }
+    } field;
+    for (int c = 0; c < 3; ++c) field.sh.c[0][c] = 40.0f;
+    constexpr double kDirect = 100.0;
+    const double lit = double(luminance(shIrradiance(field.sh, glm::vec3(0.0f, 1.0f, 0.0f))));
+    ASSERT_GT(lit, 10.0);
+    const auto run = [&](const SurfaceLight* light, int* litCaptures) {
+        FurnaceCapture coarse(0.5, kDirect);
+        FakeCubeCapture full(16);
+        PatchedEnvironment environment(32.0, 0.0, 0.0);
+        MeasureSettings ms;
+        ms.every = 1;
+        ErrorMeter meter(coarse, environment, ms);
+        ReferenceSettings rs;
+        rs.every = 1;
+        rs.objectTrees = 0;
+        meter.attachReference(full, rs, true);
+        FreshCaptureMethod method;
+        method.capture = &coarse, method.environment = &environment, method.settings = ms;
+        method.light = light;
+        for (int f = 0; f < 3; ++f)
+            meter.frame(f, f / 30.0, 12.0, {40.0 * f, 0.0, 25.0}, 10.0, method);
+        *litCaptures = coarse.litCaptures;
+        return summarizeDrawnBudget(meter.drawnBudgets());
+    };
+    int plainLit = 0, withLit = 0;
+    const DrawnBudgetSummary plain = run(nullptr, &plainLit);
+    const DrawnBudgetSummary with = run(&field, &withLit);
+    ASSERT_GT(plain.count, 3u);
+    ASSERT_EQ(with.count, plain.count);
+    EXPECT_EQ(plainLit, 0);
+    EXPECT_GT(withLit, 0);
+    const double scale = (kDirect + lit) / kDirect;
+    EXPECT_NEAR(with.sceneBias + 1.0, scale * (plain.sceneBias + 1.0), 1e-4 * scale);
+    EXPECT_NEAR(with.placedBias + 1.0, scale * (plain.placedBias + 1.0), 1e-4 * scale);
 }
 
 namespace {
