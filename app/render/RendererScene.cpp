@@ -218,26 +218,24 @@ void RendererScene::buildView(const glm::dvec3& eye_m, const glm::mat4& viewProj
     // lit per vertex stays so while it is in range, seen or not (its values stay cached).
     const double vertexRange = ambient.terrainVertexRange_m();
     const int vertexBudget = ambient.terrainVertexPointsPerFrame();
-    const auto inVertexRange = [&](std::size_t i) {
+    std::vector<char> inVertexRange(terrainMesh_.patches.size(), 0);
+    std::unordered_set<PatchKey, PatchKeyHash> kept;
+    for (std::size_t i = 0; i < terrainMesh_.patches.size(); ++i) {
         const PatchBounds& b = terrainBounds_[i];
         const double dx = std::max({b.min.x - eye_m.x, 0.0, eye_m.x - b.max.x});
         const double dz = std::max({b.min.z - eye_m.z, 0.0, eye_m.z - b.max.z});
-        return vertexRange > 0.0 && std::hypot(dx, dz) < vertexRange;
-    };
-    {
-        std::unordered_set<PatchKey, PatchKeyHash> kept;
-        for (std::size_t i = 0; i < terrainMesh_.patches.size(); ++i)
-            if (inVertexRange(i) && vertexLit_.count(terrainMesh_.patches[i].key))
-                kept.insert(terrainMesh_.patches[i].key);
-        vertexLit_.swap(kept);
+        inVertexRange[i] = vertexRange > 0.0 && std::hypot(dx, dz) < vertexRange;
+        if (inVertexRange[i] && vertexLit_.count(terrainMesh_.patches[i].key))
+            kept.insert(terrainMesh_.patches[i].key);
     }
+    vertexLit_.swap(kept);
     std::vector<std::size_t> visiblePatches, vertexPatches;
     std::size_t newVertices = 0;
     vertexWaiting_ = 0;
     for (const auto& [distance, i] : visible) {
         const TerrainPatchDraw& p = terrainMesh_.patches[i];
         bool lit = false;
-        if (inVertexRange(i)) {
+        if (inVertexRange[i]) {
             lit = vertexLit_.count(p.key) > 0;
             if (!lit && (vertexBudget <= 0 || newVertices == 0 ||
                          newVertices + p.vertexCount <= std::size_t(vertexBudget))) {
@@ -361,12 +359,12 @@ void RendererScene::addRoads(const glm::dvec3& eye_m, const glm::mat4* viewProj,
                                       out.vertexIrradiance.data() + first);
     } else {
         // Terrain vertices lit per vertex, and the road vertices after them, in one batch, all
-        // as points (no patch_m). The
-        // buffer is bound at a byte offset, which cannot be negative, and a patch's indices
-        // are absolute into the shared terrain mesh: so the terrain's part is laid out by mesh
-        // vertex, vertexIrradiance[first + v] for mesh vertex v (firstVertexIrradiance = first
-        // for every such patch), up to the last one used; the vertices of patches blending their
-        // corners stay zero there, unread. The roads' part follows.
+        // as points (no patch_m). The buffer is bound at a byte offset, which cannot be
+        // negative, and a patch's indices are absolute into the shared terrain mesh: so the
+        // terrain's part is laid out by mesh vertex, vertexIrradiance[first + v] for mesh vertex
+        // v (firstVertexIrradiance = first for every such patch), up to the last one used; the
+        // vertices of patches blending their corners stay zero there, unread. The roads' part
+        // follows.
         const std::size_t terrainCount = terrain->at.size();
         std::uint32_t end = 0;
         for (std::uint32_t v : terrain->index) end = std::max(end, v + 1);

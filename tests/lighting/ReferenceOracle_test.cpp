@@ -300,6 +300,28 @@ struct FreshCaptureMethod final : AmbienceMethod {
     MethodStatistics methodStatistics() const override { return {}; }
 };
 
+// Three frames of a FreshCaptureMethod over `coarse` (its gain and surface light as given) on a
+// meter with `full` as the reference and the witnesses on PatchedEnvironment(32, u, v): the
+// drawn budget's summary.
+DrawnBudgetSummary freshBudget(CubeCapture& coarse, CubeCapture& full, double u, double v,
+                               float gain, const SurfaceLight* light = nullptr) {
+    PatchedEnvironment environment(32.0, u, v);
+    MeasureSettings ms;
+    ms.every = 1;
+    ErrorMeter meter(coarse, environment, ms);
+    ReferenceSettings rs;
+    rs.every = 1;
+    rs.objectTrees = 0;
+    meter.attachReference(full, rs, true);
+    FreshCaptureMethod method;
+    method.capture = &coarse, method.environment = &environment, method.settings = ms;
+    method.gain = gain;
+    method.light = light;
+    for (int f = 0; f < 3; ++f)
+        meter.frame(f, f / 30.0, 12.0, {40.0 * f, 0.0, 25.0}, 10.0, method);
+    return summarizeDrawnBudget(meter.drawnBudgets());
+}
+
 }  // namespace
 
 // The budget on a meter: a method whose far field is the fresh capture has no far-field term;
@@ -310,20 +332,7 @@ TEST(DrawnBudget, FreshCapturesMakeTheFarFieldTermVanish) {
     using testing_support::FakeCubeCapture;
     const auto run = [](double u, double v, float gain) {
         FakeCubeCapture coarse(8), full(16);
-        PatchedEnvironment environment(32.0, u, v);
-        MeasureSettings ms;
-        ms.every = 1;
-        ErrorMeter meter(coarse, environment, ms);
-        ReferenceSettings rs;
-        rs.every = 1;
-        rs.objectTrees = 0;
-        meter.attachReference(full, rs, true);
-        FreshCaptureMethod method;
-        method.capture = &coarse, method.environment = &environment, method.settings = ms;
-        method.gain = gain;
-        for (int f = 0; f < 3; ++f)
-            meter.frame(f, f / 30.0, 12.0, {40.0 * f, 0.0, 25.0}, 10.0, method);
-        return summarizeDrawnBudget(meter.drawnBudgets());
+        return freshBudget(coarse, full, u, v, gain);
     };
     const DrawnBudgetSummary exact = run(0.0, 0.0, 0.0f);
     ASSERT_GT(exact.count, 3u);
@@ -378,21 +387,9 @@ TEST(DrawnBudget, TheModelSplitLightsItsCapturesAsTheMethodDoes) {
     const auto run = [&](const SurfaceLight* light, int* litCaptures) {
         FurnaceCapture coarse(0.5, kDirect);
         FakeCubeCapture full(16);
-        PatchedEnvironment environment(32.0, 0.0, 0.0);
-        MeasureSettings ms;
-        ms.every = 1;
-        ErrorMeter meter(coarse, environment, ms);
-        ReferenceSettings rs;
-        rs.every = 1;
-        rs.objectTrees = 0;
-        meter.attachReference(full, rs, true);
-        FreshCaptureMethod method;
-        method.capture = &coarse, method.environment = &environment, method.settings = ms;
-        method.light = light;
-        for (int f = 0; f < 3; ++f)
-            meter.frame(f, f / 30.0, 12.0, {40.0 * f, 0.0, 25.0}, 10.0, method);
+        const DrawnBudgetSummary s = freshBudget(coarse, full, 0.0, 0.0, 0.0f, light);
         *litCaptures = coarse.litCaptures;
-        return summarizeDrawnBudget(meter.drawnBudgets());
+        return s;
     };
     int plainLit = 0, withLit = 0;
     const DrawnBudgetSummary plain = run(nullptr, &plainLit);
