@@ -116,7 +116,37 @@ std::vector<SphereOccluder> NearField::occluders(const glm::dvec3& p) const {
     std::vector<SphereOccluder> out;
     if (!settings_.plants) return out;
     scene_.occludersNear(p, settings_.radius_m, settings_.smallRadius_m, out);
+    sunVisibilities(out);
     return out;
+}
+
+void NearField::sunVisibilities(std::vector<SphereOccluder>& spheres) const {
+    if (!settings_.plantShadows || spheres.empty()) return;
+    const glm::dvec3 l = light_.direction;
+    const std::uint32_t epoch = lightEpoch_;
+    const auto keyOf = [](const SphereOccluder& o) {
+        return Key{float(o.centre_m.x), float(o.centre_m.y), float(o.centre_m.z), float(o.radius_m)};
+    };
+    std::vector<std::size_t> missing;
+    {
+        std::lock_guard<std::mutex> lock(sunMutex_);
+        if (sunEpoch_ != epoch || sunCache_.size() >= kSunEntries) sunCache_.clear(), sunEpoch_ = epoch;
+        for (std::size_t i = 0; i < spheres.size(); ++i) {
+            const auto it = sunCache_.find(keyOf(spheres[i]));
+            if (it != sunCache_.end())
+                spheres[i].sunVisibility = double(it->second);
+            else
+                missing.push_back(i);
+        }
+    }
+    if (missing.empty()) return;
+    for (std::size_t i : missing) {
+        const double v = scene_.sphereLightVisibility(spheres[i].centre_m, spheres[i].radius_m, l);
+        spheres[i].sunVisibility = std::isfinite(v) ? std::clamp(v, 0.0, 1.0) : 1.0;
+    }
+    std::lock_guard<std::mutex> lock(sunMutex_);
+    if (sunEpoch_ != epoch) return;
+    for (std::size_t i : missing) sunCache_.emplace(keyOf(spheres[i]), float(spheres[i].sunVisibility));
 }
 
 std::unique_ptr<NearFieldTransfer> NearField::build(const glm::dvec3& point_m, double selfRadius_m,
@@ -150,6 +180,7 @@ std::unique_ptr<NearFieldTransfer> NearField::build(const glm::dvec3& point_m, d
     std::vector<OccluderCap> caps = nearOccluders(p, caps0, horizon);
     if (caps.empty() && !ground.any) return nullptr;
     auto t = std::make_unique<NearFieldTransfer>(nearFieldTransfer(caps, &ground));
+    t->capSun = float(capSunVisibility(caps, light_.direction));
     updateLightTerm(*t, light_.direction, ambient_);
     return t;
 }

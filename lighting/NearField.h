@@ -72,6 +72,19 @@
 //   of a wall's cosine (within 9 %, as order-2 irradiance always is). T is cached per point (the
 //   points the draw asks for do not move), 2.5 kB with the ground's terms, whatever the number of
 //   occluders.
+// [SECTION] Plants' shadows
+//   The phase law lights a sphere as if nothing stood between it and the light, but in a wood a
+//   crown stands in its neighbours' shadows and a hill's, as the reference's and the main
+//   view's shadowed crowns do. So each plant sphere carries the share of the light that reaches
+//   its lit side (SphereOccluder::sunVisibility): five points on it (the point facing the light
+//   and four 60 degrees from it, weighted by their cosine), each lit as far as the terrain
+//   (terrainLightVisibility) and the other plants' spheres along the light leave it. A sphere's
+//   share depends on the light alone, so the scene's answer is kept per sphere until the light
+//   moves (NearField::sunVisibilities). A point's caps take one share for their light term S:
+//   the mean of theirs weighted by what each shows of the light (w_i Omega_i rho_i Phi(alpha_i);
+//   terrain bands count as lit), kept with the transfer when the light moves on, as the
+//   ground's own visibilities are (NearFieldTransfer::capSun). Off (plantShadows), every share
+//   is 1.
 // [SECTION] Terrain
 //   The terrain cannot be left out of a capture (it would leave a hole), so the anchors hold the
 //   terrain their probes saw. What they cannot hold is terrain near a point that rises above the
@@ -182,6 +195,9 @@ struct NearFieldSettings {
     // Probes leave out the plants this close to them (see Radii).
     double captureRadius_m = 12.0;
     bool plants = true;      // trees, bushes and rocks as spheres
+    // Their spheres lit by the light only where other plants and the terrain leave it (see
+    // Plants' shadows); off, as if nothing shaded them.
+    bool plantShadows = true;
     // Bushes and rocks, which probe captures never draw (only trees are in the capture scene),
     // are near out to this radius: the near field is all the ambience knows of them.
     double smallRadius_m = 48.0;
@@ -242,6 +258,7 @@ struct SphereOccluder {
     double radius_m = 0.0;
     glm::dvec3 albedo{0.0};
     double weight = 1.0;  // in [0, 1]: faded near the edge of the near radius (see Radii)
+    double sunVisibility = 1.0;  // the light's share on its lit side (see Plants' shadows)
 };
 
 // ---- Closed forms ------------------------------------------------------------------------------
@@ -298,6 +315,7 @@ struct OccluderCap {
     std::array<double, kShCoefficients> sh{};  // the region's SH
     double solidAngle = 0.0;
     int behind = -1;  // the band a cap is seen against: it hides that band, not the far field
+    double sunVisibility = 1.0;  // its sphere's (see Plants' shadows); bands 1
 };
 // The caps of `occluders` seen from `point`, with their overlap weights (largest first).
 // An occluder that holds the point is a cap wider than a hemisphere: 90 degrees at its surface,
@@ -325,6 +343,7 @@ struct NearFieldTransfer {
     alignas(16) std::array<float, 4 * kShCoefficients * kShCoefficients> columns{};
     std::array<std::array<float, kShCoefficients>, 3> s{};  // S_c for lightDirection
     glm::dvec3 lightDirection{0.0};
+    float capSun = 1.0f;  // the caps' share of the light, kept as the light moves (see Plants' shadows)
     // The ground's light terms (see Ground): g_c, lit_c, the ground's normal and ambient, and
     // E_amb,c at lightDirection's time (what g_c is lit by) [W m^-2].
     std::array<std::array<float, kShCoefficients>, 3> groundShow{}, groundLit{};
@@ -343,6 +362,9 @@ struct NearFieldTransfer {
 };
 NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps,
                                     const GroundTerm* ground = nullptr);
+// The caps' one share of the light towards `lightDirection` (see Plants' shadows): their
+// sunVisibility weighted by what each shows of the light; 1 when none shows any.
+double capSunVisibility(const std::vector<OccluderCap>& caps, const glm::dvec3& lightDirection);
 
 // One sample's ground light term in a patch mean (see Patch mean), its weight folded in.
 struct GroundLightPart {
@@ -358,6 +380,7 @@ struct NormalTransfer {
                                                     // (the ground's hide included)
     std::array<float, kShCoefficients> groundHide{};  // the ground's hide^T a(n)
     glm::vec3 light{0.0f};                          // s_c . Y(l), for lightEpoch's light
+    float capSun = 1.0f;  // the transfer's (see Plants' shadows): scales the caps' part of light
     glm::vec3 sky{0.0f};  // the ground's a(n) . g_c E_amb,c(n_ground), for its ambient [W m^-2]
     // The ground's part through this normal: a(n) . g_c and a(n) . lit_c (see Ground).
     glm::vec3 groundShow{0.0f}, groundLit{0.0f};
@@ -447,6 +470,13 @@ class NearFieldScene {
         (void)from_m, (void)toLight;
         return 1.0;
     }
+    // The share of the light (unit direction towards it) that reaches the lit side of a plant's
+    // sphere, in [0, 1] (see Plants' shadows); 1 by default.
+    virtual double sphereLightVisibility(const glm::dvec3& centre_m, double radius_m,
+                                         const glm::dvec3& toLight) const {
+        (void)centre_m, (void)radius_m, (void)toLight;
+        return 1.0;
+    }
 };
 
 // The ground term at `point_m` (see Ground): the ground within radius_m of its foot, lit by the
@@ -484,6 +514,12 @@ class WorldNearFieldScene final : public NearFieldScene {
     // Marched along the light out to kShadowReach_m, as far as the main view's shadows reach.
     double terrainLightVisibility(const glm::dvec3& from_m,
                                   const glm::dvec3& toLight) const override;
+    // The terrain and the other plants' spheres along the light (out to where the light's line
+    // is kPlantTop_m above the ground) at five points of the lit side.
+    double sphereLightVisibility(const glm::dvec3& centre_m, double radius_m,
+                                 const glm::dvec3& toLight) const override;
+    static constexpr double kPlantTop_m = 20.0;  // no plant of the world is taller
+    static constexpr double kMaxCasterReach_m = 64.0;  // plants farther along the light are left out
     static constexpr int kWedges = 8;
     static constexpr double kShadowReach_m = 200.0;
 
@@ -548,8 +584,11 @@ class NearField {
     // The same with the lock held and without timing.
     ShRgb applyLocked(const ShRgb& far, const std::array<float, 4>& key,
                       const std::function<glm::dvec3()>& point, double selfRadius_m) const;
-    // The plants near a point (all of them: build leaves an object's own out of its caps).
+    // The plants near a point (all of them: build leaves an object's own out of its caps), each
+    // with its share of the light.
     std::vector<SphereOccluder> occluders(const glm::dvec3& point_m) const;
+    // Fills the spheres' sunVisibility from the scene, kept per sphere for the light's epoch.
+    void sunVisibilities(std::vector<SphereOccluder>& spheres) const;
     // An object's ground term: the B-spline blend of the lattice's (see Ground), cached.
     GroundTerm objectGround(const glm::dvec3& point_m) const;
     // The nine lattice points an object's ground term blends: their keys, weights and
@@ -614,6 +653,12 @@ class NearField {
     std::uint32_t addNormalEntry(const Key& key, const NormalTransfer& transfer,
                                  const NormalApply& apply) const;
     std::uint32_t lightEpoch_ = 1;  // counts the light's moves of more than 0.5 degrees
+    // The spheres' shares of the light for sunEpoch_'s light, by centre and radius (cm): emptied
+    // when the light moves or when it holds kSunEntries (see Plants' shadows).
+    mutable std::mutex sunMutex_;
+    mutable tsl::hopscotch_map<Key, float, KeyHash> sunCache_;
+    mutable std::uint32_t sunEpoch_ = 0;
+    static constexpr std::size_t kSunEntries = 1u << 17;
     glm::dvec3 viewer_{0.0};
     bool viewerKnown_ = false;
     // Whether an object built at `point_m` now blends the lattice (see latticeRange_m).

@@ -302,4 +302,53 @@ double WorldNearFieldScene::terrainLightVisibility(const glm::dvec3& from,
     return std::clamp(0.5 - above / kPenumbra_rad, 0.0, 1.0);
 }
 
+double WorldNearFieldScene::sphereLightVisibility(const glm::dvec3& c, double r,
+                                                  const glm::dvec3& l) const {
+    const double horizontal = std::hypot(l.x, l.z);
+    if (!(l.y > 0.0) || !(r > 0.0)) return 0.0;
+    // The terrain's shadow is wide beside a plant: once, at the point facing the light.
+    const double terrain = terrainLightVisibility(c + l * r, l);
+    if (terrain <= 0.0) return 0.0;
+    // The plants whose spheres may stand in the light's way: those within a crown's reach of
+    // its line's foot, out to where the line is kPlantTop_m above the ground here.
+    std::vector<SphereOccluder> casters;
+    if (horizontal > 1e-6) {
+        const glm::dvec2 along(l.x / horizontal, l.z / horizontal);
+        const double rise = l.y / horizontal;  // per metre along
+        const double above = c.y + r - world_.height(c.x, c.z);
+        const double reach = std::clamp((kPlantTop_m - above) / rise, 0.0, kMaxCasterReach_m);
+        constexpr double kStep = 16.0;
+        std::vector<Plant> plants;
+        for (double s = 0.0;; s = std::min(s + kStep, reach)) {
+            for (const Plant& p : world_.vegetation().inDisc(c.x + along.x * s, c.z + along.y * s, kStep)) {
+                const bool seen = std::any_of(plants.begin(), plants.end(), [&](const Plant& q) {
+                    return q.position_m == p.position_m;
+                });
+                if (!seen) plants.push_back(p);
+            }
+            if (s >= reach) break;
+        }
+        for (const Plant& p : plants)
+            for (const PlantSphere& s : Vegetation::spheres(p.kind)) {
+                const glm::dvec3 centre = p.position_m + double(p.scale) * s.centre_m;
+                const double radius = double(p.scale) * s.radius_m;
+                if (glm::length(centre - c) < 1e-6 && std::fabs(radius - r) < 1e-6) continue;  // itself
+                casters.push_back({centre, radius, s.albedo, 1.0, 1.0});
+            }
+    }
+    // Five points of the lit side: facing the light (weight 1) and 60 degrees from it (cos 60
+    // each).
+    const glm::dvec3 t = glm::normalize(
+        glm::cross(l, std::abs(l.y) < 0.9 ? glm::dvec3(0.0, 1.0, 0.0) : glm::dvec3(1.0, 0.0, 0.0)));
+    const glm::dvec3 b = glm::cross(l, t);
+    double lit = 1.0 - sphereBlock(c + l * r, l, 1e30, casters);
+    const double s60 = std::sqrt(3.0) / 2.0;
+    for (int k = 0; k < 4; ++k) {
+        const double phi = 0.5 * kPi * k;
+        const glm::dvec3 d = 0.5 * l + s60 * (std::cos(phi) * t + std::sin(phi) * b);
+        lit += 0.5 * (1.0 - sphereBlock(c + d * r, l, 1e30, casters));
+    }
+    return terrain * lit / 3.0;
+}
+
 }  // namespace amb

@@ -156,6 +156,7 @@ std::vector<OccluderCap> occluderCaps(const glm::dvec3& point_m,
         c.weight = w;
         c.sh = capSh(c.direction, c.cosHalfAngle);
         c.solidAngle = omega;
+        c.sunVisibility = std::clamp(si.occluder->sunVisibility, 0.0, 1.0);
         caps.push_back(c);
     }
     return caps;
@@ -375,6 +376,23 @@ NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps, const 
     return t;
 }
 
+double capSunVisibility(const std::vector<OccluderCap>& caps, const glm::dvec3& lightDirection) {
+    // Each weighted by what it shows of the light: w Omega rho Phi(alpha), alpha between the
+    // light and the cap's face towards the point (-direction); a band as a cap at full phase.
+    double shown = 0.0, lit = 0.0;
+    for (const OccluderCap& c : caps) {
+        const double rho = (c.albedo.x + c.albedo.y + c.albedo.z) / 3.0;
+        const double phase =
+            c.band ? 1.0
+                   : lambertSpherePhase(std::acos(std::clamp(-glm::dot(c.direction, lightDirection), -1.0, 1.0)));
+        const double f = c.weight * c.solidAngle * rho * phase;
+        if (!(f > 0.0)) continue;
+        shown += f;
+        lit += f * (c.band ? 1.0 : std::clamp(c.sunVisibility, 0.0, 1.0));
+    }
+    return shown > 0.0 ? lit / shown : 1.0;
+}
+
 namespace {
 
 // The light on the ground per unit of the light's irradiance (see Ground): max(0, n . l).
@@ -405,7 +423,7 @@ void updateLightTerm(NearFieldTransfer& t, const glm::dvec3& lightDirection,
             double v = 0.0;
             for (int m = 0; m < K; ++m)
                 v += (t.columns[std::size_t((m * K + j) * 4 + ch)] - t.hide[j * K + m]) * y[m];
-            t.s[ch][j] = float(v);
+            t.s[ch][j] = float(v) * t.capSun;
         }
     if (t.ground) {
         const double cosine = groundCosine(t.groundNormal, lightDirection);
@@ -446,6 +464,7 @@ NormalTransfer normalTransfer(const NearFieldTransfer* t, const glm::dvec3& norm
         n.groundAmbient = t->groundAmbient;
         n.ground = true;
     }
+    n.capSun = t->capSun;
     n.any = true;
     return n;
 }
@@ -457,7 +476,7 @@ void updateLightTerm(NormalTransfer& t, const glm::dvec3& lightDirection,
         double v = 0.0;
         for (int k = 0; k < kShCoefficients; ++k)
             v += (t.show[std::size_t(ch * kShCoefficients + k)] - t.groundHide[std::size_t(k)]) * y[k];
-        t.light[ch] = float(v);
+        t.light[ch] = float(v) * t.capSun;
     }
     t.sky = glm::vec3(0.0f);
     if (t.ground) {
@@ -480,6 +499,7 @@ NormalTransfer meanNormalTransfer(const NormalTransfer* const* samples, const do
     std::array<double, kShCoefficients> hide{}, groundHide{};
     std::array<double, 3 * kShCoefficients> show{};
     glm::dvec3 light(0.0), sky(0.0);
+    double capSun = 0.0, weightSum = 0.0;  // the samples' shares, weighted as they are
     for (std::size_t i = 0; i < count; ++i) {
         const NormalTransfer& t = *samples[i];
         if (!t.any) continue;
@@ -497,6 +517,7 @@ NormalTransfer meanNormalTransfer(const NormalTransfer* const* samples, const do
                 p.show *= float(w), p.lit *= float(w);
                 parts->push_back(p);
             }
+        capSun += w * t.capSun, weightSum += w;
         m.lightEpoch = t.lightEpoch;
         m.any = true;
     }
@@ -505,6 +526,7 @@ NormalTransfer meanNormalTransfer(const NormalTransfer* const* samples, const do
         m.hide[k] = float(hide[k]), m.groundHide[k] = float(groundHide[k]);
     for (std::size_t k = 0; k < show.size(); ++k) m.show[k] = float(show[k]);
     m.light = glm::vec3(light);
+    m.capSun = weightSum > 0.0 ? float(capSun / weightSum) : 1.0f;
     m.sky = glm::vec3(sky);
     if (!parts->empty()) m.groundParts = std::move(parts);
     return m;
@@ -728,7 +750,9 @@ ShRgbD applyNearField(const ShRgbD& far, const glm::dvec3& point_m,
                       const std::vector<SphereOccluder>& occluders, const DirectionalLight& light,
                       const std::vector<HorizonWedge>& horizon, const GroundTerm* ground,
                       const HemisphereAmbient& ambient) {
-    NearFieldTransfer t = nearFieldTransfer(nearOccluders(point_m, occluders, horizon), ground);
+    const std::vector<OccluderCap> caps = nearOccluders(point_m, occluders, horizon);
+    NearFieldTransfer t = nearFieldTransfer(caps, ground);
+    t.capSun = float(capSunVisibility(caps, light.direction));
     updateLightTerm(t, light.direction, ambient);
     return toDouble(applyTransfer(t, toFloat(far), light));
 }

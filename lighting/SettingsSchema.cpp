@@ -269,6 +269,9 @@ Keys<NearFieldSettings> nearFieldKeys() {
     k.boolean(
         "plants", "trees, bushes and rocks as spheres", [](T& t) -> bool& { return t.plants; },
         costHigh);
+    k.boolean(
+        "plantShadows", "the plants' spheres lit by the sun only where other plants and the terrain leave it",
+        [](T& t) -> bool& { return t.plantShadows; }, costHigh);
     k.number(
         "smallRadius_m", "m", 0.0, 100.0, "bushes and rocks (never captured) are near out to this",
         [](T& t) -> double& { return t.smallRadius_m; }, costHigh);

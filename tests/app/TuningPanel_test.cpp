@@ -124,6 +124,7 @@ TEST(TuningPanel, EveryKeyOfTheSettingsFileIsInTheTable) {
                           "nearField.radius_m",
                           "nearField.captureRadius_m",
                           "nearField.plants",
+                          "nearField.plantShadows",
                           "nearField.smallRadius_m",
                           "nearField.terrain",
                           "nearField.terrainRadius_m",
