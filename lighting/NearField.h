@@ -242,7 +242,7 @@ struct NearFieldSettings {
     // the ambient at each mesh vertex, each at its own point and through its own normal, instead of blending the corners across the patch (docs/ARCHITECTURE.md
     // "Terrain and objects"). 0: off, every patch blends its corners. (why this value:
     // docs/TUNING.md "Near field")
-    double vertexAmbient_m = 160.0;
+    double vertexAmbient_m = 320.0;
     // The draw lights at most this many new mesh vertices a frame per vertex (nearest patches
     // first, at least one patch); a patch entering the range whose turn has not come blends its
     // corners meanwhile, so a frame's near-field builds stay bounded (docs/ARCHITECTURE.md

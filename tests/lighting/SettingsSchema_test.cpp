@@ -194,9 +194,9 @@ TEST(SettingsSchema, WhatTheWriterWritesReadsBackEqual) {
 }
 
 // nearField.vertexAmbient_m (terrain patches lit per vertex near the eye): in both files, in
-// metres over [0, 2000], 160 m by default (the new vertices a frame bounded at 600); a file with it reads into the near field's settings,
-// writes back with it and reads back equal, as does a KEY=VALUE assignment; beyond the range it
-// is refused naming the key.
+// metres over [0, 2000], 320 m by default (the new vertices a frame bounded at 600); a file with
+// it reads into the near field's settings, writes back with it and reads back equal, as does a
+// KEY=VALUE assignment; beyond the range it is refused naming the key.
 TEST(SettingsSchema, TheVertexAmbientRangeRoundTrips) {
     for (const auto* f :
          {static_cast<const SettingSpec*>(volumeSettingsSchema().find("nearField.vertexAmbient_m")),
@@ -210,8 +210,8 @@ TEST(SettingsSchema, TheVertexAmbientRangeRoundTrips) {
         EXPECT_TRUE(f->rebuilds);
         EXPECT_FALSE(f->help.empty());
     }
-    EXPECT_EQ(AmbienceVolumeSettings{}.capture.nearField.vertexAmbient_m, 160.0);
-    EXPECT_EQ(BaselineSettings{}.capture.nearField.vertexAmbient_m, 160.0);
+    EXPECT_EQ(AmbienceVolumeSettings{}.capture.nearField.vertexAmbient_m, 320.0);
+    EXPECT_EQ(BaselineSettings{}.capture.nearField.vertexAmbient_m, 320.0);
     EXPECT_EQ(AmbienceVolumeSettings{}.capture.nearField.vertexPointsPerFrame, 600);
     EXPECT_EQ(BaselineSettings{}.capture.nearField.vertexPointsPerFrame, 600);
     const std::string file = R"({"nearField": {"vertexAmbient_m": 64}})";
