@@ -21,8 +21,10 @@
 //   height, whose far field the near field completes. A surface's own irradiance is taken at the
 //   surface, so its plants, terrain walls and ground can be put back as seen from
 //   surfaceHeight_m instead (the far field stays the probes'). Measured against the bounce-lit
-//   reference, 1 m or 0.25 m moved the drawn error by -5 to +2 % (docs/HISTORY.md, "The model
-//   term is a bias"): the default stays 2 m.
+//   reference with the terrain near the eye lit per vertex and the plants' shadows, 0.5 m took
+//   the error at the drawn normal on the tuning replays from 0.175 / 0.283 / 0.052 to 0.148 /
+//   0.191 / 0.048 (2 m before; docs/TUNING.md "Near field", surfaceHeight_m). Lower still gains
+//   on the mountain road and loses on the other two.
 // [SECTION] Range
 //   The near field is put back where the picture can show it. Objects farther than
 //   objectRange_m from the camera (plants a few pixels tall) and terrain corners and road
@@ -215,7 +217,7 @@ struct NearFieldSettings {
     // surface: the near field puts its plants, terrain walls and ground back as seen from this
     // height above the ground, not from the probes' kShadingHeight_m, whose far field it
     // completes (see Surface height).
-    double surfaceHeight_m = kShadingHeight_m;
+    double surfaceHeight_m = 0.5;
     // Points the draw asks for (terrain corners, objects) are cached with their transfer; when a
     // cache holds this many, the half of it used least recently is dropped (the view's points,
     // asked every frame, stay).

@@ -3,7 +3,7 @@
 # build in one command, and the README's results table taken from that RESULTS.md.
 #
 #   scripts/make-figures.sh [--short] [--out DIR | --docs] [--work DIR] [--bin AMBIENCE] [--no-soak]
-#                           [--resume]
+#                           [--no-tune] [--resume]
 #
 #   (no option)  the full setting: the frames at 640x360 and full reference resolution, the
 #                viewer's panel after 150 frames, the one-hour soak, a 40-trial `ambience tune`
@@ -22,6 +22,8 @@
 #   --work DIR   where the runs go (default out/figures or out/figures-short; DIR/work with --out)
 #   --bin FILE   the ambience executable (default build/bin/ambience)
 #   --no-soak    leave docs/soak-memory.png as it is (the soak alone takes about 10 minutes)
+#   --no-tune    leave docs/tune-front.png as it is (the tune study alone takes about half an
+#                hour); RESULTS.md says which pictures an earlier run made
 #   --resume     keep the compare runs, the tune study and the bench already in the work folder
 #                that ran with the same options and are newer than the executable (a run stopped
 #                half way goes on where it was; RESULTS.md says what was kept)
@@ -36,11 +38,11 @@ set -euo pipefail
 {
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(dirname "$here")"
-short=0 out="" docs=0 work="" bin="$root/build/bin/ambience" soak=1 resume=0
+short=0 out="" docs=0 work="" bin="$root/build/bin/ambience" soak=1 tune=1 resume=0
 
 usage() {
   echo "make-figures.sh: $1 (usage: make-figures.sh [--short] [--out DIR | --docs]" \
-    "[--work DIR] [--bin FILE] [--no-soak] [--resume])" >&2
+    "[--work DIR] [--bin FILE] [--no-soak] [--no-tune] [--resume])" >&2
   exit 2
 }
 while [[ $# -gt 0 ]]; do
@@ -51,8 +53,9 @@ while [[ $# -gt 0 ]]; do
     --bin) [[ $# -ge 2 ]] || usage "--bin needs a file"; bin="$2"; shift 2 ;;
     --docs) docs=1; shift ;;
     --no-soak) soak=0; shift ;;
+    --no-tune) tune=0; shift ;;
     --resume) resume=1; shift ;;
-    -h|--help) sed -n '2,30p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '2,35p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) usage "unknown argument '$1'" ;;
   esac
 done
@@ -275,15 +278,19 @@ fresh() {
 
 # The tune study's front (docs/TUNING.md "Tuning with Optuna"). A study folder is resumed by
 # the same command, so a fresh one is started unless --resume keeps it.
-step "tune: $(show "$bin" tune "${tune_args[@]}")"
-tune_cmd=("$bin" tune "${tune_args[@]}")
-if ! resumed tune "$work/tune/summary.md" "${tune_cmd[@]}"; then
-  rm -rf "$work/tune"
-  fresh tune "${tune_cmd[@]}"
+if ((tune)); then
+  step "tune: $(show "$bin" tune "${tune_args[@]}")"
+  tune_cmd=("$bin" tune "${tune_args[@]}")
+  if ! resumed tune "$work/tune/summary.md" "${tune_cmd[@]}"; then
+    rm -rf "$work/tune"
+    fresh tune "${tune_cmd[@]}"
+  fi
+  cp "$work/tune/front.png" "$dest/tune-front.png"
+  printf '%s\t%s\t%s\t%s\n' tune-front.png "the tune study's front" "-" "$(show "${tune_cmd[@]}")" \
+    >>"$frames_tsv"
+else
+  step "tune: not run (--no-tune): $dest/tune-front.png left as it is"
 fi
-cp "$work/tune/front.png" "$dest/tune-front.png"
-printf '%s\t%s\t%s\t%s\n' tune-front.png "the tune study's front" "-" "$(show "${tune_cmd[@]}")" \
-  >>"$frames_tsv"
 
 # The bench behind docs/RESULTS.md and the README's table.
 step "bench: $(show "$bin" bench "${bench_args[@]}")"
@@ -302,9 +309,12 @@ commit="$(git -C "$root" rev-parse --short=12 HEAD 2>/dev/null || echo unknown)"
 git -C "$root" diff --quiet HEAD -- . ':!docs' ':!README.md' 2>/dev/null || commit="$commit (with local changes)"
 soak_log=()
 ((soak)) && soak_log=(--soak-log "$work/soak.log")
+not_run=()
+((soak)) || not_run+=(soak-memory.png)
+((tune)) || not_run+=(tune-front.png)
 "$python" "$here/results-md.py" --bench "$work/bench" --frames "$frames_tsv" "${soak_log[@]}" \
   --command "$(show "${bench_cmd[@]}")" --setting "$setting" --commit "$commit" \
-  "${timing[@]}" --kept "${kept[*]}" --total-seconds "$((SECONDS - start_all))" \
+  "${timing[@]}" --kept "${kept[*]}" --not-run "${not_run[*]}" --total-seconds "$((SECONDS - start_all))" \
   --out "$dest/RESULTS.md" --readme "$readme_out"
 step "done in $((SECONDS - start_all)) s ($setting setting)"
 exit 0
