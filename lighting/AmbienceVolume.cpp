@@ -49,6 +49,7 @@ AmbienceVolume::AmbienceVolume(CubeCapture& capture, const ProbeEnvironment& env
       scheduler_(settings.scheduler),
       core_(capture, environment, settings.capture) {
     scheduler_.setRoads(roads);
+    core_.setGradients(settings.store.gradients);
     frameTime_s_ = settings.nominalFrameTime_s;
     core_.setOwnField([this](double x_m, double z_m) { return store_.interpolate(x_m, z_m); });
 }
@@ -66,6 +67,7 @@ void AmbienceVolume::retune(const AmbienceVolumeSettings& settings) {
     store_.retune(settings.store);
     scheduler_.setSettings(settings.scheduler);
     core_.retune(settings.capture);
+    core_.setGradients(settings.store.gradients);
 }
 
 std::optional<ProbeInProgress> AmbienceVolume::probeInProgress() const {
@@ -154,7 +156,8 @@ void AmbienceVolume::storeStage() {
     const double lifetime = currentLifetime_s();
     for (const CompletedProbe& c : core_.takeCompleted()) {
         const auto result =
-            store_.insert(latticeKey(c.job.key), c.sh, c.job.position_m, lifetime, timeOfDay_h);
+            store_.insert(latticeKey(c.job.key), c.sh, c.job.position_m, lifetime, timeOfDay_h,
+                          c.slope ? &*c.slope : nullptr);
         if (result == AnchorStore::InsertResult::Rejected) core_.countRejected();
     }
     if (settings_.relightBySkyLevel) {

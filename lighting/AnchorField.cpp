@@ -248,7 +248,7 @@ void AnchorField::buildLevel(int L, const std::vector<FieldAnchor>& anchors) {
     const ReachPoints inReach = valuesInReach(L, coarserAt);
     std::vector<CellKey> cellList, cornerList;
     cellsAroundReach(cellList, cornerList);
-    const std::vector<float> values = cornerData(cornerList, inReach, coarserAt);
+    const std::vector<float> values = cornerData(L, cornerList, inReach, coarserAt);
     writeCells(L, cellList, cornerList, values);
 }
 
@@ -384,7 +384,7 @@ void AnchorField::cellsAroundReach(std::vector<CellKey>& cellList,
 }
 
 // H_L at each corner: value, s d/dx, s d/dz, s^2 d2/dxdz.
-std::vector<float> AnchorField::cornerData(const std::vector<CellKey>& cornerList,
+std::vector<float> AnchorField::cornerData(int L, const std::vector<CellKey>& cornerList,
                                            const ReachPoints& inReach,
                                            CoarserCache& coarserAt) const {
     std::vector<float> values(cornerList.size() * pointFloats_, 0.0f);
@@ -405,14 +405,14 @@ std::vector<float> AnchorField::cornerData(const std::vector<CellKey>& cornerLis
                 for (int j = 0; j < kN; ++j) out[m * kStride + j] = float(base[m * kN + j]);
             continue;
         }
-        cornerInReach(c, own->second, base, inReach, coarserAt, out);
+        cornerInReach(L, c, own->second, base, inReach, coarserAt, out);
     }
     return values;
 }
 
 // H_L at a corner in reach: its value C_L, and slopes and twist blended by the coverage between
 // F_{L-1}'s own plus D_L's central differences and the lattice's limited ones.
-void AnchorField::cornerInReach(const CellKey& c, const ReachPoint& own,
+void AnchorField::cornerInReach(int L, const CellKey& c, const ReachPoint& own,
                                 const std::array<double, 4 * kFloats>& base,
                                 const ReachPoints& inReach, CoarserCache& coarserAt,
                                 float* out) const {
@@ -463,6 +463,22 @@ void AnchorField::cornerInReach(const CellKey& c, const ReachPoint& own,
         out[kStride + j] = float(ox + k * (lx[j] - ox));
         out[2 * kStride + j] = float(oz + k * (lz[j] - oz));
         out[3 * kStride + j] = float(oxz + k * (lxz[j] - oxz));
+    }
+    // An anchor with a measured slope gives its point that slope, weighted by its presence.
+    const FieldAnchor* anchor = anchorAt(L, c);
+    if (anchor && anchor->hasSlope) {
+        // Over a cell much wider than the slope's radius of validity, the slope describes the
+        // near surfaces around the probe, not the way to the next lattice point: its weight
+        // falls as validity / spacing.
+        const double s = lattice_.spacing[L];
+        const double p =
+            double(anchor->presence) * std::clamp(double(anchor->slope.validity_m) / s, 0.0, 1.0);
+        for (int j = 0; j < kN; ++j) {
+            const double mx = s * double(anchor->slope.dx.c[j / 3][j % 3]);
+            const double mz = s * double(anchor->slope.dz.c[j / 3][j % 3]);
+            out[kStride + j] = float((1.0 - p) * double(out[kStride + j]) + p * mx);
+            out[2 * kStride + j] = float((1.0 - p) * double(out[2 * kStride + j]) + p * mz);
+        }
     }
 }
 

@@ -56,6 +56,7 @@
 #include <tsl/hopscotch_map.h>
 
 #include "lighting/SH.h"
+#include "lighting/ShGradient.h"
 
 namespace amb {
 
@@ -92,6 +93,10 @@ struct FieldAnchor {
     std::int64_t i = 0, k = 0;  // lattice coordinates on that level
     float presence = 1.0f;    // (0, 1]
     ShRgb value;              // current x relight
+    // Its measured slope (AnchorStoreSettings::gradients), per metre, x relight: the smooth
+    // cells' d/dx and d/dz at its point, weighted by presence, instead of the lattice's.
+    bool hasSlope = false;
+    ShSlope slope;
 };
 
 class AnchorField {
@@ -200,9 +205,9 @@ class AnchorField {
     ReachPoints valuesInReach(int level, CoarserCache& coarserAt) const;
     static bool rowOrder(const CellKey& a, const CellKey& b);
     void cellsAroundReach(std::vector<CellKey>& cellList, std::vector<CellKey>& cornerList) const;
-    std::vector<float> cornerData(const std::vector<CellKey>& cornerList,
+    std::vector<float> cornerData(int level, const std::vector<CellKey>& cornerList,
                                   const ReachPoints& inReach, CoarserCache& coarserAt) const;
-    void cornerInReach(const CellKey& c, const ReachPoint& own,
+    void cornerInReach(int level, const CellKey& c, const ReachPoint& own,
                        const std::array<double, 4 * kFloats>& base, const ReachPoints& inReach,
                        CoarserCache& coarserAt, float* out) const;
     void writeCells(int level, const std::vector<CellKey>& cellList,

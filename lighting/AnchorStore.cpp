@@ -112,9 +112,24 @@ void AnchorStore::forEach(const std::function<void(const Anchor&)>& f) const {
 
 // ---- Insert, remove, advance --------------------------------------------------------------------
 
+ShSlope Anchor::currentSlope() const {
+    ShSlope s = slope;
+    if (blendProgress < 1.0f) {
+        const float t = easeInOut(blendProgress);
+        s = {lerp(slopeFrom.dx, slope.dx, t), lerp(slopeFrom.dz, slope.dz, t),
+             slopeFrom.validity_m + t * (slope.validity_m - slopeFrom.validity_m)};
+    }
+    if (relight != 1.0f) s.dx *= relight, s.dz *= relight;
+    return s;
+}
+
 AnchorStore::InsertResult AnchorStore::insert(const LatticeKey& key, const ShRgb& sh,
                                               const glm::dvec3& capturedPosition_m,
-                                              double lifetime_s, double timeOfDay_h) {
+                                              double lifetime_s, double timeOfDay_h,
+                                              const ShSlope* slope) {
+    if (slope && (!finiteSh(slope->dx, kMaxCoefficient) || !finiteSh(slope->dz, kMaxCoefficient) ||
+                  !(slope->validity_m >= 0.0f) || !std::isfinite(slope->validity_m)))
+        slope = nullptr;
     Impl& m = *impl_;
     AMB_CHECK(key.level >= 0 && key.level < m.levels);
     const bool positionOk = std::isfinite(capturedPosition_m.x) &&
@@ -138,6 +153,13 @@ AnchorStore::InsertResult AnchorStore::insert(const LatticeKey& key, const ShRgb
         if (instant || a.presence != presenceBefore) m.touchField(c.level);
         m.setFadeDirection(a, false);
         // Blend from what interpolation showed (relight included), so a refresh is no pop.
+        if (slope) {
+            a.slopeFrom = a.hasSlope ? a.currentSlope() : *slope;
+            a.slope = *slope;
+            a.hasSlope = true;
+        } else {
+            a.hasSlope = false;
+        }
         a.blendFrom = a.relight == 1.0f ? a.current : a.current * a.relight;
         a.current = a.blendFrom;
         a.relight = 1.0f;
@@ -158,6 +180,7 @@ AnchorStore::InsertResult AnchorStore::insert(const LatticeKey& key, const ShRgb
     a.current = instant ? sh : m.interpolate(m.x(c), m.z(c), nullptr);
     a.blendFrom = a.current;
     a.target = sh;
+    if (slope) a.slope = a.slopeFrom = *slope, a.hasSlope = true;
     a.blendStart_s = m.now;
     a.blendProgress = instant ? 1.0f : 0.0f;
     a.presence = instant ? 1.0f : 0.0f;
@@ -314,8 +337,14 @@ void AnchorStore::Impl::ensureField() const {
         const Anchor& a = pool[n];
         const float weight = easeInOut(a.presence);
         if (!alive[n] || !(weight > 0.0f)) continue;
-        anchors.push_back({a.key.level, a.key.i, a.key.k, weight,
-                           a.relight == 1.0f ? a.current : a.current * a.relight});
+        FieldAnchor f;
+        f.level = a.key.level, f.i = a.key.i, f.k = a.key.k, f.presence = weight;
+        f.value = a.relight == 1.0f ? a.current : a.current * a.relight;
+        if (settings.gradients && a.hasSlope) {
+            f.hasSlope = true;
+            f.slope = a.currentSlope();
+        }
+        anchors.push_back(f);
     }
     field.rebuild(lattice, anchors, fallback, from);
     if (separateFixedField()) {

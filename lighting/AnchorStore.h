@@ -38,6 +38,7 @@
 #include <glm/vec3.hpp>
 
 #include "lighting/SH.h"
+#include "lighting/ShGradient.h"
 
 namespace amb {
 
@@ -79,6 +80,14 @@ struct AnchorStoreSettings {
     // their colours linearly across each patch, so a kink at a lattice line cannot show there.
     // false: fixed points read interpolate() too. (why this value: docs/TUNING.md "Anchor store")
     bool bilinearFixedPoints = true;
+    // Each probe also measures how its SH change as it moves along the ground (its
+    // translational gradient, from the capture's distances: lighting/ShGradient.h), and the
+    // smooth cells take that as the slope at the anchor's point, weighted by its presence,
+    // instead of the central differences of its neighbours (AnchorField.h, H_L): interpolation
+    // extrapolates first order from each anchor. It acts through the smooth cells only, so
+    // fixed points feel it when bilinearFixedPoints is off. (why this value: docs/TUNING.md
+    // "Anchor store")
+    bool gradients = false;
 };
 
 // Spacing of the finest level, s_0 / 3^(levels - 1) [m].
@@ -132,6 +141,12 @@ struct Anchor {
     bool regenerationRequested = false;  // age >= regenerateFraction x lifetime
     bool expired = false;                // age >= lifetime: fading out, then removed
     float relight = 1.0f;                // read as current x relight (AnchorStore::relight)
+    // The translational gradient (AnchorStoreSettings::gradients), blended as the value is:
+    // lerp(slopeFrom, slope, easeInOut(blendProgress)) x relight. hasSlope false: none (a
+    // store without gradients, an anchor read from a file).
+    ShSlope slope, slopeFrom;
+    bool hasSlope = false;
+    ShSlope currentSlope() const;
 
     double age_s(double now_s) const { return now_s - captureTime_s; }
 };
@@ -223,9 +238,11 @@ class AnchorStore {
     // Any coefficient that is NaN, infinite or above kMaxCoefficient, a non-finite position, a
     // non-positive lifetime or a key outside the lattice's integer range (|i|, |k| x 3^(F-L)
     // above 2^31 - 1) rejects the capture (counted in statistics().rejected).
+    // `slope`: the capture's translational gradient (AnchorStoreSettings::gradients), kept when
+    // finite and in range; a refresh blends the anchor's slope to it as it blends the value.
     InsertResult insert(const LatticeKey& key, const ShRgb& sh,
                         const glm::dvec3& capturedPosition_m, double lifetime_s,
-                        double timeOfDay_h = 0.0);
+                        double timeOfDay_h = 0.0, const ShSlope* slope = nullptr);
     static constexpr float kMaxCoefficient = 1.0e15f;
     // Sets every anchor's relight factor (finite, > 0; anything else counts as 1): interpolation
     // reads an anchor as current x relight. A refresh bakes the factor into the blend's start.

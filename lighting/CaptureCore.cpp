@@ -12,6 +12,7 @@
 #include "lighting/CubeCapture.h"
 #include "lighting/CubeMapProjector.h"
 #include "lighting/ProbeEnvironment.h"
+#include "lighting/ShGradient.h"
 #include "world/Error.h"
 
 namespace amb {
@@ -49,7 +50,7 @@ struct FacesResult {
 FacesResult captureProbeFaces(CubeCapture& capture, CubeMapProjector& projector,
                               std::vector<float>& cube, const glm::dvec3& position_m,
                               double timeOfDay_h, int facesDone, int budget, double nearRadius_m,
-                              const SurfaceLight* light, bool& bad) {
+                              const SurfaceLight* light, std::vector<float>* distance, bool& bad) {
     FacesResult result;
     const int count = std::min(budget, kCubeFaces - facesDone);
     if (count <= 0) return result;
@@ -59,7 +60,10 @@ FacesResult captureProbeFaces(CubeCapture& capture, CubeMapProjector& projector,
     auto t0 = Clock::now();
     // The method's own light for its own captures only: a capture may serve others.
     capture.setSurfaceLight(light);
-    capture.captureFar(position_m, timeOfDay_h, mask, cube, nearRadius_m);
+    if (distance)
+        capture.captureFarWithDistance(position_m, timeOfDay_h, mask, cube, *distance, nearRadius_m);
+    else
+        capture.captureFar(position_m, timeOfDay_h, mask, cube, nearRadius_m);
     capture.setSurfaceLight(nullptr);
     result.capture_s = secondsSince(t0);
     const std::size_t faceFloats = 3 * std::size_t(capture.faceSize()) * capture.faceSize();
@@ -193,6 +197,7 @@ void CaptureCore::captureFaces(const NextProbe& next) {
                 job.position_m = environment_.placeProbe(request->x_m, request->z_m, request->aside_m);
                 job.startTime_s = time_s_;
                 job_ = job;
+                jobGradients_ = gradients_;
                 projector_->reset();
             }
             stats_.predict_s += secondsSince(t0);
@@ -201,7 +206,7 @@ void CaptureCore::captureFaces(const NextProbe& next) {
         const FacesResult r = captureProbeFaces(capture_, *projector_, cube_, job_->position_m,
                                                 timeOfDay_h_, job_->facesDone, budget,
                                                 settings_.nearRadius_m(), surfaceLight(),
-                                                job_->bad);
+                                                jobGradients_ ? &distance_ : nullptr, job_->bad);
         stats_.capture_s += r.capture_s;
         stats_.project_s += r.project_s;
         job_->facesDone += r.faces;
@@ -209,7 +214,13 @@ void CaptureCore::captureFaces(const NextProbe& next) {
         stats_.facesThisFrame += r.faces;
         stats_.facesCaptured += r.faces;
         if (job_->facesDone == kCubeFaces) {
-            completed_.push_back({*job_, projector_->coefficients()});
+            std::optional<ShGroundGradient> gradient;
+            if (jobGradients_ && !job_->bad) {
+                const Clock::time_point t0 = Clock::now();
+                gradient = shGroundGradient(capture_.faceSize(), cube_, distance_);
+                stats_.project_s += secondsSince(t0);
+            }
+            completed_.push_back({*job_, projector_->coefficients(), gradient});
             job_.reset();
         }
     }
@@ -224,7 +235,12 @@ std::vector<CompletedProbe> CaptureCore::takeCompleted() {
             ++stats_.rejectedProbes;
             continue;
         }
-        out.push_back({c.job, sh});
+        std::optional<ShSlope> slope;
+        if (c.gradient) {
+            slope = toFloat(*c.gradient);
+            if (!acceptable(slope->dx) || !acceptable(slope->dz)) slope.reset();
+        }
+        out.push_back({c.job, sh, slope});
     }
     completed_.clear();
     return out;

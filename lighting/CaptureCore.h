@@ -47,6 +47,7 @@
 #include "lighting/CubeCapture.h"
 #include "lighting/NearField.h"
 #include "lighting/SH.h"
+#include "lighting/ShGradient.h"
 #include "world/Conventions.h"
 
 namespace amb {
@@ -124,6 +125,9 @@ struct ProbeJob {
 struct CompletedProbe {
     ProbeJob job;
     ShRgb sh;  // the coefficients in float
+    // Their translational gradient along the ground (lighting/ShGradient.h), when the method
+    // asked for it (CaptureCore::setGradients) and it is finite and in range.
+    std::optional<ShSlope> slope;
 };
 
 // What beginFrame() saw.
@@ -167,6 +171,11 @@ class CaptureCore {
     // Stage 4's shared part: the probes completed this frame, bad ones counted in
     // rejectedProbes and left out. Empties the list.
     std::vector<CompletedProbe> takeCompleted();
+
+    // Whether probes are captured with their distances and completed with their SH's
+    // translational gradient (CompletedProbe::slope); off by default. From the next probe on.
+    void setGradients(bool on) { gradients_ = on; }
+    bool gradients() const { return gradients_; }
 
     // Drops the probe in progress (its point left the method's structure).
     void abortJob() { job_.reset(); }
@@ -221,7 +230,11 @@ class CaptureCore {
     struct Done {
         ProbeJob job;
         ShRgbD sh;
+        std::optional<ShGroundGradient> gradient;
     };
+    bool gradients_ = false;
+    bool jobGradients_ = false;    // the probe in progress is captured with distances
+    std::vector<float> distance_;  // its texels' distances (gradients_)
     std::vector<Done> completed_;
 
     double time_s_ = 0.0;

@@ -8,8 +8,10 @@
 // cubeTexelDirection(f, i, j, N).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -68,6 +70,26 @@ class CubeCapture {
         (void)nearRadius_m;
         return capture(position_m, timeOfDay_h, faces, cube);
     }
+
+    // captureFar, and the distance [m] from `position_m` to what each texel of the rendered
+    // faces shows, along its direction, into `distance_m` (6 N^2 floats, face-major, resized
+    // as `cube` is; infinite where a texel shows sky, the sun's included): what the
+    // translational gradient of the probe's SH is estimated from (lighting/ShGradient.h). A
+    // capture that knows no distances (this default) gives every texel as sky.
+    virtual CubeCaptureStats captureFarWithDistance(const glm::dvec3& position_m,
+                                                    double timeOfDay_h, CubeFaceMask faces,
+                                                    std::vector<float>& cube,
+                                                    std::vector<float>& distance_m,
+                                                    double nearRadius_m) {
+        const CubeCaptureStats stats = captureFar(position_m, timeOfDay_h, faces, cube, nearRadius_m);
+        const std::size_t face = std::size_t(faceSize()) * std::size_t(faceSize());
+        if (distance_m.size() != 6 * face) distance_m.assign(6 * face, kFar);
+        for (int f = 0; f < 6; ++f)
+            if (faces & cubeFaceBit(f))
+                std::fill_n(distance_m.begin() + std::ptrdiff_t(f * face), face, kFar);
+        return stats;
+    }
+    static constexpr float kFar = std::numeric_limits<float>::infinity();
 
     // The direction whose texel gets the sun disc in a capture at `timeOfDay_h`: what whoever
     // leaves the sun out of the SH is told (CubeMapProjector::addFace, the reference oracle).

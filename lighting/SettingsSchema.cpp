@@ -154,6 +154,8 @@ Keys<AnchorStoreSettings> storeKeys() {
         [](T& t) -> bool& { return t.smoothInterpolation; }, kCostHigh);
     k.boolean("bilinearFixedPoints", "terrain corners and road vertices read bilinear cells",
               [](T& t) -> bool& { return t.bilinearFixedPoints; });
+    k.boolean("gradients", "anchors carry their measured translational gradient as slope",
+              [](T& t) -> bool& { return t.gradients; });
     return k;
 }
 

@@ -247,6 +247,20 @@ CubeCaptureStats CubeCaptureGl::capture(const glm::dvec3& position_m, double tim
 CubeCaptureStats CubeCaptureGl::captureFar(const glm::dvec3& position_m, double timeOfDay_h,
                                            CubeFaceMask faces, std::vector<float>& cube,
                                            double nearRadius_m) {
+    return render(position_m, timeOfDay_h, faces, cube, nullptr, nearRadius_m);
+}
+
+CubeCaptureStats CubeCaptureGl::captureFarWithDistance(const glm::dvec3& position_m,
+                                                       double timeOfDay_h, CubeFaceMask faces,
+                                                       std::vector<float>& cube,
+                                                       std::vector<float>& distance_m,
+                                                       double nearRadius_m) {
+    return render(position_m, timeOfDay_h, faces, cube, &distance_m, nearRadius_m);
+}
+
+CubeCaptureStats CubeCaptureGl::render(const glm::dvec3& position_m, double timeOfDay_h,
+                                       CubeFaceMask faces, std::vector<float>& cube,
+                                       std::vector<float>* distance_m, double nearRadius_m) {
     using Clock = std::chrono::steady_clock;
     const auto t0 = Clock::now();
     const size_t faceFloats = size_t(n_) * n_ * 3;
@@ -309,6 +323,28 @@ CubeCaptureStats CubeCaptureGl::captureFar(const glm::dvec3& position_m, double 
     const int rows = (hi - lo + 1) * n_;
     rgba_.resize(size_t(n_) * rows * 4);
     readFramebuffer(fbo_.id(), 0, lo * n_, n_, rows, GL_RGBA, GL_FLOAT, 4, rgba_.data());
+    if (distance_m) {
+        const size_t face = size_t(n_) * n_;
+        if (distance_m->size() != 6 * face) distance_m->assign(6 * face, kFar);
+        depthRows_.resize(size_t(n_) * rows);
+        readFramebuffer(fbo_.id(), 0, lo * n_, n_, rows, GL_DEPTH_COMPONENT, GL_FLOAT, 4,
+                        depthRows_.data());
+        for (int f = lo; f <= hi; ++f) {
+            if (!(faces & cubeFaceBit(f))) continue;
+            for (int j = 0; j < n_; ++j)
+                for (int i = 0; i < n_; ++i) {
+                    const size_t t = size_t(j) * n_ + i;
+                    const float depth = depthRows_[size_t(f - lo) * face + t];
+                    // Depth 0 is the cleared far plane (sky); a texel the sky shader filled
+                    // reads alpha 1 (the sun's test below).
+                    const bool sky = !(depth > 0.0f) || rgba_[(size_t(f - lo) * face + t) * 4 + 3] >= 0.5f;
+                    (*distance_m)[size_t(f) * face + t] =
+                        sky ? kFar
+                            : float(double(kCaptureNear_m) / double(depth) *
+                                    glm::length(cubeTexelDirection(f, i, j, n_)));
+                }
+        }
+    }
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
 
     for (int f = lo; f <= hi; ++f) {

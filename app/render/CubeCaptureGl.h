@@ -77,6 +77,12 @@ class CubeCaptureGl final : public CubeCapture {
     CubeCaptureStats captureFar(const glm::dvec3& position_m, double timeOfDay_h,
                                 CubeFaceMask faces, std::vector<float>& cube,
                                 double nearRadius_m) override;
+    // The same with each texel's distance, from the depth buffer (reversed infinite depth:
+    // near / depth along the face's axis).
+    CubeCaptureStats captureFarWithDistance(const glm::dvec3& position_m, double timeOfDay_h,
+                                            CubeFaceMask faces, std::vector<float>& cube,
+                                            std::vector<float>& distance_m,
+                                            double nearRadius_m) override;
 
     // Lights the surfaces with `light` (lighting/BounceField.h) instead of the sky/ground
     // hemisphere ambient; null: the hemisphere again.
@@ -107,6 +113,9 @@ class CubeCaptureGl final : public CubeCapture {
 
   private:
     void init();
+    CubeCaptureStats render(const glm::dvec3& position_m, double timeOfDay_h, CubeFaceMask faces,
+                            std::vector<float>& cube, std::vector<float>* distance_m,
+                            double nearRadius_m);
     // The shadows of a capture at `probe_m` (rendering the maps when due).
     ShadowBinding prepareShadows(const glm::dvec3& probe_m);
 
@@ -121,6 +130,7 @@ class CubeCaptureGl final : public CubeCapture {
     GlFramebuffer fbo_;
     DrawList list_, faceList_;  // the capture's scene, and its objects culled to one face
     std::vector<float> rgba_;
+    std::vector<float> depthRows_;  // depth read-back (captureFarWithDistance)
     CubeCaptureStats lastStats_;
     ShadowSettings shadows_;
     std::unique_ptr<ShadowMap> shadowMap_;

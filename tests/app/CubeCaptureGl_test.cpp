@@ -340,5 +340,38 @@ TEST_F(CubeCaptureTest, CapturesUnderACanopyAreDarkerWithShadows) {
                       ", open ground " + std::to_string(faceMean(c, below) / faceMean(d, below)));
 }
 
+// The distances a capture reads back from its depth buffer (for the SH's translational
+// gradient, lighting/ShGradient.h): a texel looking steeply down ends on the terrain (the
+// heightfield under the point it names, within the capture mesh's 0.5 m), one looking steeply up
+// at the sky is infinitely far, and the colours are those of captureFar.
+TEST_F(CubeCaptureTest, DistancesEndOnTheTerrainAndAtTheSky) {
+    AMB_REQUIRE_PLATFORM(platform, Backend::Auto, 16, 16);
+    CubeCaptureGl capture(*world_, kN);
+    std::vector<float> cube, withDistance, distance;
+    capture.captureFar(probe_, kMorning_h, kAllCubeFaces, cube, 0.0);
+    capture.captureFarWithDistance(probe_, kMorning_h, kAllCubeFaces, withDistance, distance, 0.0);
+    ASSERT_EQ(distance.size(), size_t(6) * kN * kN);
+    EXPECT_EQ(cube, withDistance);
+    int down = 0, up = 0;
+    for (int f = 0; f < 6; ++f)
+        for (int j = 0; j < kN; ++j)
+            for (int i = 0; i < kN; ++i) {
+                const glm::dvec3 d = glm::normalize(cubeTexelDirection(f, i, j, kN));
+                const double r = distance[(size_t(f) * kN + j) * kN + i];
+                if (d.y < -0.7) {
+                    ASSERT_TRUE(std::isfinite(r)) << "face " << f << " texel " << i << "," << j;
+                    const glm::dvec3 p = probe_ + r * d;
+                    EXPECT_NEAR(p.y, world_->height(p.x, p.z), 0.5)
+                        << "face " << f << " texel " << i << "," << j;
+                    ++down;
+                } else if (d.y > 0.8) {
+                    EXPECT_TRUE(std::isinf(r)) << "face " << f << " texel " << i << "," << j;
+                    ++up;
+                }
+            }
+    EXPECT_GT(down, 100);
+    EXPECT_GT(up, 100);
+}
+
 }  // namespace
 }  // namespace amb

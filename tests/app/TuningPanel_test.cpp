@@ -93,6 +93,7 @@ TEST(TuningPanel, EveryKeyOfTheSettingsFileIsInTheTable) {
                           "store.finerWeight",
                           "store.smoothInterpolation",
                           "store.bilinearFixedPoints",
+                          "store.gradients",
                           "scheduler.velocityTimeConstant_s",
                           "scheduler.horizon_s",
                           "scheduler.pathStep_s",
