@@ -29,7 +29,10 @@
 //                 (1 - k) (F_{L-1}'s own + D_L's central differences) + k (C_L's central
 //                 differences), over c's neighbours s_L apart, with k = min(1, sum_a K_a p_a)
 //                 the level's coverage at c: F_{L-1}'s own slopes where the level adds nothing,
-//                 the lattice's slopes where its anchors cover c, continuous in between.
+//                 the lattice's slopes where its anchors cover c, continuous in between. At a
+//                 point holding an anchor with a measured slope g (FieldAnchor::hasSlope), the
+//                 d/dx and d/dz are then (1 - w) x those + w s_L g, with w = p min(1, validity /
+//                 s_L): its own gradient where it is valid across the cell.
 //   F_L(x)      = the bicubic Hermite interpolation of H_L over x's level-L cell.
 //   result      = F_finest.
 // Where no level-L anchor reaches a cell's corners, H_L there is F_{L-1}'s own value and

@@ -112,15 +112,25 @@ void AnchorStore::forEach(const std::function<void(const Anchor&)>& f) const {
 
 // ---- Insert, remove, advance --------------------------------------------------------------------
 
-ShSlope Anchor::currentSlope() const {
-    ShSlope s = slope;
-    if (blendProgress < 1.0f) {
-        const float t = easeInOut(blendProgress);
-        s = {lerp(slopeFrom.dx, slope.dx, t), lerp(slopeFrom.dz, slope.dz, t),
-             slopeFrom.validity_m + t * (slope.validity_m - slopeFrom.validity_m)};
+ShSlope AnchorStore::Impl::currentSlope(const Anchor& a, const SlopeState& state) {
+    ShSlope s = state.slope;
+    if (a.blendProgress < 1.0f) {
+        const float t = easeInOut(a.blendProgress);
+        s = {lerp(state.from.dx, state.slope.dx, t), lerp(state.from.dz, state.slope.dz, t),
+             state.from.validity_m + t * (state.slope.validity_m - state.from.validity_m)};
     }
-    if (relight != 1.0f) s.dx *= relight, s.dz *= relight;
+    if (a.relight != 1.0f) s.dx *= a.relight, s.dz *= a.relight;
     return s;
+}
+
+std::optional<ShSlope> AnchorStore::slope(const LatticeKey& key) const {
+    const Impl& m = *impl_;
+    if (!m.validKey(key)) return std::nullopt;
+    const std::int32_t index = m.indexOf(m.canonical(key));
+    if (index == kNoAnchor) return std::nullopt;
+    const Impl::SlopeState* state = m.slopeOf(std::size_t(index));
+    if (!state) return std::nullopt;
+    return Impl::currentSlope(m.pool[std::size_t(index)], *state);
 }
 
 AnchorStore::InsertResult AnchorStore::insert(const LatticeKey& key, const ShRgb& sh,
@@ -154,11 +164,12 @@ AnchorStore::InsertResult AnchorStore::insert(const LatticeKey& key, const ShRgb
         m.setFadeDirection(a, false);
         // Blend from what interpolation showed (relight included), so a refresh is no pop.
         if (slope) {
-            a.slopeFrom = a.hasSlope ? a.currentSlope() : *slope;
-            a.slope = *slope;
-            a.hasSlope = true;
-        } else {
-            a.hasSlope = false;
+            Impl::SlopeState& state = *m.slopeAt(index);
+            state.from = state.has ? Impl::currentSlope(a, state) : *slope;
+            state.slope = *slope;
+            state.has = true;
+        } else if (std::size_t(index) < m.slopes.size()) {
+            m.slopes[std::size_t(index)].has = false;
         }
         a.blendFrom = a.relight == 1.0f ? a.current : a.current * a.relight;
         a.current = a.blendFrom;
@@ -180,7 +191,6 @@ AnchorStore::InsertResult AnchorStore::insert(const LatticeKey& key, const ShRgb
     a.current = instant ? sh : m.interpolate(m.x(c), m.z(c), nullptr);
     a.blendFrom = a.current;
     a.target = sh;
-    if (slope) a.slope = a.slopeFrom = *slope, a.hasSlope = true;
     a.blendStart_s = m.now;
     a.blendProgress = instant ? 1.0f : 0.0f;
     a.presence = instant ? 1.0f : 0.0f;
@@ -194,6 +204,7 @@ AnchorStore::InsertResult AnchorStore::insert(const LatticeKey& key, const ShRgb
     a.key = c;
     const std::int32_t slot = m.allocate(a);
     m.setIndex(c, slot);
+    if (slope) *m.slopeAt(slot) = {*slope, *slope, true};
     if (instant) m.touchField(c.level);  // present at once; otherwise presence 0 moves nothing
     ++m.counters.inserted;
     return InsertResult::Inserted;
@@ -218,6 +229,7 @@ void AnchorStore::clear() {
     m.pool.clear();
     m.alive.clear();
     m.freeList.clear();
+    m.slopes.clear();
     m.count = 0;
     m.touchField();
 }
@@ -340,10 +352,11 @@ void AnchorStore::Impl::ensureField() const {
         FieldAnchor f;
         f.level = a.key.level, f.i = a.key.i, f.k = a.key.k, f.presence = weight;
         f.value = a.relight == 1.0f ? a.current : a.current * a.relight;
-        if (settings.gradients && a.hasSlope) {
-            f.hasSlope = true;
-            f.slope = a.currentSlope();
-        }
+        if (settings.gradients)
+            if (const SlopeState* state = slopeOf(n)) {
+                f.hasSlope = true;
+                f.slope = currentSlope(a, *state);
+            }
         anchors.push_back(f);
     }
     field.rebuild(lattice, anchors, fallback, from);
@@ -505,7 +518,8 @@ AnchorStoreStatistics AnchorStore::statistics() const {
     }
     s.poolBytes = sizeof(Impl) + m.pool.capacity() * sizeof(Anchor) +
                   m.alive.capacity() * sizeof(std::uint8_t) +
-                  m.freeList.capacity() * sizeof(std::int32_t);
+                  m.freeList.capacity() * sizeof(std::int32_t) +
+                  m.slopes.capacity() * sizeof(Impl::SlopeState);
     s.gridBytes = m.indexBytes();
     return s;
 }

@@ -32,6 +32,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -141,12 +142,6 @@ struct Anchor {
     bool regenerationRequested = false;  // age >= regenerateFraction x lifetime
     bool expired = false;                // age >= lifetime: fading out, then removed
     float relight = 1.0f;                // read as current x relight (AnchorStore::relight)
-    // The translational gradient (AnchorStoreSettings::gradients), blended as the value is:
-    // lerp(slopeFrom, slope, easeInOut(blendProgress)) x relight. hasSlope false: none (a
-    // store without gradients, an anchor read from a file).
-    ShSlope slope, slopeFrom;
-    bool hasSlope = false;
-    ShSlope currentSlope() const;
 
     double age_s(double now_s) const { return now_s - captureTime_s; }
 };
@@ -225,6 +220,12 @@ class AnchorStore {
     // The anchor at a lattice point (any level naming it), or nullptr. The pointer stays valid
     // until the next insert, remove, advance or load.
     const Anchor* find(const LatticeKey& key) const;
+    // The measured slope of the anchor at a lattice point (AnchorStoreSettings::gradients),
+    // blended as its value is (from the slope before the latest refresh, by easeInOut of the
+    // blend) and relit: none without an anchor, without gradients or for an anchor read from a
+    // file. (Kept beside the anchor pool, allocated by the first slope: a store without
+    // gradients pays nothing for them.)
+    std::optional<ShSlope> slope(const LatticeKey& key) const;
     std::size_t size() const;
     // Calls f for every anchor (unspecified order).
     void forEach(const std::function<void(const Anchor&)>& f) const;
@@ -338,6 +339,8 @@ class AnchorStore {
     // its checksum verified and its OpenVDB structure walked (AnchorStoreFile.h) before OpenVDB
     // parses it from memory with delayed loading off; then every grid, count and value is
     // checked (coefficients finite and within kMaxCoefficient, so no NaN enters the store).
+    // Measured slopes (AnchorStoreSettings::gradients) are not in the file: a loaded anchor has
+    // none until its next capture, and its cells take the lattice's slopes meanwhile.
     void load(const std::string& path);
 
   private:

@@ -42,6 +42,22 @@ struct AnchorStore::Impl {
     std::vector<Anchor> pool;
     std::vector<std::uint8_t> alive;
     std::vector<std::int32_t> freeList;
+    // Measured slopes (settings.gradients) by pool slot: the latest capture's and the one its
+    // blend started from; empty until the first slope arrives.
+    struct SlopeState {
+        ShSlope slope, from;
+        bool has = false;
+    };
+    std::vector<SlopeState> slopes;
+    SlopeState* slopeAt(std::int32_t slot) {
+        if (slopes.size() < pool.size()) slopes.resize(pool.size());
+        return &slopes[std::size_t(slot)];
+    }
+    const SlopeState* slopeOf(std::size_t slot) const {
+        return slot < slopes.size() && slopes[slot].has ? &slopes[slot] : nullptr;
+    }
+    // The slope interpolation reads: blended as the value, relit.
+    static ShSlope currentSlope(const Anchor& a, const SlopeState& s);
     std::size_t count = 0;
     double now = 0.0;
     ShRgb fallback;
@@ -100,6 +116,7 @@ struct AnchorStore::Impl {
             freeList.pop_back();
             pool[index] = anchor;
             alive[index] = 1;
+            if (std::size_t(index) < slopes.size()) slopes[std::size_t(index)] = SlopeState{};
         } else {
             index = std::int32_t(pool.size());
             pool.push_back(anchor);

@@ -338,20 +338,21 @@ TEST(AnchorInterpolation, BadSlopesAreDroppedAndSlopesBlend) {
     ShSlope nan{makeSh(std::numeric_limits<float>::quiet_NaN()), makeSh(1.0f), 10.0f};
     ASSERT_EQ(store.insert(c, makeSh(1.0f), {27.0, 2.0, 27.0}, 1e6, 0.0, &nan),
               AnchorStore::InsertResult::Inserted);
-    EXPECT_FALSE(store.find(c)->hasSlope);
+    EXPECT_FALSE(store.slope(c).has_value());
     ShSlope negative{makeSh(1.0f), makeSh(1.0f), -1.0f};
     store.advance(2.0);
     ASSERT_EQ(store.insert(c, makeSh(1.0f), {27.0, 2.0, 27.0}, 1e6, 0.0, &negative),
               AnchorStore::InsertResult::Refreshed);
-    EXPECT_FALSE(store.find(c)->hasSlope);
+    EXPECT_FALSE(store.slope(c).has_value());
     ShSlope a{makeSh(1.0f), makeSh(-1.0f), 10.0f}, b{makeSh(3.0f), makeSh(1.0f), 20.0f};
     store.advance(4.0);
     store.insert(c, makeSh(1.0f), {27.0, 2.0, 27.0}, 1e6, 0.0, &a);
     store.advance(6.0);  // blended to a
-    EXPECT_LT(maxDiff(store.find(c)->currentSlope().dx, a.dx), 1e-6);
+    ASSERT_TRUE(store.slope(c).has_value());
+    EXPECT_LT(maxDiff(store.slope(c)->dx, a.dx), 1e-6);
     store.insert(c, makeSh(1.0f), {27.0, 2.0, 27.0}, 1e6, 0.0, &b);
     store.advance(6.5);  // halfway: smoothstep(0.5) = 0.5
-    const ShSlope half = store.find(c)->currentSlope();
+    const ShSlope half = *store.slope(c);
     EXPECT_LT(maxDiff(half.dx, makeSh(2.0f)), 1e-5);
     EXPECT_LT(maxDiff(half.dz, makeSh(0.0f)), 1e-5);
     EXPECT_NEAR(half.validity_m, 15.0f, 1e-4f);
