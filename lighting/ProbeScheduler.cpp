@@ -260,6 +260,8 @@ std::optional<ProbeChoice> ProbeScheduler::choose(const AnchorStore& store, doub
                     }
                 }
                 if (gap) c.cost_s -= settings_.gapBonus_s;
+                c.cost_s -= settings_.coarseFirst_s * store.spacing_m(key.level) /
+                            candidates.coarsestSpacing_m;
             }
             const bool better = !best || c.cost_s < best->cost_s ||
                                 (c.cost_s == best->cost_s && packKey(c.key) < packKey(best->key));

@@ -18,6 +18,7 @@
 //                            cost = time until the camera comes nearest the point
 //                                   (min over path samples of tau + distance / max(speed, v_min))
 //                                 - gapBonus_s        if no anchor of its level is near it
+//                                 - coarseFirst_s x s_L / s_0   for a new point of level L
 //                                 + staleBias_s x (1 - urgency)  if an anchor is there but asks
 //                                                     for regeneration (urgency 0 when it asks,
 //                                                     1 when it expires)
@@ -65,6 +66,11 @@ struct ProbeSchedulerSettings {
     int maxWiden = 0;
     double minReachSpeed_mps = 10.0;  // speed assumed for time-to-reach when slower
     double gapBonus_s = 0.5;
+    // A new point of level L is ranked this x s_L / s_0 seconds earlier: at a cold start (the
+    // first frames, after a teleport) the coarse lattice, whose anchors reach furthest, is
+    // captured before the fine corridor near the camera. 0: off. (why this value:
+    // docs/TUNING.md "Scheduler")
+    double coarseFirst_s = 0.0;
     double staleBias_s = 1.0;
     // Adaptive density (thesis appendix B, "colour difference to neighbours"): a new point of a
     // level L >= 1 is skipped when the four anchors of the level L - 1 cell around it are all

@@ -204,6 +204,9 @@ Keys<ProbeSchedulerSettings> schedulerKeys() {
     k.number("gapBonus_s", "s", -1e3, 1e3,
              "priority of a point with no anchor of its level near it",
              [](T& t) -> double& { return t.gapBonus_s; });
+    k.number("coarseFirst_s", "s", 0.0, 1e3,
+             "a new point is ranked this x its spacing over the coarsest spacing earlier",
+             [](T& t) -> double& { return t.coarseFirst_s; });
     k.number("staleBias_s", "s", -1e3, 1e3,
              "cost of refreshing an anchor that asks for it, at urgency 0",
              [](T& t) -> double& { return t.staleBias_s; });

@@ -107,6 +107,7 @@ TEST(TuningPanel, EveryKeyOfTheSettingsFileIsInTheTable) {
                           "scheduler.maxWiden",
                           "scheduler.minReachSpeed_mps",
                           "scheduler.gapBonus_s",
+                          "scheduler.coarseFirst_s",
                           "scheduler.staleBias_s",
                           "scheduler.adaptiveThreshold",
                           "facesPerFrame",

@@ -191,6 +191,35 @@ TEST(ProbeScheduler, ChoosesNearTheCameraFirstSkipsFreshAndReturnsToStale) {
     EXPECT_TRUE(again->refresh);
 }
 
+// coarseFirst_s ranks a new point of level L s_L / s_0 x that many seconds earlier: with it
+// large, an empty store is filled coarsest level first (every level-0 point in its ring before
+// any finer one), then near the camera as before.
+TEST(ProbeScheduler, CoarseFirstFillsTheCoarseLatticeFirst) {
+    AnchorStoreSettings storeSettings;
+    storeSettings.blendTime_s = 0.0;
+    AnchorStore store(storeSettings);
+    ProbeSchedulerSettings settings;
+    settings.coarseFirst_s = 100.0;
+    ProbeScheduler s(settings);
+    s.observe({100.4, 0.0, 50.2}, {0, 0, 0}, 0.0);
+    std::vector<int> levels;
+    while (auto c = s.choose(store, 10.0)) {
+        levels.push_back(c->key.level);
+        store.insert(c->key, ShRgb{}, {store.keyX_m(c->key), 2.0, store.keyZ_m(c->key)}, 100.0);
+        if (levels.size() > 500) break;
+    }
+    ASSERT_GT(levels.size(), 5u);
+    EXPECT_EQ(levels.front(), 0);
+    EXPECT_TRUE(std::is_sorted(levels.begin(), levels.end()));  // coarse to fine
+    EXPECT_GT(std::count(levels.begin(), levels.end(), 0), 1);
+    EXPECT_GT(levels.back(), 0);
+    // Off (the default): the first choice is the finest point nearest the camera.
+    ProbeScheduler plain{ProbeSchedulerSettings{}};
+    AnchorStore empty(storeSettings);
+    plain.observe({100.4, 0.0, 50.2}, {0, 0, 0}, 0.0);
+    EXPECT_GT(plain.choose(empty, 10.0)->key.level, 0);
+}
+
 TEST(ProbeScheduler, IdlesOnceTheRingsAreFreshUnlessToldToWiden) {
     // A camera standing still: by default the scheduler fills each level's ring around it
     // (finestRingCells, coarseRingCells of the level's spacing) and then idles; with maxWiden 2

@@ -59,6 +59,7 @@ const Key kVolumeKeys[] = {
     {"scheduler", "maxWiden", true},
     {"scheduler", "minReachSpeed_mps", false},
     {"scheduler", "gapBonus_s", false},
+    {"scheduler", "coarseFirst_s", false},
     {"scheduler", "staleBias_s", false},
     {nullptr, "facesPerFrame", true},
     {nullptr, "nominalFrameTime_s", false},
