@@ -139,10 +139,12 @@ void AnchorField::rebuild(const FieldLattice& lattice, const std::vector<FieldAn
     finest_ = -1;
 
     for (auto& m : anchorAt_) m.clear();
+    anySlope_ = false;
     for (std::uint32_t n = 0; n < anchors.size(); ++n) {
         const FieldAnchor& a = anchors[n];
         if (a.presence > 0.0f && a.level >= 0 && a.level < lattice_.levels)
             anchorAt_[a.level][CellKey{a.i, a.k}] = n;
+        anySlope_ = anySlope_ || a.hasSlope;
     }
     anchors_ = &anchors;  // for anchorAt() during the build only
     for (int L = 0; L < lattice_.levels; ++L) {
@@ -465,7 +467,7 @@ void AnchorField::cornerInReach(int L, const CellKey& c, const ReachPoint& own,
         out[3 * kStride + j] = float(oxz + k * (lxz[j] - oxz));
     }
     // An anchor with a measured slope gives its point that slope, weighted by its presence.
-    const FieldAnchor* anchor = anchorAt(L, c);
+    const FieldAnchor* anchor = anySlope_ ? anchorAt(L, c) : nullptr;
     if (anchor && anchor->hasSlope) {
         // Over a cell much wider than the slope's radius of validity, the slope describes the
         // near surfaces around the probe, not the way to the next lattice point: its weight

@@ -243,6 +243,7 @@ class AnchorField {
     // lattice point (weight, then 27 sums) and the anchors' residuals.
     std::array<tsl::hopscotch_map<CellKey, std::uint32_t, CellKeyHash>, kFieldMaxLevels> anchorAt_;
     const std::vector<FieldAnchor>* anchors_ = nullptr;
+    bool anySlope_ = false;  // some anchor of the rebuild has a measured slope
     tsl::hopscotch_map<CellKey, std::array<double, 28>, CellKeyHash> reach_;
     tsl::hopscotch_map<CellKey, std::array<double, 27>, CellKeyHash> residuals_;
 };

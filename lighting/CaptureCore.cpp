@@ -236,10 +236,7 @@ std::vector<CompletedProbe> CaptureCore::takeCompleted() {
             continue;
         }
         std::optional<ShSlope> slope;
-        if (c.gradient) {
-            slope = toFloat(*c.gradient);
-            if (!acceptable(slope->dx) || !acceptable(slope->dz)) slope.reset();
-        }
+        if (c.gradient) slope = toFloat(*c.gradient);
         out.push_back({c.job, sh, slope});
     }
     completed_.clear();

@@ -126,7 +126,7 @@ struct CompletedProbe {
     ProbeJob job;
     ShRgb sh;  // the coefficients in float
     // Their translational gradient along the ground (lighting/ShGradient.h), when the method
-    // asked for it (CaptureCore::setGradients) and it is finite and in range.
+    // asked for it (CaptureCore::setGradients); the anchor store drops one that is not finite.
     std::optional<ShSlope> slope;
 };
 
@@ -175,7 +175,6 @@ class CaptureCore {
     // Whether probes are captured with their distances and completed with their SH's
     // translational gradient (CompletedProbe::slope); off by default. From the next probe on.
     void setGradients(bool on) { gradients_ = on; }
-    bool gradients() const { return gradients_; }
 
     // Drops the probe in progress (its point left the method's structure).
     void abortJob() { job_.reset(); }

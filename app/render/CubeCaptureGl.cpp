@@ -334,10 +334,11 @@ CubeCaptureStats CubeCaptureGl::render(const glm::dvec3& position_m, double time
             for (int j = 0; j < n_; ++j)
                 for (int i = 0; i < n_; ++i) {
                     const size_t t = size_t(j) * n_ + i;
-                    const float depth = depthRows_[size_t(f - lo) * face + t];
+                    const size_t read = size_t(f - lo) * face + t;
+                    const float depth = depthRows_[read];
                     // Depth 0 is the cleared far plane (sky); a texel the sky shader filled
                     // reads alpha 1 (the sun's test below).
-                    const bool sky = !(depth > 0.0f) || rgba_[(size_t(f - lo) * face + t) * 4 + 3] >= 0.5f;
+                    const bool sky = !(depth > 0.0f) || rgba_[read * 4 + 3] >= 0.5f;
                     (*distance_m)[size_t(f) * face + t] =
                         sky ? kFar
                             : float(double(kCaptureNear_m) / double(depth) *

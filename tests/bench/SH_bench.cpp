@@ -10,6 +10,7 @@
 
 #include "lighting/CubeMapProjector.h"
 #include "lighting/SH.h"
+#include "lighting/ShGradient.h"
 
 namespace {
 
@@ -33,6 +34,20 @@ void BM_CubeMapProjection(benchmark::State& state) {
     state.SetItemsProcessed(state.iterations() * 6 * n * n);  // texels
 }
 BENCHMARK(BM_CubeMapProjection)->Arg(16)->Arg(32)->Arg(64);
+
+// The translational gradient of one probe (lighting/ShGradient.h): every texel a surface at
+// 2 to 50 m (none sky, the worst case), once per completed probe.
+void BM_ShGroundGradient(benchmark::State& state) {
+    const int n = int(state.range(0));
+    const auto rgb = randomMap(n);
+    std::mt19937 rng(2);
+    std::uniform_real_distribution<float> d(2.0f, 50.0f);
+    std::vector<float> distance(std::size_t(6) * n * n);
+    for (auto& v : distance) v = d(rng);
+    for (auto _ : state) benchmark::DoNotOptimize(amb::shGroundGradient(n, rgb, distance));
+    state.SetItemsProcessed(state.iterations() * 6 * n * n);  // texels
+}
+BENCHMARK(BM_ShGroundGradient)->Arg(16)->Arg(32)->Unit(benchmark::kMicrosecond);
 
 // One face (the per-frame cost when one face is captured per frame).
 void BM_CubeMapProjectionOneFace(benchmark::State& state) {
