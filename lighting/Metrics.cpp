@@ -424,8 +424,18 @@ void ErrorMeter::referenceFrame(int index, double timeOfDay_h, const glm::dvec3&
         r.position_m = o.position_m;
         const ReferenceSample& ref = reference(index, o.position_m, timeOfDay_h);
         const ShRgb coarse = oracleAt(index, o.position_m, timeOfDay_h);
-        r.terms = budgetTerms(ref, coarse, ideal(o.groundX_m, o.groundZ_m),
-                              method.shAt(o.groundX_m, o.groundZ_m), rule_);
+        const ShRgb applied = method.shAt(o.groundX_m, o.groundZ_m);
+        r.terms = budgetTerms(ref, coarse, ideal(o.groundX_m, o.groundZ_m), applied, rule_);
+        // At the drawn normal: the object's SH through the normal of the surface the witness
+        // stands for, against the reference captured at the witness (kScreenProbeOffset_m out
+        // from that surface) through the same normal.
+        const glm::dvec3 n = glm::normalize(o.normal);
+        const glm::dvec3 eRef(
+            surfaceEntry(index, o.position_m - kScreenProbeOffset_m * n, n, timeOfDay_h).irradiance);
+        const glm::dvec3 e = glm::max(glm::dvec3(shIrradiance(applied, glm::vec3(n))), glm::dvec3(0.0));
+        r.drawnError = irradianceRelativeError(e, eRef);
+        r.drawnBudget.drawn = r.drawnError;
+        r.drawnBudget.drawnBias = irradianceBias(e, eRef);
         referenceWitnesses_.push_back(r);
     }
 }
@@ -540,6 +550,15 @@ std::vector<BudgetTerms> ErrorMeter::objectBudget(ObjectKind kind) const {
     std::vector<BudgetTerms> out;
     for (const ReferenceWitness& r : referenceWitnesses_)
         if (r.ring < 0 && r.object == kind) out.push_back(r.terms);
+    return out;
+}
+
+std::vector<double> ErrorMeter::objectDrawnErrors(ObjectKind kind, bool bias) const {
+    std::vector<double> out;
+    for (const ReferenceWitness& r : referenceWitnesses_) {
+        const double v = bias ? r.drawnBudget.drawnBias : r.drawnError;
+        if (r.ring < 0 && r.object == kind && std::isfinite(v)) out.push_back(v);
+    }
     return out;
 }
 

@@ -199,7 +199,9 @@ struct ReferenceWitness {
     ObjectKind object = ObjectKind::Car;
     glm::dvec3 position_m{0.0};  // where the reference and the coarse capture look from
     BudgetTerms terms;
-    // A terrain witness as the screen shows it (NaN when not taken: objects, or no patch known):
+    // An object witness at its drawn normal (ObjectWitness::normal): the object's SH through
+    // that normal against the reference captured at the witness through the same normal.
+    // A terrain witness as the screen shows it (NaN when not taken: no patch known):
     // the ambient the draw applies at the ground point, read as the draw reads it (the
     // corners of the terrain patch drawn there, each at its point and normal through
     // cornerIrradianceAtPoints, interpolated bilinearly; on a patch lit per vertex, the vertices
@@ -276,6 +278,9 @@ class ErrorMeter {
     // Budget terms of the terrain witnesses (ring >= 0, or one ring), or of one object kind.
     std::vector<BudgetTerms> terrainBudget(int ring = -1) const;
     std::vector<BudgetTerms> objectBudget(ObjectKind kind) const;
+    // The object witnesses of a kind at their drawn normal (ReferenceWitness::drawnError), or
+    // their signed bias there.
+    std::vector<double> objectDrawnErrors(ObjectKind kind, bool bias = false) const;
     // True when the latest frame() was a reference frame (screen witnesses are taken then).
     bool referenceFrameNow() const { return referenceNow_; }
     void screenFrame(int frameIndex, double timeOfDay_h, const std::vector<ScreenWitness>& pixels);

@@ -184,6 +184,7 @@ std::vector<ObjectWitness> WorldProbeEnvironment::objectWitnesses(double cameraX
         base.kind = ObjectKind::TreeBase;
         base.groundX_m = p.position_m.x, base.groundZ_m = p.position_m.z;
         base.position_m = p.position_m + 0.5 * crown * toward + glm::dvec3(0.0, 1.0, 0.0);
+        base.normal = toward;
         out.push_back(base);
         ObjectWitness top = base;
         top.kind = ObjectKind::TreeCrown;

@@ -21,6 +21,9 @@
 //   range is as likely; each gives a base witness (1 m up, half its crown radius out from the
 //   trunk, towards the camera: the lit trunk) and a crown witness (at 60 % of its height, just
 //   outside its crown towards the camera). An object's ambience is read at its ground point.
+//   Each also carries the normal of the surface it stands for as the camera sees it, at which
+//   the error at the drawn normal is taken: a tree's trunk and crown face the camera
+//   (horizontally), the car's roof faces up.
 #pragma once
 
 #include <array>
@@ -42,6 +45,7 @@ struct ObjectWitness {
     ObjectKind kind = ObjectKind::Car;
     glm::dvec3 position_m{0.0};        // where the reference looks from
     double groundX_m = 0.0, groundZ_m = 0.0;  // where the draw reads the object's ambience
+    glm::dvec3 normal{0.0, 1.0, 0.0};  // the drawn surface's normal there (unit)
 };
 
 // The terrain patch the main view draws around a ground point for a camera (world/TerrainPatch.h

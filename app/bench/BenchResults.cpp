@@ -101,6 +101,9 @@ const std::vector<std::string> kColumns = {"replay",
                                            "car_error_mean",
                                            "tree_base_error_mean",
                                            "tree_crown_error_mean",
+                                           "car_drawn_error_mean",
+                                           "tree_base_drawn_error_mean",
+                                           "tree_crown_drawn_error_mean",
                                            "screen_error_mean",
                                            "screen_terrain_error_mean",
                                            "screen_road_error_mean",
@@ -176,8 +179,11 @@ std::map<std::string, std::string> resultRow(const Job& job) {
         put("budget_total_rms", number(b, {"rmsTotal"}));
         for (const char* term : {"truncation", "capture", "spacing", "schedule", "closure"})
             put(std::string("budget_") + term, number(b, {term}));
-        for (const char* kind : {"car", "tree_base", "tree_crown"})
+        for (const char* kind : {"car", "tree_base", "tree_crown"}) {
             put(std::string(kind) + "_error_mean", number(ref, {"objects", kind, "error", "mean"}));
+            put(std::string(kind) + "_drawn_error_mean",
+                number(ref, {"objects", kind, "drawn", "mean"}));
+        }
         put("reference_s", number(ref, {"reference_s"}));
         if (number(ref, {"drawn", "error", "count"}) > 0) {
             put("drawn_error_mean", number(ref, {"drawn", "error", "mean"}));
@@ -410,7 +416,10 @@ void writeErrorBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
            "**d** scheduling, staleness and blending (the method against its ideal volume). "
            "Closure = (a² + b² + c² + d²) / total²: 1 when the terms add up as squares. Methods "
            "without a lattice show c + d in column d. Objects: mean error against the reference "
-           "at the car (1 m above its ground point) and at tree bases and crowns within 6-48 m. "
+           "at the car (1 m above its ground point) and at tree bases and crowns within 6-48 m, "
+           "at the drawn normal (the object's SH through the normal of the surface the witness "
+           "stands for: a tree's trunk and crown facing the camera, the car's roof), then in "
+           "brackets over the sphere of normals. "
            "Screen: the screen-weighted mean error, at random pixels of the main view (terrain, "
            "road, plants and the car), of the ambient irradiance as the draw applies it against "
            "the reference at that surface point and normal (terrain / road / object means in "
@@ -440,7 +449,8 @@ void writeErrorBudgetSection(std::ostream& out, const std::vector<Job>& jobs,
                 << " | " << fmt(number(b, {"error", "mean"}), "%.4f") << " | "
                 << fmt(number(b, {"selfError", "mean"}), "%.4f");
             for (const char* kind : {"car", "tree_base", "tree_crown"})
-                out << " | " << fmt(number(ref, {"objects", kind, "error", "mean"}), "%.3f");
+                out << " | " << fmt(number(ref, {"objects", kind, "drawn", "mean"}), "%.3f") << " ("
+                    << fmt(number(ref, {"objects", kind, "error", "mean"}), "%.3f") << ")";
             const auto screenMean = [&](const char* kind) {
                 return number(ref, {"screen", kind, "count"}) > 0
                            ? number(ref, {"screen", kind, "mean"})

@@ -709,8 +709,13 @@ std::string measurementJson(const ErrorMeter& meter) {
             drawnBudgetRings.push_back(drawnBudgetJson(meter.drawnBudgets(r)));
         drawnJson["budgetByRing"] = drawnBudgetRings;
         json objects = json::object();
-        for (int k = 0; k < kObjectKinds; ++k)
-            objects[toString(ObjectKind(k))] = budgetJson(meter.objectBudget(ObjectKind(k)));
+        for (int k = 0; k < kObjectKinds; ++k) {
+            json o = budgetJson(meter.objectBudget(ObjectKind(k)));
+            // At the drawn normal (ReferenceWitness::drawnError), with its signed bias.
+            o["drawn"] = summaryJson(summarize(meter.objectDrawnErrors(ObjectKind(k))));
+            o["drawnBias"] = summaryJson(summarize(meter.objectDrawnErrors(ObjectKind(k), true)));
+            objects[toString(ObjectKind(k))] = o;
+        }
         j["reference"] = {{"faceSize", rs.faceSize},
                           {"scene", "full"},
                           {"every", rs.every},

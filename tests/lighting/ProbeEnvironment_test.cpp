@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
+#include <glm/vec2.hpp>
 
 #include "world/Conventions.h"
 #include "world/Road.h"
@@ -103,6 +104,35 @@ TEST(WorldProbeEnvironment, FallbackCubeMapFiniteAndFollowsTheDay) {
     EXPECT_GT(noon[zenith + 2], noon[zenith + 0]);
     EXPECT_GT(env.sunAngularSpeed_radPerHour(), 0.0);
     EXPECT_LE(env.sunAngularSpeed_radPerHour(), kPi / 12.0 + 1e-12);
+}
+
+// Object witnesses carry the normal of the surface they stand for, at which the error at the
+// drawn normal is taken: the car's roof faces up; a tree's base and crown witnesses face the
+// camera horizontally (the way from the trunk to the camera) and stand on that side of it.
+TEST(WorldProbeEnvironment, ObjectWitnessesFaceTheCamera) {
+    const WorldProbeEnvironment env(defaultWorld());
+    int trees = 0;
+    for (int i = 0; i < 6; ++i) {
+        const double cx = 300.0 * i - 700.0, cz = 220.0 * i - 500.0;
+        const auto witnesses = env.objectWitnesses(cx, cz, 3, 6.0, 48.0, 1.0, i);
+        ASSERT_FALSE(witnesses.empty());
+        EXPECT_EQ(witnesses[0].kind, ObjectKind::Car);
+        EXPECT_NEAR(glm::length(witnesses[0].normal - glm::dvec3(0.0, 1.0, 0.0)), 0.0, 1e-12);
+        for (std::size_t w = 1; w < witnesses.size(); ++w) {
+            const ObjectWitness& o = witnesses[w];
+            ASSERT_TRUE(o.kind == ObjectKind::TreeBase || o.kind == ObjectKind::TreeCrown);
+            EXPECT_NEAR(glm::length(o.normal), 1.0, 1e-9);
+            EXPECT_NEAR(o.normal.y, 0.0, 1e-12);
+            const glm::dvec2 toCamera =
+                glm::normalize(glm::dvec2(cx - o.groundX_m, cz - o.groundZ_m));
+            EXPECT_NEAR(o.normal.x * toCamera.x + o.normal.z * toCamera.y, 1.0, 1e-9);
+            // The witness stands out from the trunk along its normal.
+            const glm::dvec2 out(o.position_m.x - o.groundX_m, o.position_m.z - o.groundZ_m);
+            EXPECT_GT(out.x * o.normal.x + out.y * o.normal.z, 0.0);
+            ++trees;
+        }
+    }
+    EXPECT_GT(trees, 6);  // the default world's woods give most cameras trees in range
 }
 
 // The cell a patch lit per vertex interpolates at a point is the drawn mesh's: over a field of

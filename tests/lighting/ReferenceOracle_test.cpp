@@ -288,6 +288,7 @@ struct FreshCaptureMethod final : AmbienceMethod {
     const ProbeEnvironment* environment = nullptr;
     MeasureSettings settings;
     float gain = 0.0f;
+    bool mirrorY = false;  // its SH mirrored top to bottom (the terms odd in y negated)
     const SurfaceLight* light = nullptr;  // what its captures light their surfaces with
     std::string methodName() const override { return "fresh"; }
     const SurfaceLight* captureSurfaceLight() const override { return light; }
@@ -295,7 +296,15 @@ struct FreshCaptureMethod final : AmbienceMethod {
     void captureStage() override {}
     void storeStage() override {}
     ShRgb shAt(double x_m, double z_m) const override {
-        return oracleSh(*capture, *environment, settings, x_m, z_m, 12.0) * (1.0f + gain);
+        ShRgb sh = oracleSh(*capture, *environment, settings, x_m, z_m, 12.0) * (1.0f + gain);
+        if (mirrorY) {
+            // Y_k(x, -y, z) = +-Y_k(x, y, z): the sign of each term, read off a generic direction.
+            const glm::dvec3 d = glm::normalize(glm::dvec3(0.3, 0.5, 0.8));
+            const auto up = shBasis(d), down = shBasis(glm::dvec3(d.x, -d.y, d.z));
+            for (int k = 0; k < kShCoefficients; ++k)
+                if (up[std::size_t(k)] * down[std::size_t(k)] < 0.0) sh.c[std::size_t(k)] *= -1.0f;
+        }
+        return sh;
     }
     MethodStatistics methodStatistics() const override { return {}; }
 };
@@ -367,6 +376,82 @@ TEST(DrawnBudget, FreshCapturesMakeTheFarFieldTermVanish) {
     EXPECT_LT(std::fabs(exact.sceneBias), 0.05);  // the fakes differ only in face size
     EXPECT_NEAR(off.sceneBias, exact.sceneBias, 1e-9);
     EXPECT_NEAR(off.placedBias, exact.placedBias, 1e-9);
+}
+
+namespace {
+
+// A flat world with two object witnesses 10 m from the camera's ground point: the car (its roof,
+// facing up) and a tree's trunk facing the camera (horizontally).
+class ObjectEnvironment final : public testing_support::FlatProbeEnvironment {
+  public:
+    std::vector<ObjectWitness> objectWitnesses(double cx, double cz, int, double, double, double,
+                                               int) const override {
+        ObjectWitness car;
+        car.groundX_m = cx, car.groundZ_m = cz;
+        car.position_m = {cx, 1.0, cz};
+        ObjectWitness trunk;
+        trunk.kind = ObjectKind::TreeBase;
+        trunk.groundX_m = cx + 10.0, trunk.groundZ_m = cz;
+        trunk.normal = {-1.0, 0.0, 0.0};  // towards the camera
+        trunk.position_m = {cx + 9.0, 1.0, cz};
+        return {car, trunk};
+    }
+};
+
+struct ObjectFigures {
+    double carDrawn, carBias, trunkDrawn, trunkBias, trunkSphere;
+    std::size_t count;
+};
+
+ObjectFigures objectFigures(float gain, bool mirrorY) {
+    testing_support::FakeCubeCapture coarse(8), full(16);
+    ObjectEnvironment environment;
+    MeasureSettings ms;
+    ms.every = 1;
+    ErrorMeter meter(coarse, environment, ms);
+    ReferenceSettings rs;
+    rs.every = 1;
+    meter.attachReference(full, rs, true);
+    FreshCaptureMethod method;
+    method.capture = &coarse, method.environment = &environment, method.settings = ms;
+    method.gain = gain, method.mirrorY = mirrorY;
+    for (int f = 0; f < 3; ++f)
+        meter.frame(f, f / 30.0, 12.0, {40.0 * f, 0.0, 25.0}, 10.0, method);
+    const auto mean = [](const std::vector<double>& v) {
+        double s = 0.0;
+        for (double x : v) s += x;
+        return v.empty() ? std::nan("") : s / double(v.size());
+    };
+    double sphere = 0.0;
+    const auto trunk = meter.objectBudget(ObjectKind::TreeBase);
+    for (const BudgetTerms& t : trunk) sphere += t.total / double(trunk.size());
+    return {mean(meter.objectDrawnErrors(ObjectKind::Car)),
+            mean(meter.objectDrawnErrors(ObjectKind::Car, true)),
+            mean(meter.objectDrawnErrors(ObjectKind::TreeBase)),
+            mean(meter.objectDrawnErrors(ObjectKind::TreeBase, true)), sphere,
+            meter.objectDrawnErrors(ObjectKind::TreeBase).size()};
+}
+
+}  // namespace
+
+// Object witnesses are graded at the normal of the surface they stand for (ObjectWitness::normal)
+// as well as over the sphere: a method 1.5 times too bright is 1.5 times as bright there; one
+// whose field is mirrored top to bottom keeps every horizontal normal's irradiance (the terms odd
+// in y vanish there), so the trunk facing the camera is graded as before while the car's roof and
+// the sphere figure see the mirror.
+TEST(ReferenceOracle, ObjectWitnessesAreGradedAtTheirDrawnNormal) {
+    const ObjectFigures exact = objectFigures(0.0f, false);
+    ASSERT_EQ(exact.count, 3u);  // one a frame
+    EXPECT_LT(exact.carDrawn, 0.05);    // the fakes differ in face size only
+    EXPECT_LT(exact.trunkDrawn, 0.05);
+    const ObjectFigures bright = objectFigures(0.5f, false);
+    EXPECT_NEAR(bright.carBias + 1.0, 1.5 * (exact.carBias + 1.0), 1e-4);
+    EXPECT_NEAR(bright.trunkBias + 1.0, 1.5 * (exact.trunkBias + 1.0), 1e-4);
+    const ObjectFigures mirrored = objectFigures(0.0f, true);
+    EXPECT_NEAR(mirrored.trunkDrawn, exact.trunkDrawn, 1e-4);
+    EXPECT_NEAR(mirrored.trunkBias, exact.trunkBias, 1e-4);
+    EXPECT_GT(mirrored.carDrawn, exact.carDrawn + 0.1);  // the roof now sees the ground's light
+    EXPECT_GT(mirrored.trunkSphere, exact.trunkSphere + 0.1);
 }
 
 // The model step's split lights its coarse captures as the method's own captures light their
