@@ -36,6 +36,11 @@ double plantTop_m(PlantKind kind) {
     return tops[static_cast<int>(kind)];
 }
 
+// Object witnesses (see Object witnesses): how far above the terrain a witness must stand (the
+// reference's offset from a surface), and a plant's reach, crown or rock, at the largest scale.
+constexpr double kWitnessClearance_m = 0.25;
+constexpr double kLargestPlant_m = 3.2 * 2.0;
+
 }  // namespace
 
 WorldProbeEnvironment::WorldProbeEnvironment(const World& world,
@@ -43,11 +48,10 @@ WorldProbeEnvironment::WorldProbeEnvironment(const World& world,
     : world_(world), settings_(s) {}
 
 glm::dvec3 WorldProbeEnvironment::placeProbe(double x_m, double z_m, double maxAside_m) const {
-    const double kLargestFootprint_m = 3.2 * 2.0;  // largest crown x a generous scale
     const double clearance = settings_.clearance_m;
     const double water = world_.settings().waterLevel_m;
     const std::vector<Plant> plants =
-        world_.vegetation().inDisc(x_m, z_m, kLargestFootprint_m + maxAside_m + clearance);
+        world_.vegetation().inDisc(x_m, z_m, kLargestPlant_m + maxAside_m + clearance);
     auto blocking = [&](double x, double z) -> const Plant* {
         for (const Plant& p : plants) {
             const double r = Vegetation::footprintRadius_m(p.kind) * p.scale + clearance;
@@ -175,8 +179,24 @@ std::vector<ObjectWitness> WorldProbeEnvironment::objectWitnesses(double cameraX
     }
     std::sort(candidates.begin(), candidates.end(),
               [](const auto& a, const auto& b) { return a.first < b.first; });
-    for (int t = 0; t < trees && t < int(candidates.size()); ++t) {
-        const Plant& p = candidates[std::size_t(t)].second;
+    // A witness stands in the open: kWitnessClearance_m above the terrain (its reference is
+    // captured there) and outside every other plant's spheres (a crown's, a trunk's, a rock's).
+    // A point inside another plant shows nothing the camera sees; that tree is passed over.
+    const auto clear = [&](const glm::dvec3& at, const Plant& own) {
+        if (at.y < world_.height(at.x, at.z) + kWitnessClearance_m) return false;
+        for (const Plant& q : world_.vegetation().inDisc(at.x, at.z, kLargestPlant_m)) {
+            if (q.position_m == own.position_m) continue;
+            for (const PlantSphere& sphere : Vegetation::spheres(q.kind)) {
+                const glm::dvec3 c = q.position_m + double(q.scale) * sphere.centre_m;
+                const double r = double(q.scale) * sphere.radius_m;
+                if (glm::dot(at - c, at - c) < r * r) return false;
+            }
+        }
+        return true;
+    };
+    int taken = 0;
+    for (std::size_t t = 0; taken < trees && t < candidates.size(); ++t) {
+        const Plant& p = candidates[t].second;
         glm::dvec3 toward(cameraX_m - p.position_m.x, 0.0, cameraZ_m - p.position_m.z);
         toward /= std::max(glm::length(toward), 1e-9);
         const double crown = Vegetation::footprintRadius_m(p.kind) * p.scale;
@@ -185,12 +205,14 @@ std::vector<ObjectWitness> WorldProbeEnvironment::objectWitnesses(double cameraX
         base.groundX_m = p.position_m.x, base.groundZ_m = p.position_m.z;
         base.position_m = p.position_m + 0.5 * crown * toward + glm::dvec3(0.0, 1.0, 0.0);
         base.normal = toward;
-        out.push_back(base);
         ObjectWitness top = base;
         top.kind = ObjectKind::TreeCrown;
         top.position_m = p.position_m + (crown + settings_.clearance_m) * toward +
                          glm::dvec3(0.0, 0.6 * plantTop_m(p.kind) * p.scale, 0.0);
+        if (!clear(base.position_m, p) || !clear(top.position_m, p)) continue;
+        out.push_back(base);
         out.push_back(top);
+        ++taken;
     }
     return out;
 }

@@ -126,13 +126,23 @@ TEST(WorldProbeEnvironment, ObjectWitnessesFaceTheCamera) {
             const glm::dvec2 toCamera =
                 glm::normalize(glm::dvec2(cx - o.groundX_m, cz - o.groundZ_m));
             EXPECT_NEAR(o.normal.x * toCamera.x + o.normal.z * toCamera.y, 1.0, 1e-9);
-            // The witness stands out from the trunk along its normal.
+            // The witness stands out from the trunk along its normal, in the open: above the
+            // terrain and outside every other plant's spheres.
             const glm::dvec2 out(o.position_m.x - o.groundX_m, o.position_m.z - o.groundZ_m);
             EXPECT_GT(out.x * o.normal.x + out.y * o.normal.z, 0.0);
+            EXPECT_GE(o.position_m.y, defaultWorld().height(o.position_m.x, o.position_m.z) + 0.25);
+            for (const Plant& q : defaultWorld().vegetation().inDisc(o.position_m.x, o.position_m.z, 8.0)) {
+                if (q.position_m.x == o.groundX_m && q.position_m.z == o.groundZ_m) continue;
+                for (const PlantSphere& sphere : Vegetation::spheres(q.kind)) {
+                    const glm::dvec3 c = q.position_m + double(q.scale) * sphere.centre_m;
+                    EXPECT_GE(glm::length(o.position_m - c), double(q.scale) * sphere.radius_m);
+                }
+            }
             ++trees;
         }
     }
     EXPECT_GT(trees, 6);  // the default world's woods give most cameras trees in range
+    EXPECT_LE(trees, 6 * 3 * 2);
 }
 
 // The cell a patch lit per vertex interpolates at a point is the drawn mesh's: over a field of
