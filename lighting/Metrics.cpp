@@ -431,8 +431,10 @@ void ErrorMeter::referenceFrame(int index, double timeOfDay_h, const glm::dvec3&
         // from that surface) through the same normal.
         const glm::dvec3 n = glm::normalize(o.normal);
         const glm::dvec3 eRef(
-            surfaceEntry(index, o.position_m - kScreenProbeOffset_m * n, n, timeOfDay_h).irradiance);
-        const glm::dvec3 e = glm::max(glm::dvec3(shIrradiance(applied, glm::vec3(n))), glm::dvec3(0.0));
+            surfaceEntry(index, o.position_m - kScreenProbeOffset_m * n, n, timeOfDay_h)
+                .irradiance);
+        const glm::dvec3 e =
+            glm::max(glm::dvec3(shIrradiance(applied, glm::vec3(n))), glm::dvec3(0.0));
         r.drawnError = irradianceRelativeError(e, eRef);
         r.drawnBudget.drawn = r.drawnError;
         r.drawnBudget.drawnBias = irradianceBias(e, eRef);

@@ -47,7 +47,7 @@ struct ObjectWitness {
     ObjectKind kind = ObjectKind::Car;
     glm::dvec3 position_m{0.0};        // where the reference looks from
     double groundX_m = 0.0, groundZ_m = 0.0;  // where the draw reads the object's ambience
-    glm::dvec3 normal{0.0, 1.0, 0.0};  // the drawn surface's normal there (unit)
+    glm::dvec3 normal{0.0, 1.0, 0.0};         // the drawn surface's normal there (unit)
 };
 
 // The terrain patch the main view draws around a ground point for a camera (world/TerrainPatch.h

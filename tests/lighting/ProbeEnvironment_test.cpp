@@ -131,7 +131,8 @@ TEST(WorldProbeEnvironment, ObjectWitnessesFaceTheCamera) {
             const glm::dvec2 out(o.position_m.x - o.groundX_m, o.position_m.z - o.groundZ_m);
             EXPECT_GT(out.x * o.normal.x + out.y * o.normal.z, 0.0);
             EXPECT_GE(o.position_m.y, defaultWorld().height(o.position_m.x, o.position_m.z) + 0.25);
-            for (const Plant& q : defaultWorld().vegetation().inDisc(o.position_m.x, o.position_m.z, 8.0)) {
+            for (const Plant& q :
+                 defaultWorld().vegetation().inDisc(o.position_m.x, o.position_m.z, 8.0)) {
                 if (q.position_m.x == o.groundX_m && q.position_m.z == o.groundZ_m) continue;
                 for (const PlantSphere& sphere : Vegetation::spheres(q.kind)) {
                     const glm::dvec3 c = q.position_m + double(q.scale) * sphere.centre_m;

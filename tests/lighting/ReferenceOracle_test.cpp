@@ -415,8 +415,7 @@ ObjectFigures objectFigures(float gain, bool mirrorY) {
     FreshCaptureMethod method;
     method.capture = &coarse, method.environment = &environment, method.settings = ms;
     method.gain = gain, method.mirrorY = mirrorY;
-    for (int f = 0; f < 3; ++f)
-        meter.frame(f, f / 30.0, 12.0, {40.0 * f, 0.0, 25.0}, 10.0, method);
+    for (int f = 0; f < 3; ++f) meter.frame(f, f / 30.0, 12.0, {40.0 * f, 0.0, 25.0}, 10.0, method);
     const auto mean = [](const std::vector<double>& v) {
         double s = 0.0;
         for (double x : v) s += x;
@@ -428,7 +427,8 @@ ObjectFigures objectFigures(float gain, bool mirrorY) {
     return {mean(meter.objectDrawnErrors(ObjectKind::Car)),
             mean(meter.objectDrawnErrors(ObjectKind::Car, true)),
             mean(meter.objectDrawnErrors(ObjectKind::TreeBase)),
-            mean(meter.objectDrawnErrors(ObjectKind::TreeBase, true)), sphere,
+            mean(meter.objectDrawnErrors(ObjectKind::TreeBase, true)),
+            sphere,
             meter.objectDrawnErrors(ObjectKind::TreeBase).size()};
 }
 
@@ -441,8 +441,8 @@ ObjectFigures objectFigures(float gain, bool mirrorY) {
 // the sphere figure see the mirror.
 TEST(ReferenceOracle, ObjectWitnessesAreGradedAtTheirDrawnNormal) {
     const ObjectFigures exact = objectFigures(0.0f, false);
-    ASSERT_EQ(exact.count, 3u);  // one a frame
-    EXPECT_LT(exact.carDrawn, 0.05);    // the fakes differ in face size only
+    ASSERT_EQ(exact.count, 3u);       // one a frame
+    EXPECT_LT(exact.carDrawn, 0.05);  // the fakes differ in face size only
     EXPECT_LT(exact.trunkDrawn, 0.05);
     const ObjectFigures bright = objectFigures(0.5f, false);
     EXPECT_NEAR(bright.carBias + 1.0, 1.5 * (exact.carBias + 1.0), 1e-4);
