@@ -458,6 +458,14 @@ void ErrorMeter::screenFrame(int frameIndex, double timeOfDay_h,
                              const std::vector<ScreenWitness>& pixels) {
     if (!reference_) throw InputError("--screen-witnesses", "needs the reference oracle");
     for (const ScreenWitness& p : pixels) {
+        // A reference inside a plant or the terrain sees nothing the pixel does: there the main
+        // view left out a plant the full scene has (too few pixels, or beyond its range) or
+        // drew coarser terrain. Such pixels grade the view's simplification, not the ambience.
+        const glm::dvec3 probe = p.position_m + kScreenProbeOffset_m * glm::normalize(p.normal);
+        if (!environment_.inTheOpen(probe, 0.0)) {
+            ++screenLeftOut_;
+            continue;
+        }
         screenResults_.push_back(
             {frameIndex, p.kind,
              irradianceRelativeError(

@@ -223,7 +223,9 @@ struct ReferenceWitness {
 // A screen witness (opt-in, on reference frames): a random pixel of the rendered main view, its
 // surface point and normal, and the ambient irradiance the draw applied there. Its error is
 // |E_applied(n) - E_ref(n)| / |E_ref(n)| (luminance-weighted channels), E_ref from a reference
-// capture probeOffset_m along the normal from the surface.
+// capture probeOffset_m along the normal from the surface. A pixel whose reference would stand
+// inside a plant or the terrain (the view left out a plant the full scene has: too few pixels or
+// beyond its range) is left out and counted (ErrorMeter::screenLeftOut).
 enum class SurfaceKind { Terrain = 1, Road = 2, Object = 3 };
 inline constexpr int kSurfaceKinds = 3;
 const char* toString(SurfaceKind kind);
@@ -290,6 +292,9 @@ class ErrorMeter {
                                 const glm::dvec3& normal, double timeOfDay_h);
     const std::vector<ScreenResult>& screenResults() const { return screenResults_; }
     std::vector<double> screenErrors(int kind = 0) const;  // kind 0: every surface
+    // Screen witnesses left out: their reference would stand inside a plant or the terrain
+    // (ProbeEnvironment::inTheOpen).
+    std::size_t screenLeftOut() const { return screenLeftOut_; }
     // The terrain witnesses' errors at the drawn normal (ReferenceWitness::drawnError), of one
     // ring or (ring < 0) all; witnesses without one are left out.
     // `underCrown` 0: open ground only, 1: under crowns only, -1: both.
@@ -413,6 +418,7 @@ class ErrorMeter {
     std::map<std::pair<const SurfaceLight*, Key>, ShRgb> litCache_;
     std::map<Key, ScreenEntry> screenCache_;
     std::vector<ScreenResult> screenResults_;
+    std::size_t screenLeftOut_ = 0;
     bool referenceNow_ = false;
     std::vector<ReferenceWitness> referenceWitnesses_;
     double reference_s_ = 0.0;

@@ -43,6 +43,20 @@ constexpr double kLargestPlant_m = 3.2 * 2.0;
 
 }  // namespace
 
+bool WorldProbeEnvironment::inTheOpen(const glm::dvec3& point_m, double clearance_m,
+                                      const glm::dvec3* ownBase_m) const {
+    if (!(point_m.y >= world_.height(point_m.x, point_m.z) + clearance_m)) return false;
+    for (const Plant& q : world_.vegetation().inDisc(point_m.x, point_m.z, kLargestPlant_m)) {
+        if (ownBase_m && q.position_m == *ownBase_m) continue;
+        for (const PlantSphere& sphere : Vegetation::spheres(q.kind)) {
+            const glm::dvec3 c = q.position_m + double(q.scale) * sphere.centre_m;
+            const double r = double(q.scale) * sphere.radius_m;
+            if (glm::dot(point_m - c, point_m - c) < r * r) return false;
+        }
+    }
+    return true;
+}
+
 WorldProbeEnvironment::WorldProbeEnvironment(const World& world,
                                              const WorldProbeEnvironmentSettings& s)
     : world_(world), settings_(s) {}
@@ -183,16 +197,7 @@ std::vector<ObjectWitness> WorldProbeEnvironment::objectWitnesses(double cameraX
     // captured there) and outside every other plant's spheres (a crown's, a trunk's, a rock's).
     // A point inside another plant shows nothing the camera sees; that tree is passed over.
     const auto clear = [&](const glm::dvec3& at, const Plant& own) {
-        if (at.y < world_.height(at.x, at.z) + kWitnessClearance_m) return false;
-        for (const Plant& q : world_.vegetation().inDisc(at.x, at.z, kLargestPlant_m)) {
-            if (q.position_m == own.position_m) continue;
-            for (const PlantSphere& sphere : Vegetation::spheres(q.kind)) {
-                const glm::dvec3 c = q.position_m + double(q.scale) * sphere.centre_m;
-                const double r = double(q.scale) * sphere.radius_m;
-                if (glm::dot(at - c, at - c) < r * r) return false;
-            }
-        }
-        return true;
+        return inTheOpen(at, kWitnessClearance_m, &own.position_m);
     };
     int taken = 0;
     for (std::size_t t = 0; taken < trees && t < candidates.size(); ++t) {

@@ -111,6 +111,14 @@ class ProbeEnvironment {
         (void)carHeight_m, (void)measuredIndex;
         return {};
     }
+    // Whether a reference may stand at `point_m`: at least clearance_m above the terrain and
+    // outside every plant (its spheres, world/Vegetation.h) but the one standing at ownBase_m, if
+    // given (see Object witnesses). Everywhere by default.
+    virtual bool inTheOpen(const glm::dvec3& point_m, double clearance_m,
+                           const glm::dvec3* ownBase_m = nullptr) const {
+        (void)point_m, (void)clearance_m, (void)ownBase_m;
+        return true;
+    }
     // The patch drawn around ground point (x, z) for a camera at `camera_m` (see DrawnPatch);
     // none by default.
     virtual DrawnPatch drawnPatch(double x_m, double z_m, const glm::dvec3& camera_m) const {
@@ -137,6 +145,8 @@ class WorldProbeEnvironment : public ProbeEnvironment {
     ProbePlacement placement(double x_m, double z_m, double maxAside_m) const override;
     double sunAngularSpeed_radPerHour() const override;
     void fallbackCubeMap(double timeOfDay_h, int n, std::vector<float>& rgb) const override;
+    bool inTheOpen(const glm::dvec3& point_m, double clearance_m,
+                   const glm::dvec3* ownBase_m = nullptr) const override;
     std::vector<ObjectWitness> objectWitnesses(double cameraX_m, double cameraZ_m, int trees,
                                                double near_m, double far_m, double carHeight_m,
                                                int measuredIndex) const override;

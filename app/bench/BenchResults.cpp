@@ -612,6 +612,12 @@ std::string referenceLightLine(const std::vector<Job>& jobs, const std::string& 
                 << fmt(number(ref, {"drawn", "lifted"}), "%.0f")
                 << " (the drawn-normal figure reads every witness at its own ground point)";
         }
+        const double screen = number(ref, {"screen", "error", "count"});
+        if (std::isfinite(screen) && screen > 0)
+            out << ". Screen witnesses: " << fmt(screen, "%.0f") << ", and "
+                << fmt(number(ref, {"screen", "leftOut"}), "%.0f")
+                << " left out (their reference would stand inside a plant the view did not draw, "
+                   "or inside the terrain)";
         out << ".\n\n";
         return out.str();
     }

@@ -668,7 +668,8 @@ std::string measurementJson(const ErrorMeter& meter) {
                         {"selfError", summaryJson(summarize(selfs))}};
         };
         const ReferenceSettings& rs = meter.referenceSettings();
-        json screenJson = {{"error", summaryJson(summarize(meter.screenErrors()))}};
+        json screenJson = {{"error", summaryJson(summarize(meter.screenErrors()))},
+                           {"leftOut", meter.screenLeftOut()}};
         for (int k = 1; k <= kSurfaceKinds; ++k)
             screenJson[toString(SurfaceKind(k))] = summaryJson(summarize(meter.screenErrors(k)));
         json rings = json::array();

@@ -146,6 +146,37 @@ TEST(WorldProbeEnvironment, ObjectWitnessesFaceTheCamera) {
     EXPECT_LE(trees, 6 * 3 * 2);
 }
 
+// A reference may stand where nothing is: not inside a plant's spheres (unless the plant is the
+// one named as its own), not below the terrain plus the clearance; high above the ground it may.
+TEST(WorldProbeEnvironment, InTheOpenMeansOutsidePlantsAndAboveTheTerrain) {
+    const World& world = defaultWorld();
+    const WorldProbeEnvironment env(world);
+    int checked = 0;
+    for (const Plant& p : world.vegetation().inDisc(0.0, 0.0, 400.0)) {
+        const PlantSphere& first = Vegetation::spheres(p.kind).front();
+        const glm::dvec3 inside = p.position_m + double(p.scale) * first.centre_m;
+        if (inside.y < world.height(inside.x, inside.z) + 0.1) continue;  // a sunken rock
+        EXPECT_FALSE(env.inTheOpen(inside, 0.0));
+        // Its own plant does not count, but a neighbour's sphere may still hold the point.
+        bool neighbour = false;
+        for (const Plant& q : world.vegetation().inDisc(inside.x, inside.z, 8.0)) {
+            if (q.position_m == p.position_m) continue;
+            for (const PlantSphere& s : Vegetation::spheres(q.kind))
+                neighbour |= glm::length(inside - (q.position_m + double(q.scale) * s.centre_m)) <
+                             double(q.scale) * s.radius_m;
+        }
+        EXPECT_EQ(env.inTheOpen(inside, 0.0, &p.position_m), !neighbour);
+        if (++checked == 40) break;
+    }
+    EXPECT_EQ(checked, 40);
+    for (double x = -300.0; x <= 300.0; x += 150.0) {
+        const double ground = world.height(x, 77.0);
+        EXPECT_FALSE(env.inTheOpen({x, ground + 0.2, 77.0}, 0.25));
+        EXPECT_FALSE(env.inTheOpen({x, ground - 0.5, 77.0}, 0.0));
+        EXPECT_TRUE(env.inTheOpen({x, ground + 80.0, 77.0}, 0.25));  // above every plant
+    }
+}
+
 // The cell a patch lit per vertex interpolates at a point is the drawn mesh's: over a field of
 // points around a camera on the highway (across LOD boundaries, where the edges are stitched),
 // its vertices lie on the leaf's grid of size / quads, its weights are a triangle's (non-negative,

@@ -434,6 +434,40 @@ ObjectFigures objectFigures(float gain, bool mirrorY) {
 
 }  // namespace
 
+namespace {
+// Flat ground with a wall of plants over x > 100 m: no reference may stand there.
+class WalledEnvironment final : public testing_support::FlatProbeEnvironment {
+  public:
+    bool inTheOpen(const glm::dvec3& point_m, double, const glm::dvec3*) const override {
+        return point_m.x <= 100.0;
+    }
+};
+}  // namespace
+
+// Screen witnesses whose reference would stand inside something (a plant the view left out) are
+// left out of the screen error and counted; the others are graded.
+TEST(ReferenceOracle, ScreenWitnessesInsideThingsAreLeftOut) {
+    testing_support::FakeCubeCapture coarse(8), full(16);
+    WalledEnvironment environment;
+    MeasureSettings ms;
+    ms.every = 1;
+    ErrorMeter meter(coarse, environment, ms);
+    ReferenceSettings rs;
+    rs.every = 1;
+    meter.attachReference(full, rs, true);
+    std::vector<ScreenWitness> pixels;
+    for (int i = 0; i < 6; ++i) {
+        ScreenWitness w;
+        w.position_m = {40.0 * i, 0.0, 5.0};  // 0, 40, 80 in the open; 120, 160, 200 walled
+        w.applied = glm::dvec3(1.0);
+        pixels.push_back(w);
+    }
+    meter.screenFrame(0, 12.0, pixels);
+    EXPECT_EQ(meter.screenResults().size(), 3u);
+    EXPECT_EQ(meter.screenLeftOut(), 3u);
+    for (const ScreenResult& r : meter.screenResults()) EXPECT_TRUE(std::isfinite(r.error));
+}
+
 // Object witnesses are graded at the normal of the surface they stand for (ObjectWitness::normal)
 // as well as over the sphere: a method 1.5 times too bright is 1.5 times as bright there; one
 // whose field is mirrored top to bottom keeps every horizontal normal's irradiance (the terms odd
