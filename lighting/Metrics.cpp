@@ -461,8 +461,9 @@ void ErrorMeter::screenFrame(int frameIndex, double timeOfDay_h,
         // A reference inside a plant or the terrain sees nothing the pixel does: there the main
         // view left out a plant the full scene has (too few pixels, or beyond its range) or
         // drew coarser terrain. Such pixels grade the view's simplification, not the ambience.
+        // (A plant's own pixels stand on its spheres' rim: they are not asked.)
         const glm::dvec3 probe = p.position_m + kScreenProbeOffset_m * glm::normalize(p.normal);
-        if (!environment_.inTheOpen(probe, 0.0)) {
+        if (p.kind != SurfaceKind::Object && !environment_.inTheOpen(probe, 0.0)) {
             ++screenLeftOut_;
             continue;
         }

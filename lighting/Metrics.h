@@ -223,9 +223,9 @@ struct ReferenceWitness {
 // A screen witness (opt-in, on reference frames): a random pixel of the rendered main view, its
 // surface point and normal, and the ambient irradiance the draw applied there. Its error is
 // |E_applied(n) - E_ref(n)| / |E_ref(n)| (luminance-weighted channels), E_ref from a reference
-// capture probeOffset_m along the normal from the surface. A pixel whose reference would stand
-// inside a plant or the terrain (the view left out a plant the full scene has: too few pixels or
-// beyond its range) is left out and counted (ErrorMeter::screenLeftOut).
+// capture probeOffset_m along the normal from the surface. A terrain or road pixel whose
+// reference would stand inside a plant or the terrain (the view left out a plant the full scene
+// has: too few pixels or beyond its range) is left out and counted (ErrorMeter::screenLeftOut).
 enum class SurfaceKind { Terrain = 1, Road = 2, Object = 3 };
 inline constexpr int kSurfaceKinds = 3;
 const char* toString(SurfaceKind kind);

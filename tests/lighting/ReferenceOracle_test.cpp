@@ -462,8 +462,11 @@ TEST(ReferenceOracle, ScreenWitnessesInsideThingsAreLeftOut) {
         w.applied = glm::dvec3(1.0);
         pixels.push_back(w);
     }
+    ScreenWitness leaf = pixels.back();  // a plant's own pixel is not asked
+    leaf.kind = SurfaceKind::Object;
+    pixels.push_back(leaf);
     meter.screenFrame(0, 12.0, pixels);
-    EXPECT_EQ(meter.screenResults().size(), 3u);
+    EXPECT_EQ(meter.screenResults().size(), 4u);
     EXPECT_EQ(meter.screenLeftOut(), 3u);
     for (const ScreenResult& r : meter.screenResults()) EXPECT_TRUE(std::isfinite(r.error));
 }
