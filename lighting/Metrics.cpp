@@ -467,10 +467,9 @@ void ErrorMeter::screenFrame(int frameIndex, double timeOfDay_h,
             ++screenLeftOut_;
             continue;
         }
-        screenResults_.push_back(
-            {frameIndex, p.kind,
-             irradianceRelativeError(
-                 p.applied, surfaceReference(frameIndex, p.position_m, p.normal, timeOfDay_h))});
+        const glm::dvec3 eRef = surfaceReference(frameIndex, p.position_m, p.normal, timeOfDay_h);
+        screenResults_.push_back({frameIndex, p.kind, irradianceRelativeError(p.applied, eRef),
+                                  irradianceBias(p.applied, eRef), p.position_m, p.normal});
     }
 }
 

@@ -239,6 +239,8 @@ struct ScreenResult {
     int frame = 0;
     SurfaceKind kind = SurfaceKind::Terrain;
     double error = 0.0;
+    double bias = 0.0;  // irradianceBias: > 0 too bright
+    glm::dvec3 position_m{0.0}, normal{0.0, 1.0, 0.0};
 };
 
 // ---- Error meter -----------------------------------------------------------------------------

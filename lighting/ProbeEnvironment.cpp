@@ -48,6 +48,15 @@ bool WorldProbeEnvironment::inTheOpen(const glm::dvec3& point_m, double clearanc
     if (!(point_m.y >= world_.height(point_m.x, point_m.z) + clearance_m)) return false;
     for (const Plant& q : world_.vegetation().inDisc(point_m.x, point_m.z, kLargestPlant_m)) {
         if (ownBase_m && q.position_m == *ownBase_m) continue;
+        // Bushes and rocks spread wider near the ground than their spheres: their footprint,
+        // up to their top (the rule that hides a terrain witness's ground, DrawnPatch::cover).
+        if (q.kind == PlantKind::Bush || q.kind == PlantKind::Rock) {
+            if (std::hypot(q.position_m.x - point_m.x, q.position_m.z - point_m.z) <
+                    Vegetation::footprintRadius_m(q.kind) * q.scale &&
+                point_m.y < q.position_m.y + plantTop_m(q.kind) * q.scale)
+                return false;
+            continue;
+        }
         for (const PlantSphere& sphere : Vegetation::spheres(q.kind)) {
             const glm::dvec3 c = q.position_m + double(q.scale) * sphere.centre_m;
             const double r = double(q.scale) * sphere.radius_m;

@@ -24,8 +24,8 @@
 //   Each also carries the normal of the surface it stands for as the camera sees it, at which
 //   the error at the drawn normal is taken: a tree's trunk and crown face the camera
 //   (horizontally), the car's roof faces up. A tree whose base or crown witness would stand
-//   inside another plant (its spheres, world/Vegetation.h) or less than 0.25 m above the
-//   terrain is passed over for the next: such a point shows nothing the camera sees.
+//   inside another plant (inTheOpen) or less than 0.25 m above the terrain is passed over for
+//   the next: such a point shows nothing the camera sees.
 #pragma once
 
 #include <array>
@@ -112,8 +112,9 @@ class ProbeEnvironment {
         return {};
     }
     // Whether a reference may stand at `point_m`: at least clearance_m above the terrain and
-    // outside every plant (its spheres, world/Vegetation.h) but the one standing at ownBase_m, if
-    // given (see Object witnesses). Everywhere by default.
+    // outside every plant (a tree's spheres, world/Vegetation.h; a bush's or rock's footprint up
+    // to its top) but the one standing at ownBase_m, if given (see Object witnesses). Everywhere
+    // by default.
     virtual bool inTheOpen(const glm::dvec3& point_m, double clearance_m,
                            const glm::dvec3* ownBase_m = nullptr) const {
         (void)point_m, (void)clearance_m, (void)ownBase_m;

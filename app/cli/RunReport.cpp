@@ -757,10 +757,12 @@ void writeMeasureCsv(const ErrorMeter& meter, const std::string& path) {
 void writeScreenCsv(const ErrorMeter& meter, const std::string& path) {
     std::ofstream out(path);
     if (!out) throw InputError(path, "cannot write the screen CSV");
-    out << "frame,kind,error\n";
+    out << "frame,kind,error,bias,x,y,z,nx,ny,nz\n";
     out.precision(9);
     for (const ScreenResult& r : meter.screenResults())
-        out << r.frame << ',' << toString(r.kind) << ',' << r.error << "\n";
+        out << r.frame << ',' << toString(r.kind) << ',' << r.error << ',' << r.bias << ','
+            << r.position_m.x << ',' << r.position_m.y << ',' << r.position_m.z << ','
+            << r.normal.x << ',' << r.normal.y << ',' << r.normal.z << "\n";
     if (!out) throw InputError(path, "cannot write the screen CSV");
 }
 

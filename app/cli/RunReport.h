@@ -106,8 +106,9 @@ void writeMeasureCsv(const ErrorMeter& meter, const std::string& path);
 // One row per reference witness: frame, witness (ring_<r> or the object kind), x, y, z, the
 // budget terms (total, truncation, capture, spacing, schedule) and the self-oracle's error.
 void writeReferenceCsv(const ErrorMeter& meter, const std::string& path);
-// screen.csv: one row per screen witness, "frame,kind,error" (kind terrain, road or object), in
-// the order they were taken (a frame's first k rows are what --screen-witnesses k takes).
+// screen.csv: one row per screen witness, "frame,kind,error,bias,x,y,z,nx,ny,nz" (kind terrain,
+// road or object; bias the signed luminance ratio less one; the surface point and its normal),
+// in the order they were taken (a frame's first k rows are what --screen-witnesses k takes).
 void writeScreenCsv(const ErrorMeter& meter, const std::string& path);
 
 struct RunReport {

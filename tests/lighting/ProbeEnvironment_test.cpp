@@ -146,13 +146,24 @@ TEST(WorldProbeEnvironment, ObjectWitnessesFaceTheCamera) {
     EXPECT_LE(trees, 6 * 3 * 2);
 }
 
-// A reference may stand where nothing is: not inside a plant's spheres (unless the plant is the
-// one named as its own), not below the terrain plus the clearance; high above the ground it may.
+// A reference may stand where nothing is: not inside a tree's spheres (unless the tree is the
+// one named as its own), not low within a bush's or rock's footprint, not below the terrain plus
+// the clearance; high above the ground it may.
 TEST(WorldProbeEnvironment, InTheOpenMeansOutsidePlantsAndAboveTheTerrain) {
     const World& world = defaultWorld();
     const WorldProbeEnvironment env(world);
     int checked = 0;
+    int small = 0;
     for (const Plant& p : world.vegetation().inDisc(0.0, 0.0, 400.0)) {
+        if (p.kind == PlantKind::Bush || p.kind == PlantKind::Rock) {
+            // Within its footprint, low: inside; beside it or high above it: not its doing.
+            const double r = Vegetation::footprintRadius_m(p.kind) * p.scale;
+            const glm::dvec3 low = p.position_m + glm::dvec3(0.9 * r, 0.1, 0.0);
+            if (low.y < world.height(low.x, low.z)) continue;
+            EXPECT_FALSE(env.inTheOpen(low, 0.0)) << "a point low within a bush or rock";
+            ++small;
+            continue;
+        }
         const PlantSphere& first = Vegetation::spheres(p.kind).front();
         const glm::dvec3 inside = p.position_m + double(p.scale) * first.centre_m;
         if (inside.y < world.height(inside.x, inside.z) + 0.1) continue;  // a sunken rock
@@ -169,6 +180,7 @@ TEST(WorldProbeEnvironment, InTheOpenMeansOutsidePlantsAndAboveTheTerrain) {
         if (++checked == 40) break;
     }
     EXPECT_EQ(checked, 40);
+    EXPECT_GT(small, 5);
     for (double x = -300.0; x <= 300.0; x += 150.0) {
         const double ground = world.height(x, 77.0);
         EXPECT_FALSE(env.inTheOpen({x, ground + 0.2, 77.0}, 0.25));
