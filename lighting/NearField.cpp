@@ -117,7 +117,34 @@ std::vector<SphereOccluder> NearField::occluders(const glm::dvec3& p) const {
     if (!settings_.plants) return out;
     scene_.occludersNear(p, settings_.radius_m, settings_.smallRadius_m, out);
     sunVisibilities(out);
+    skyVisibilities(out);
     return out;
+}
+
+void NearField::skyVisibilities(std::vector<SphereOccluder>& spheres) const {
+    if (!settings_.plantSky || spheres.empty()) return;
+    const auto keyOf = [](const SphereOccluder& o) {
+        return Key{float(o.centre_m.x), float(o.centre_m.y), float(o.centre_m.z), float(o.radius_m)};
+    };
+    std::vector<std::size_t> missing;
+    {
+        std::lock_guard<std::mutex> lock(skyMutex_);
+        if (skyCache_.size() >= kSunEntries) skyCache_.clear();
+        for (std::size_t i = 0; i < spheres.size(); ++i) {
+            const auto it = skyCache_.find(keyOf(spheres[i]));
+            if (it != skyCache_.end())
+                spheres[i].skyVisibility = double(it->second);
+            else
+                missing.push_back(i);
+        }
+    }
+    if (missing.empty()) return;
+    for (std::size_t i : missing) {
+        const double v = scene_.sphereSkyVisibility(spheres[i].centre_m, spheres[i].radius_m);
+        spheres[i].skyVisibility = std::isfinite(v) ? std::clamp(v, 0.0, 1.0) : 1.0;
+    }
+    std::lock_guard<std::mutex> lock(skyMutex_);
+    for (std::size_t i : missing) skyCache_.emplace(keyOf(spheres[i]), float(spheres[i].skyVisibility));
 }
 
 void NearField::sunVisibilities(std::vector<SphereOccluder>& spheres) const {

@@ -87,6 +87,23 @@
 //   terrain bands count as lit), kept with the transfer when the light moves on, as the
 //   ground's own visibilities are (NearFieldTransfer::capSun). Off (plantShadows), every share
 //   is 1.
+// [SECTION] Plants' sky
+//   A cap's ambient E_amb,i is the far field's irradiance at the point, and the far field holds
+//   no plant within captureRadius_m of its probes: each plant put back is lit as if it stood
+//   alone in the open. In a wood its neighbours (and its own upper crown, over a trunk) hide
+//   much of its sky, as they do in the reference, whose leaves take the light of the full scene.
+//   So each sphere also carries the share of the sky its surface sees past the other plants'
+//   spheres (SphereOccluder::skyVisibility): nine points on it (its top, four 30 degrees above
+//   its equator, four 30 degrees below), each over 24 directions of the upper hemisphere
+//   weighted by their cosine to the point's normal, the directions blocked as sphereBlock
+//   blocks them (points inside another sphere of the plant are not surface and are skipped).
+//   The sky is most of a crown's ambient, so the cap's ambient is scaled by that share: its
+//   row of T_c shows rho_i V_i. Its light term is kept: the caps' one share of the light
+//   becomes sum f_i s_i / sum f_i V_i (f_i as in Plants' shadows), which makes the light
+//   S = (T_c - hide) Y(l) capSun what it was. The share depends on the scene alone: kept per
+//   sphere for the run (NearField::skyVisibilities). Measured, lighting crowns as if alone was
+//   most of the model's brightness on the drives (docs/HISTORY.md "Plants' sky"). Off
+//   (plantSky), every share is 1.
 // [SECTION] Terrain
 //   The terrain cannot be left out of a capture (it would leave a hole), so the anchors hold the
 //   terrain their probes saw. What they cannot hold is terrain near a point that rises above the
@@ -200,6 +217,9 @@ struct NearFieldSettings {
     // Their spheres lit by the light only where other plants and the terrain leave it (see
     // Plants' shadows); off, as if nothing shaded them.
     bool plantShadows = true;
+    // Their spheres' ambient scaled by the share of the sky the other plants leave them (see
+    // Plants' sky); off, each is lit as if it stood alone in the open.
+    bool plantSky = true;
     // Bushes and rocks, which probe captures never draw (only trees are in the capture scene),
     // are near out to this radius: the near field is all the ambience knows of them.
     double smallRadius_m = 48.0;
@@ -261,6 +281,7 @@ struct SphereOccluder {
     glm::dvec3 albedo{0.0};
     double weight = 1.0;  // in [0, 1]: faded near the edge of the near radius (see Radii)
     double sunVisibility = 1.0;  // the light's share on its lit side (see Plants' shadows)
+    double skyVisibility = 1.0;  // the sky's share its surface sees (see Plants' sky)
 };
 
 // ---- Closed forms ------------------------------------------------------------------------------
@@ -318,6 +339,7 @@ struct OccluderCap {
     double solidAngle = 0.0;
     int behind = -1;  // the band a cap is seen against: it hides that band, not the far field
     double sunVisibility = 1.0;  // its sphere's (see Plants' shadows); bands 1
+    double skyVisibility = 1.0;  // its sphere's (see Plants' sky); bands 1
 };
 // The caps of `occluders` seen from `point`, with their overlap weights (largest first).
 // An occluder that holds the point is a cap wider than a hemisphere: 90 degrees at its surface,
@@ -365,7 +387,8 @@ struct NearFieldTransfer {
 NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps,
                                     const GroundTerm* ground = nullptr);
 // The caps' one share of the light towards `lightDirection` (see Plants' shadows): their
-// sunVisibility weighted by what each shows of the light; 1 when none shows any.
+// sunVisibility weighted by what each shows of the light, over the same weights scaled by their
+// skyVisibility (see Plants' sky); 1 when none shows any.
 double capSunVisibility(const std::vector<OccluderCap>& caps, const glm::dvec3& lightDirection);
 
 // One sample's ground light term in a patch mean (see Patch mean), its weight folded in.
@@ -479,6 +502,12 @@ class NearFieldScene {
         (void)centre_m, (void)radius_m, (void)toLight;
         return 1.0;
     }
+    // The share of the sky that a plant's sphere sees past the other plants' spheres, in [0, 1]
+    // (see Plants' sky); 1 by default.
+    virtual double sphereSkyVisibility(const glm::dvec3& centre_m, double radius_m) const {
+        (void)centre_m, (void)radius_m;
+        return 1.0;
+    }
 };
 
 // The ground term at `point_m` (see Ground): the ground within radius_m of its foot, lit by the
@@ -520,6 +549,10 @@ class WorldNearFieldScene final : public NearFieldScene {
     // is kPlantTop_m above the ground) at five points of the lit side.
     double sphereLightVisibility(const glm::dvec3& centre_m, double radius_m,
                                  const glm::dvec3& toLight) const override;
+    // The other plants' spheres within kSkyReach_m, at nine points of the sphere.
+    double sphereSkyVisibility(const glm::dvec3& centre_m, double radius_m) const override;
+    static constexpr double kSkyReach_m = 16.0;  // plants farther are in the far field's sky
+    static constexpr double kMinSkyVisibility = 0.02;  // keeps a cap's light term well defined
     static constexpr double kPlantTop_m = 20.0;  // no plant of the world is taller
     static constexpr double kMaxCasterReach_m = 64.0;  // plants farther along the light are left out
     static constexpr int kWedges = 8;
@@ -591,6 +624,8 @@ class NearField {
     std::vector<SphereOccluder> occluders(const glm::dvec3& point_m) const;
     // Fills the spheres' sunVisibility from the scene, kept per sphere for the light's epoch.
     void sunVisibilities(std::vector<SphereOccluder>& spheres) const;
+    // Fills the spheres' skyVisibility from the scene, kept per sphere (see Plants' sky).
+    void skyVisibilities(std::vector<SphereOccluder>& spheres) const;
     // An object's ground term: the B-spline blend of the lattice's (see Ground), cached.
     GroundTerm objectGround(const glm::dvec3& point_m) const;
     // The nine lattice points an object's ground term blends: their keys, weights and
@@ -661,6 +696,10 @@ class NearField {
     mutable tsl::hopscotch_map<Key, float, KeyHash> sunCache_;
     mutable std::uint32_t sunEpoch_ = 0;
     static constexpr std::size_t kSunEntries = 1u << 17;
+    // The spheres' shares of the sky, by centre and radius: the scene's, kept for the run (emptied
+    // only when it holds kSunEntries).
+    mutable std::mutex skyMutex_;
+    mutable tsl::hopscotch_map<Key, float, KeyHash> skyCache_;
     glm::dvec3 viewer_{0.0};
     bool viewerKnown_ = false;
     // Whether an object built at `point_m` now blends the lattice (see latticeRange_m).

@@ -3,6 +3,7 @@
 #include "lighting/NearField.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include <glm/geometric.hpp>
@@ -300,6 +301,51 @@ double WorldNearFieldScene::terrainLightVisibility(const glm::dvec3& from,
         if (d >= kShadowReach_m) break;
     }
     return std::clamp(0.5 - above / kPenumbra_rad, 0.0, 1.0);
+}
+
+double WorldNearFieldScene::sphereSkyVisibility(const glm::dvec3& c, double r) const {
+    if (!(r > 0.0)) return 1.0;
+    // The other spheres within reach (its own plant's too: a crown's upper tiers over its lower
+    // ones, the crown over the trunk).
+    std::vector<SphereOccluder> casters;
+    for (const Plant& p : world_.vegetation().inDisc(c.x, c.z, kSkyReach_m))
+        for (const PlantSphere& s : Vegetation::spheres(p.kind)) {
+            const glm::dvec3 centre = p.position_m + double(p.scale) * s.centre_m;
+            const double radius = double(p.scale) * s.radius_m;
+            if (glm::length(centre - c) < 1e-6 && std::fabs(radius - r) < 1e-6) continue;  // itself
+            casters.push_back({centre, radius, s.albedo, 1.0, 1.0});
+        }
+    if (casters.empty()) return 1.0;
+    // 24 directions of the upper hemisphere (a Fibonacci spiral, equal solid angles).
+    static const std::array<glm::dvec3, 24> sky = [] {
+        std::array<glm::dvec3, 24> d{};
+        for (std::size_t k = 0; k < d.size(); ++k) {
+            const double y = 1.0 - (double(k) + 0.5) / double(d.size()), q = std::sqrt(1.0 - y * y);
+            const double phi = 2.39996322972865332 * double(k);
+            d[k] = {q * std::cos(phi), y, q * std::sin(phi)};
+        }
+        return d;
+    }();
+    // Nine points: the top, four 30 degrees above the equator, four 30 degrees below.
+    double seen = 0.0, all = 0.0;
+    for (int k = 0; k < 9; ++k) {
+        const double e = k == 0 ? 0.5 * kPi : (k <= 4 ? 1.0 : -1.0) * kPi / 6.0;
+        const double phi = 0.5 * kPi * (k - 1) + (k > 4 ? 0.25 * kPi : 0.0);
+        const glm::dvec3 n(std::cos(e) * std::cos(phi), std::sin(e), std::cos(e) * std::sin(phi));
+        const glm::dvec3 x = c + n * (r * 1.001);
+        // A point inside another sphere of the plant is no surface.
+        const bool inside = std::any_of(casters.begin(), casters.end(), [&](const SphereOccluder& o) {
+            return glm::dot(x - o.centre_m, x - o.centre_m) < o.radius_m * o.radius_m;
+        });
+        if (inside) continue;
+        for (const glm::dvec3& d : sky) {
+            const double w = glm::dot(d, n);
+            if (!(w > 0.0)) continue;
+            all += w;
+            seen += w * (1.0 - sphereBlock(x, d, kSkyReach_m + kPlantTop_m, casters));
+        }
+    }
+    return all > 0.0 ? std::max(seen / all, kMinSkyVisibility) : 1.0;
 }
 
 double WorldNearFieldScene::sphereLightVisibility(const glm::dvec3& c, double r,

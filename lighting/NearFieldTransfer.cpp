@@ -157,6 +157,7 @@ std::vector<OccluderCap> occluderCaps(const glm::dvec3& point_m,
         c.sh = capSh(c.direction, c.cosHalfAngle);
         c.solidAngle = omega;
         c.sunVisibility = std::clamp(si.occluder->sunVisibility, 0.0, 1.0);
+        c.skyVisibility = std::clamp(si.occluder->skyVisibility, 0.0, 1.0);
         caps.push_back(c);
     }
     return caps;
@@ -327,7 +328,7 @@ NearFieldTransfer nearFieldTransfer(const std::vector<OccluderCap>& caps, const 
             cw[k] = float(e.weight * c[k]);
             hideRow[k] = b ? 0.0f : float(c[k] / e.solidAngle);
             for (int ch = 0; ch < 3; ++ch)
-                u[ch][k] = float(e.albedo[ch] * shows[i][k] -
+                u[ch][k] = float(e.skyVisibility * e.albedo[ch] * shows[i][k] -
                                  (b ? b->albedo[ch] * shows[std::size_t(e.behind)][k] : 0.0));
         }
         for (int j = 0; j < K; ++j) {
@@ -387,7 +388,8 @@ double capSunVisibility(const std::vector<OccluderCap>& caps, const glm::dvec3& 
                    : lambertSpherePhase(std::acos(std::clamp(-glm::dot(c.direction, lightDirection), -1.0, 1.0)));
         const double f = c.weight * c.solidAngle * rho * phase;
         if (!(f > 0.0)) continue;
-        shown += f;
+        // What T_c shows of it: its albedo scaled by its share of the sky (see Plants' sky).
+        shown += f * (c.band ? 1.0 : std::clamp(c.skyVisibility, 0.0, 1.0));
         lit += f * (c.band ? 1.0 : std::clamp(c.sunVisibility, 0.0, 1.0));
     }
     return shown > 0.0 ? lit / shown : 1.0;

@@ -277,6 +277,9 @@ Keys<NearFieldSettings> nearFieldKeys() {
     k.boolean(
         "plantShadows", "the plants' spheres lit by the sun only where other plants and the terrain leave it",
         [](T& t) -> bool& { return t.plantShadows; }, costHigh);
+    k.boolean(
+        "plantSky", "the plants' spheres lit by the share of the sky the other plants leave them",
+        [](T& t) -> bool& { return t.plantSky; }, costHigh);
     k.number(
         "smallRadius_m", "m", 0.0, 100.0, "bushes and rocks (never captured) are near out to this",
         [](T& t) -> double& { return t.smallRadius_m; }, costHigh);

@@ -127,6 +127,7 @@ TEST(TuningPanel, EveryKeyOfTheSettingsFileIsInTheTable) {
                           "nearField.captureRadius_m",
                           "nearField.plants",
                           "nearField.plantShadows",
+                          "nearField.plantSky",
                           "nearField.smallRadius_m",
                           "nearField.terrain",
                           "nearField.terrainRadius_m",
