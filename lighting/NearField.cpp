@@ -121,59 +121,47 @@ std::vector<SphereOccluder> NearField::occluders(const glm::dvec3& p) const {
     return out;
 }
 
-void NearField::skyVisibilities(std::vector<SphereOccluder>& spheres) const {
-    if (!settings_.plantSky || spheres.empty()) return;
+void NearField::fillShares(ShareCache& cache, std::uint32_t epoch,
+                           std::vector<SphereOccluder>& spheres, double SphereOccluder::*share,
+                           const std::function<double(const glm::dvec3&, double)>& compute) const {
+    if (spheres.empty()) return;
     const auto keyOf = [](const SphereOccluder& o) {
         return Key{float(o.centre_m.x), float(o.centre_m.y), float(o.centre_m.z), float(o.radius_m)};
     };
     std::vector<std::size_t> missing;
     {
-        std::lock_guard<std::mutex> lock(skyMutex_);
-        if (skyCache_.size() >= kSunEntries) skyCache_.clear();
+        std::lock_guard<std::mutex> lock(cache.mutex);
+        if (cache.epoch != epoch || cache.shares.size() >= kShareEntries)
+            cache.shares.clear(), cache.epoch = epoch;
         for (std::size_t i = 0; i < spheres.size(); ++i) {
-            const auto it = skyCache_.find(keyOf(spheres[i]));
-            if (it != skyCache_.end())
-                spheres[i].skyVisibility = double(it->second);
+            const auto it = cache.shares.find(keyOf(spheres[i]));
+            if (it != cache.shares.end())
+                spheres[i].*share = double(it->second);
             else
                 missing.push_back(i);
         }
     }
     if (missing.empty()) return;
     for (std::size_t i : missing) {
-        const double v = scene_.sphereSkyVisibility(spheres[i].centre_m, spheres[i].radius_m);
-        spheres[i].skyVisibility = std::isfinite(v) ? std::clamp(v, 0.0, 1.0) : 1.0;
+        const double v = compute(spheres[i].centre_m, spheres[i].radius_m);
+        spheres[i].*share = std::isfinite(v) ? std::clamp(v, 0.0, 1.0) : 1.0;
     }
-    std::lock_guard<std::mutex> lock(skyMutex_);
-    for (std::size_t i : missing) skyCache_.emplace(keyOf(spheres[i]), float(spheres[i].skyVisibility));
+    std::lock_guard<std::mutex> lock(cache.mutex);
+    if (cache.epoch != epoch) return;  // the light moved on while these were taken
+    for (std::size_t i : missing) cache.shares.emplace(keyOf(spheres[i]), float(spheres[i].*share));
+}
+
+void NearField::skyVisibilities(std::vector<SphereOccluder>& spheres) const {
+    if (!settings_.plantSky) return;
+    fillShares(skyShares_, 0, spheres, &SphereOccluder::skyVisibility,
+               [this](const glm::dvec3& c, double r) { return scene_.sphereSkyVisibility(c, r); });
 }
 
 void NearField::sunVisibilities(std::vector<SphereOccluder>& spheres) const {
-    if (!settings_.plantShadows || spheres.empty()) return;
+    if (!settings_.plantShadows) return;
     const glm::dvec3 l = light_.direction;
-    const std::uint32_t epoch = lightEpoch_;
-    const auto keyOf = [](const SphereOccluder& o) {
-        return Key{float(o.centre_m.x), float(o.centre_m.y), float(o.centre_m.z), float(o.radius_m)};
-    };
-    std::vector<std::size_t> missing;
-    {
-        std::lock_guard<std::mutex> lock(sunMutex_);
-        if (sunEpoch_ != epoch || sunCache_.size() >= kSunEntries) sunCache_.clear(), sunEpoch_ = epoch;
-        for (std::size_t i = 0; i < spheres.size(); ++i) {
-            const auto it = sunCache_.find(keyOf(spheres[i]));
-            if (it != sunCache_.end())
-                spheres[i].sunVisibility = double(it->second);
-            else
-                missing.push_back(i);
-        }
-    }
-    if (missing.empty()) return;
-    for (std::size_t i : missing) {
-        const double v = scene_.sphereLightVisibility(spheres[i].centre_m, spheres[i].radius_m, l);
-        spheres[i].sunVisibility = std::isfinite(v) ? std::clamp(v, 0.0, 1.0) : 1.0;
-    }
-    std::lock_guard<std::mutex> lock(sunMutex_);
-    if (sunEpoch_ != epoch) return;
-    for (std::size_t i : missing) sunCache_.emplace(keyOf(spheres[i]), float(spheres[i].sunVisibility));
+    fillShares(sunShares_, lightEpoch_, spheres, &SphereOccluder::sunVisibility,
+               [this, l](const glm::dvec3& c, double r) { return scene_.sphereLightVisibility(c, r, l); });
 }
 
 std::unique_ptr<NearFieldTransfer> NearField::build(const glm::dvec3& point_m, double selfRadius_m,

@@ -690,16 +690,22 @@ class NearField {
     std::uint32_t addNormalEntry(const Key& key, const NormalTransfer& transfer,
                                  const NormalApply& apply) const;
     std::uint32_t lightEpoch_ = 1;  // counts the light's moves of more than 0.5 degrees
-    // The spheres' shares of the light for sunEpoch_'s light, by centre and radius (cm): emptied
-    // when the light moves or when it holds kSunEntries (see Plants' shadows).
-    mutable std::mutex sunMutex_;
-    mutable tsl::hopscotch_map<Key, float, KeyHash> sunCache_;
-    mutable std::uint32_t sunEpoch_ = 0;
-    static constexpr std::size_t kSunEntries = 1u << 17;
-    // The spheres' shares of the sky, by centre and radius: the scene's, kept for the run (emptied
-    // only when it holds kSunEntries).
-    mutable std::mutex skyMutex_;
-    mutable tsl::hopscotch_map<Key, float, KeyHash> skyCache_;
+    // A per-sphere share (of the light or of the sky) by centre and radius: emptied when its
+    // epoch moves on or when it holds kShareEntries.
+    struct ShareCache {
+        std::mutex mutex;
+        tsl::hopscotch_map<Key, float, KeyHash> shares;
+        std::uint32_t epoch = 0;
+    };
+    static constexpr std::size_t kShareEntries = 1u << 17;
+    // Fills each sphere's `share` member from the cache, asking `compute(centre, radius)` for the
+    // spheres it lacks; a share not finite counts as 1. Entries are kept for `epoch`.
+    void fillShares(ShareCache& cache, std::uint32_t epoch, std::vector<SphereOccluder>& spheres,
+                    double SphereOccluder::*share,
+                    const std::function<double(const glm::dvec3&, double)>& compute) const;
+    // The light's shares for lightEpoch_ (see Plants' shadows); the sky's, kept for the run
+    // (see Plants' sky).
+    mutable ShareCache sunShares_, skyShares_;
     glm::dvec3 viewer_{0.0};
     bool viewerKnown_ = false;
     // Whether an object built at `point_m` now blends the lattice (see latticeRange_m).
