@@ -427,14 +427,16 @@ void ErrorMeter::referenceFrame(int index, double timeOfDay_h, const glm::dvec3&
         const ShRgb applied = method.shAt(o.groundX_m, o.groundZ_m);
         r.terms = budgetTerms(ref, coarse, ideal(o.groundX_m, o.groundZ_m), applied, rule_);
         // At the drawn normal: the object's SH through the normal of the surface the witness
-        // stands for, against the reference captured at the witness (kScreenProbeOffset_m out
-        // from that surface) through the same normal.
+        // stands for, as much of it as the draw gives that surface (a trunk's share under its
+        // crown), against the reference captured at the witness (kScreenProbeOffset_m out from
+        // that surface) through the same normal.
         const glm::dvec3 n = glm::normalize(o.normal);
         const glm::dvec3 eRef(
             surfaceEntry(index, o.position_m - kScreenProbeOffset_m * n, n, timeOfDay_h)
                 .irradiance);
         const glm::dvec3 e =
-            glm::max(glm::dvec3(shIrradiance(applied, glm::vec3(n))), glm::dvec3(0.0));
+            glm::max(glm::dvec3(shIrradiance(applied, glm::vec3(n))), glm::dvec3(0.0)) *
+            o.ambientShare;
         r.drawnError = irradianceRelativeError(e, eRef);
         r.drawnBudget.drawn = r.drawnError;
         r.drawnBudget.drawnBias = irradianceBias(e, eRef);

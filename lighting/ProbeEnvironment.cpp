@@ -219,8 +219,12 @@ std::vector<ObjectWitness> WorldProbeEnvironment::objectWitnesses(double cameraX
         base.groundX_m = p.position_m.x, base.groundZ_m = p.position_m.z;
         base.position_m = p.position_m + 0.5 * crown * toward + glm::dvec3(0.0, 1.0, 0.0);
         base.normal = toward;
+        // The trunk's mesh is drawn with what its crown leaves of the tree's ambient.
+        base.ambientShare = Vegetation::crownSkyShare(
+            p.kind, (base.position_m - p.position_m) / double(p.scale), base.normal);
         ObjectWitness top = base;
         top.kind = ObjectKind::TreeCrown;
+        top.ambientShare = 1.0;
         top.position_m = p.position_m + (crown + settings_.clearance_m) * toward +
                          glm::dvec3(0.0, 0.6 * plantTop_m(p.kind) * p.scale, 0.0);
         if (!clear(base.position_m, p) || !clear(top.position_m, p)) continue;

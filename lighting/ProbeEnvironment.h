@@ -48,6 +48,9 @@ struct ObjectWitness {
     glm::dvec3 position_m{0.0};        // where the reference looks from
     double groundX_m = 0.0, groundZ_m = 0.0;  // where the draw reads the object's ambience
     glm::dvec3 normal{0.0, 1.0, 0.0};         // the drawn surface's normal there (unit)
+    // The share of the object's ambient the draw gives that surface: a trunk's under its own
+    // crown (world/Vegetation.h crownSkyShare), else 1.
+    double ambientShare = 1.0;
 };
 
 // The terrain patch the main view draws around a ground point for a camera (world/TerrainPatch.h

@@ -9,11 +9,13 @@ layout(location = 1) in vec3 aNormal;
 layout(location = 2) in vec3 aAlbedo;
 layout(location = 3) in vec4 iPositionScale;  // xyz: camera-relative base [m]; w: scale
 layout(location = 4) in vec2 iRotationSet;    // x: rotation about +Y [rad]; y: ambient set index
+layout(location = 7) in float aOcclusion;     // the share of the ambient the plant's crown hides
 
 out vec3 vNormal;
 out vec3 vAlbedo;
 out vec4 vFog;
 out vec3 vRelPos;  // camera-relative position [m], for the shadow lookup
+out float vAmbientShare;
 flat out uint vAmbientSet;
 
 void main() {
@@ -23,6 +25,7 @@ void main() {
     vNormal = rot * aNormal;
     vAlbedo = aAlbedo;
     vAmbientSet = uint(iRotationSet.y + 0.5);
+    vAmbientShare = 1.0 - aOcclusion;
     vFog = fogAt(relPos);
     vRelPos = relPos;
     gl_Position = uViewProj * vec4(relPos, 1.0);

@@ -12,6 +12,8 @@
 
 #include <glm/vec2.hpp>
 #include <glm/geometric.hpp>
+#define GLM_ENABLE_EXPERIMENTAL
+#include <glm/gtx/intersect.hpp>
 
 #include "world/Conventions.h"
 #include "world/World.h"
@@ -402,7 +404,9 @@ WorldMesh buildMesh(PlantKind kind, bool proxy) {
                 b.frustum(0.0, 2.0, 0.3, 0.3, 3, kBark, false);
                 b.frustum(1.5, 12.0, 2.6, 0.0, 8, kNeedles, true);
             } else {
-                b.frustum(0.0, 2.5, 0.28, 0.22, 10, kBark, false);
+                // The trunk in two bands: its vertices carry the crown's occlusion.
+                b.frustum(0.0, 1.25, 0.28, 0.25, 10, kBark, false);
+                b.frustum(1.25, 2.5, 0.25, 0.22, 10, kBark, false);
                 // Four stacked cones, narrowing upwards.
                 const double ys[4] = {1.5, 4.0, 6.3, 8.4};
                 const double rs[4] = {2.6, 2.1, 1.6, 1.1};
@@ -416,7 +420,8 @@ WorldMesh buildMesh(PlantKind kind, bool proxy) {
                 b.ellipsoid({0, 6.0, 0}, widened({3.2, 2.8, 3.2}, kBroadleafProxyWiden), 6, 4,
                             kLeaves, 0.0, 0);
             } else {
-                b.frustum(0.0, 3.5, 0.35, 0.25, 10, kBark, false);
+                b.frustum(0.0, 1.75, 0.35, 0.3, 10, kBark, false);
+                b.frustum(1.75, 3.5, 0.3, 0.25, 10, kBark, false);
                 b.ellipsoid({0, 6.0, 0}, {3.2, 2.8, 3.2}, 14, 9, kLeaves, 0.25, 17);
             }
             break;
@@ -440,18 +445,62 @@ WorldMesh buildMesh(PlantKind kind, bool proxy) {
     return b.m;
 }
 
+// The full crown's triangles (those with no bark vertex), at scale 1: what a trunk sees of it.
+struct CrownTriangles {
+    std::vector<glm::dvec3> corners;  // three a triangle
+};
+
+const CrownTriangles& crownTriangles(PlantKind kind) {
+    static const std::array<CrownTriangles, kPlantKinds> all = [] {
+        std::array<CrownTriangles, kPlantKinds> out;
+        for (PlantKind k : {PlantKind::Conifer, PlantKind::Broadleaf}) {
+            const WorldMesh m = buildMesh(k, false);
+            const auto at = [&](std::uint32_t v) {
+                return glm::dvec3(m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]);
+            };
+            const auto bark = [&](std::uint32_t v) {
+                return glm::vec3(m.albedo[3 * v], m.albedo[3 * v + 1], m.albedo[3 * v + 2]) == kBark;
+            };
+            CrownTriangles& c = out[static_cast<int>(k)];
+            for (std::size_t t = 0; t + 2 < m.indices.size(); t += 3) {
+                const std::uint32_t a = m.indices[t], b = m.indices[t + 1], d = m.indices[t + 2];
+                if (bark(a) || bark(b) || bark(d)) continue;
+                for (std::uint32_t v : {a, b, d}) c.corners.push_back(at(v));
+            }
+        }
+        return out;
+    }();
+    return all[static_cast<int>(kind)];
+}
+
+// The mesh with its trunk's vertices darkened by the crown (WorldMesh::occlusion; trees only).
+WorldMesh withOcclusion(WorldMesh m, PlantKind kind) {
+    if (kind != PlantKind::Conifer && kind != PlantKind::Broadleaf) return m;
+    m.occlusion.assign(m.vertexCount(), 0.0f);
+    for (std::size_t v = 0; v < m.vertexCount(); ++v) {
+        if (glm::vec3(m.albedo[3 * v], m.albedo[3 * v + 1], m.albedo[3 * v + 2]) != kBark)
+            continue;  // the crown's own leaves keep the ambient
+        const glm::dvec3 p(m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]);
+        const glm::dvec3 n(m.normals[3 * v], m.normals[3 * v + 1], m.normals[3 * v + 2]);
+        m.occlusion[v] = float(1.0 - Vegetation::crownSkyShare(kind, p, n));
+    }
+    return m;
+}
+
 }  // namespace
 
 const WorldMesh& Vegetation::mesh(PlantKind kind) {
     static const std::array<WorldMesh, kPlantKinds> meshes = {
-        buildMesh(PlantKind::Conifer, false), buildMesh(PlantKind::Broadleaf, false),
+        withOcclusion(buildMesh(PlantKind::Conifer, false), PlantKind::Conifer),
+        withOcclusion(buildMesh(PlantKind::Broadleaf, false), PlantKind::Broadleaf),
         buildMesh(PlantKind::Bush, false), buildMesh(PlantKind::Rock, false)};
     return meshes[static_cast<int>(kind)];
 }
 
 const WorldMesh& Vegetation::proxyMesh(PlantKind kind) {
     static const std::array<WorldMesh, kPlantKinds> meshes = {
-        buildMesh(PlantKind::Conifer, true), buildMesh(PlantKind::Broadleaf, true),
+        withOcclusion(buildMesh(PlantKind::Conifer, true), PlantKind::Conifer),
+        withOcclusion(buildMesh(PlantKind::Broadleaf, true), PlantKind::Broadleaf),
         buildMesh(PlantKind::Bush, true), buildMesh(PlantKind::Rock, true)};
     return meshes[static_cast<int>(kind)];
 }
@@ -477,6 +526,37 @@ const std::vector<PlantSphere>& Vegetation::spheres(PlantKind kind) {
         std::vector<PlantSphere>{{{0, 0.6, 0}, 0.97, glm::dvec3(kBushLeaves)}},
         std::vector<PlantSphere>{{{0, 0.25, 0}, 0.72, glm::dvec3(kStone)}}};
     return s[static_cast<int>(kind)];
+}
+
+double Vegetation::crownSkyShare(PlantKind kind, const glm::dvec3& point_m,
+                                 const glm::dvec3& normal) {
+    if (kind != PlantKind::Conifer && kind != PlantKind::Broadleaf) return 1.0;
+    const CrownTriangles& crown = crownTriangles(kind);
+    // Cosine-weighted directions about the normal, of equal shares: kRings rings of equal
+    // projected area, kAzimuths each, the rings' azimuths staggered.
+    constexpr int kRings = 6, kAzimuths = 12;
+    const glm::dvec3 w = glm::normalize(normal);
+    const glm::dvec3 a = std::abs(w.y) < 0.9 ? glm::dvec3(0, 1, 0) : glm::dvec3(1, 0, 0);
+    const glm::dvec3 u = glm::normalize(glm::cross(a, w)), v = glm::cross(w, u);
+    int open = 0;
+    for (int r = 0; r < kRings; ++r) {
+        const double rho = std::sqrt((r + 0.5) / kRings), up = std::sqrt(1.0 - rho * rho);
+        for (int k = 0; k < kAzimuths; ++k) {
+            const double phi = 2.0 * kPi * (k + 0.5 * (r % 2)) / kAzimuths;
+            const glm::dvec3 d = rho * std::cos(phi) * u + rho * std::sin(phi) * v + up * w;
+            bool blocked = false;
+            for (std::size_t t = 0; !blocked && t + 2 < crown.corners.size(); t += 3) {
+                glm::dvec2 bary;
+                double distance = 0.0;
+                blocked = glm::intersectRayTriangle(point_m, d, crown.corners[t],
+                                                    crown.corners[t + 1], crown.corners[t + 2],
+                                                    bary, distance) &&
+                          distance > 1e-6;
+            }
+            open += blocked ? 0 : 1;
+        }
+    }
+    return double(open) / double(kRings * kAzimuths);
 }
 
 double Vegetation::footprintRadius_m(PlantKind kind) {

@@ -77,6 +77,14 @@ class Vegetation {
     // The kind's shape as a few spheres (crown, trunk, rock) of about the full mesh's extent: a
     // crown of one or three spheres, a trunk of thin spheres stacked up to the crown.
     static const std::vector<PlantSphere>& spheres(PlantKind kind);
+    // The share of a surface's ambient the kind's crown leaves it, at `point_m` (scale 1, the
+    // kind's frame) with unit `normal`: the cosine-weighted fraction of 72 directions about
+    // the normal along which a ray from the point meets none of the full mesh's crown
+    // triangles (those without bark). 1 for a kind without a crown (bushes, rocks). The
+    // meshes' trunks carry 1 - this a vertex (WorldMesh::occlusion): a tree's one ambient
+    // leaves the tree's own crown out (lighting/NearField.h), yet a trunk stands under it.
+    static double crownSkyShare(PlantKind kind, const glm::dvec3& point_m,
+                                const glm::dvec3& normal);
     // Radius of the kind's footprint at scale 1 (crown or rock) [m].
     static double footprintRadius_m(PlantKind kind);
 

@@ -15,6 +15,10 @@ struct WorldMesh {
     // Terrain only, else empty: the terrain's own sky visibility at a vertex and at its patch's
     // corners, two a vertex (TerrainPatch::skyDetail).
     std::vector<float> skyDetail;
+    // Plants only, else empty: the share of the ambient a vertex's own crown hides from it, one
+    // a vertex (a trunk under its crown; Vegetation::crownSkyShare). The draw scales the
+    // ambient it applies there by 1 - this.
+    std::vector<float> occlusion;
     std::vector<std::uint32_t> indices;  // three per triangle, counter-clockwise seen from outside
 
     std::size_t vertexCount() const { return positions.size() / 3; }

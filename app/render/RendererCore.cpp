@@ -59,6 +59,15 @@ GlMesh uploadMesh(const WorldMesh& mesh) {
         glVertexArrayAttribFormat(vao, 6, 2, GL_FLOAT, GL_FALSE, 0);
         glVertexArrayAttribBinding(vao, 6, 6);
     }
+    // A plant's own crown's occlusion per vertex (world/WorldMesh.h); disabled, the attribute
+    // reads 0 (the ambient kept whole).
+    if (!mesh.occlusion.empty()) {
+        m.occlusion = makeBuffer(mesh.occlusion.data(), mesh.occlusion.size() * sizeof(float));
+        glVertexArrayVertexBuffer(vao, 7, m.occlusion.id(), 0, sizeof(float));
+        glEnableVertexArrayAttrib(vao, 7);
+        glVertexArrayAttribFormat(vao, 7, 1, GL_FLOAT, GL_FALSE, 0);
+        glVertexArrayAttribBinding(vao, 7, 7);
+    }
     glVertexArrayElementBuffer(vao, m.indices.id());
     return m;
 }

@@ -75,6 +75,7 @@ struct GlMesh {
     GlVertexArray vao;
     GlBuffer positions, normals, albedo, indices;
     GlBuffer skyDetail;  // terrain only: two floats a vertex (attribute 6), else none
+    GlBuffer occlusion;  // plants only: one float a vertex (attribute 7), else none
     GLsizei indexCount = 0;
     float boundRadius_m = 0.0f;  // farthest vertex from the mesh origin (culling)
     std::size_t triangles() const { return std::size_t(indexCount) / 3; }

@@ -111,13 +111,14 @@ TEST(WorldProbeEnvironment, FallbackCubeMapFiniteAndFollowsTheDay) {
 // camera horizontally (the way from the trunk to the camera) and stand on that side of it.
 TEST(WorldProbeEnvironment, ObjectWitnessesFaceTheCamera) {
     const WorldProbeEnvironment env(defaultWorld());
-    int trees = 0;
+    int trees = 0, shaded = 0;
     for (int i = 0; i < 6; ++i) {
         const double cx = 300.0 * i - 700.0, cz = 220.0 * i - 500.0;
         const auto witnesses = env.objectWitnesses(cx, cz, 3, 6.0, 48.0, 1.0, i);
         ASSERT_FALSE(witnesses.empty());
         EXPECT_EQ(witnesses[0].kind, ObjectKind::Car);
         EXPECT_NEAR(glm::length(witnesses[0].normal - glm::dvec3(0.0, 1.0, 0.0)), 0.0, 1e-12);
+        EXPECT_EQ(witnesses[0].ambientShare, 1.0);
         for (std::size_t w = 1; w < witnesses.size(); ++w) {
             const ObjectWitness& o = witnesses[w];
             ASSERT_TRUE(o.kind == ObjectKind::TreeBase || o.kind == ObjectKind::TreeCrown);
@@ -139,10 +140,20 @@ TEST(WorldProbeEnvironment, ObjectWitnessesFaceTheCamera) {
                     EXPECT_GE(glm::length(o.position_m - c), double(q.scale) * sphere.radius_m);
                 }
             }
+            // The trunk is drawn with what its crown leaves of the tree's ambient (some sky is
+            // always open in front of it); the crown's leaves with all of it.
+            if (o.kind == ObjectKind::TreeBase) {
+                EXPECT_GT(o.ambientShare, 0.5);
+                EXPECT_LE(o.ambientShare, 1.0);
+                shaded += o.ambientShare < 1.0;
+            } else {
+                EXPECT_EQ(o.ambientShare, 1.0);
+            }
             ++trees;
         }
     }
     EXPECT_GT(trees, 6);  // the default world's woods give most cameras trees in range
+    EXPECT_GT(shaded, trees / 4);  // half the witnesses are trunks: most stand under a crown
     EXPECT_LE(trees, 6 * 3 * 2);
 }
 

@@ -384,6 +384,7 @@ namespace {
 // facing up) and a tree's trunk facing the camera (horizontally).
 class ObjectEnvironment final : public testing_support::FlatProbeEnvironment {
   public:
+    double trunkShare = 1.0;  // what the trunk's crown leaves of its ambient
     std::vector<ObjectWitness> objectWitnesses(double cx, double cz, int, double, double, double,
                                                int) const override {
         ObjectWitness car;
@@ -394,6 +395,7 @@ class ObjectEnvironment final : public testing_support::FlatProbeEnvironment {
         trunk.groundX_m = cx + 10.0, trunk.groundZ_m = cz;
         trunk.normal = {-1.0, 0.0, 0.0};  // towards the camera
         trunk.position_m = {cx + 9.0, 1.0, cz};
+        trunk.ambientShare = trunkShare;
         return {car, trunk};
     }
 };
@@ -403,9 +405,10 @@ struct ObjectFigures {
     std::size_t count;
 };
 
-ObjectFigures objectFigures(float gain, bool mirrorY) {
+ObjectFigures objectFigures(float gain, bool mirrorY, double trunkShare = 1.0) {
     testing_support::FakeCubeCapture coarse(8), full(16);
     ObjectEnvironment environment;
+    environment.trunkShare = trunkShare;
     MeasureSettings ms;
     ms.every = 1;
     ErrorMeter meter(coarse, environment, ms);
@@ -489,6 +492,19 @@ TEST(ReferenceOracle, ObjectWitnessesAreGradedAtTheirDrawnNormal) {
     EXPECT_NEAR(mirrored.trunkBias, exact.trunkBias, 1e-4);
     EXPECT_GT(mirrored.carDrawn, exact.carDrawn + 0.1);  // the roof now sees the ground's light
     EXPECT_GT(mirrored.trunkSphere, exact.trunkSphere + 0.1);
+}
+
+// A trunk under its crown is drawn with the share of the tree's ambient its crown leaves it
+// (ObjectWitness::ambientShare, world/Vegetation.h crownSkyShare): graded at that share, 1 + its
+// bias scales by it, while the car and the sphere figure (the tree's SH itself) do not move.
+TEST(ReferenceOracle, TrunkWitnessesAreGradedWithTheirCrownsShare) {
+    const ObjectFigures whole = objectFigures(0.0f, false);
+    const ObjectFigures shaded = objectFigures(0.0f, false, 0.6);
+    ASSERT_EQ(shaded.count, whole.count);
+    EXPECT_NEAR(shaded.trunkBias + 1.0, 0.6 * (whole.trunkBias + 1.0), 1e-4);
+    EXPECT_GT(shaded.trunkDrawn, 0.3);  // the fakes agree, so a share of 0.6 is 40 % too dark
+    EXPECT_NEAR(shaded.carBias, whole.carBias, 1e-9);
+    EXPECT_NEAR(shaded.trunkSphere, whole.trunkSphere, 1e-9);
 }
 
 // The model step's split lights its coarse captures as the method's own captures light their

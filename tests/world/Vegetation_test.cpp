@@ -190,6 +190,59 @@ TEST(Vegetation, MeshBudgetsAndOutwardFaces) {
     }
 }
 
+// A trunk stands under its crown, which the tree's one ambient leaves out: crownSkyShare is the
+// cosine-weighted share of the sky the crown leaves a surface. Looking straight up from the
+// trunk's foot at the broadleaf's ellipsoid (radii a across, b up, centre D above) it hides
+// sin^2 of the tangent cone's half-angle, tan^2 = a^2 / (D^2 - b^2); the crown's bumps (within
+// +-12.5 %) and facets bound it between the ellipsoid shrunk and grown by 12.5 %.
+TEST(Vegetation, TrunksTakeWhatTheirCrownLeavesOfTheAmbient) {
+    const auto hidden = [](double a, double b, double d) {
+        const double t2 = a * a / (d * d - b * b);
+        return t2 / (1.0 + t2);
+    };
+    const double up = Vegetation::crownSkyShare(PlantKind::Broadleaf, {0.0, 0.01, 0.0}, {0, 1, 0});
+    EXPECT_GE(up, 1.0 - hidden(3.2 * 1.125, 2.8 * 1.125, 6.0) - 0.03);
+    EXPECT_LE(up, 1.0 - hidden(3.2 * 0.875, 2.8 * 0.875, 6.0) + 0.03);
+    // Far out, facing away: nothing; inside the crown: everything; no crown: nothing.
+    EXPECT_EQ(Vegetation::crownSkyShare(PlantKind::Conifer, {20.0, 1.0, 0.0}, {1, 0, 0}), 1.0);
+    EXPECT_EQ(Vegetation::crownSkyShare(PlantKind::Broadleaf, {0.0, 6.0, 0.5}, {0, 0, 1}), 0.0);
+    EXPECT_EQ(Vegetation::crownSkyShare(PlantKind::Rock, {0.0, 0.1, 0.0}, {0, 1, 0}), 1.0);
+    // The meshes carry it on their trunks: darker up the trunk, black inside the crown, the
+    // leaves untouched; bushes and rocks carry none.
+    for (PlantKind kind : {PlantKind::Conifer, PlantKind::Broadleaf}) {
+        for (const WorldMesh* m : {&Vegetation::mesh(kind), &Vegetation::proxyMesh(kind)}) {
+            ASSERT_EQ(m->occlusion.size(), m->vertexCount()) << toString(kind);
+            double yTop = 0.0;
+            for (std::size_t v = 0; v < m->vertexCount(); ++v) {
+                const float o = m->occlusion[v];
+                ASSERT_GE(o, 0.0f);
+                ASSERT_LE(o, 1.0f);
+                const bool bark = m->albedo[3 * v + 1] < 0.14f && m->albedo[3 * v] > 0.19f;
+                if (bark) yTop = std::max(yTop, double(m->positions[3 * v + 1]));
+                if (!bark) EXPECT_EQ(o, 0.0f) << toString(kind) << " leaf vertex " << v;
+            }
+            double baseMax = 0.0, topMin = 1.0;
+            for (std::size_t v = 0; v < m->vertexCount(); ++v) {
+                const bool bark = m->albedo[3 * v + 1] < 0.14f && m->albedo[3 * v] > 0.19f;
+                const double y = m->positions[3 * v + 1];
+                if (bark && y < 0.01) baseMax = std::max(baseMax, double(m->occlusion[v]));
+                if (bark && y > yTop - 0.01) topMin = std::min(topMin, double(m->occlusion[v]));
+            }
+            EXPECT_LT(baseMax, 0.3) << toString(kind);
+            EXPECT_GT(topMin, baseMax + 0.2) << toString(kind);
+        }
+        // The full trunk's top stands inside its crown.
+        const WorldMesh& full = Vegetation::mesh(kind);
+        float top = 1.0f;
+        for (std::size_t v = 0; v < full.vertexCount(); ++v)
+            if (full.positions[3 * v + 1] > 2.4f && full.albedo[3 * v] > 0.19f)
+                top = std::min(top, full.occlusion[v]);
+        EXPECT_GT(top, 0.9f) << toString(kind);
+    }
+    EXPECT_TRUE(Vegetation::mesh(PlantKind::Bush).occlusion.empty());
+    EXPECT_TRUE(Vegetation::mesh(PlantKind::Rock).occlusion.empty());
+}
+
 // The area a shape covers seen along `d` (orthographic), by parallel rays on a grid of g x g over
 // its bounds: the mesh's triangles (either side) or, with `spheres`, those spheres instead.
 double coveredArea(const WorldMesh& mesh, const std::vector<PlantSphere>* spheres,
