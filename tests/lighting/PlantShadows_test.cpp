@@ -12,6 +12,7 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include "TwoSpherePlant.h"
 #include "world/Conventions.h"
 #include "world/Vegetation.h"
 #include "world/World.h"
@@ -73,36 +74,11 @@ TEST(PlantShadows, TheLightTermScalesWithTheShareAndTheAmbientDoesNot) {
     EXPECT_NEAR(meanNormalTransfer(samples, weights, 2).capSun, 0.75 + 0.25 * 0.25, 1e-7);
 }
 
-// A scene of one plant, its spheres beside the point on the side away from the light, which
-// reaches them in part.
-struct ShadedPlant final : NearFieldScene {
-    double share = 0.3;
-    double lightIrradiance = 1.0;
-    mutable int asked = 0;
-    void occludersNear(const glm::dvec3&, double, double, std::vector<SphereOccluder>& out) const override {
-        out.push_back(sphere({5.0, 2.0, 0.0}, 2.0, 1.0));
-        out.push_back(sphere({5.0, 5.0, 0.0}, 1.2, 1.0));
-    }
-    DirectionalLight mainLight(double timeOfDay_h) const override {
-        const double e = kPi / 2.0 - (timeOfDay_h - 12.0) * kPi / 12.0;
-        DirectionalLight l;
-        l.direction = glm::normalize(glm::dvec3(-std::cos(e), std::sin(e), 0.1));
-        l.irradiance = glm::dvec3(lightIrradiance);
-        return l;
-    }
-    HemisphereAmbient ambient(double) const override { return {glm::dvec3(0.5), glm::dvec3(0.2)}; }
-    double groundHeight(double, double) const override { return 0.0; }
-    double sphereLightVisibility(const glm::dvec3&, double, const glm::dvec3&) const override {
-        ++asked;
-        return share;
-    }
-};
-
 // What the near field adds of the light at `p` (green, through the normal facing the plant):
 // the answer with the light less the one without.
 double lightPart(const NearFieldSettings& settings, const glm::dvec3& p, double share, int* asked) {
-    ShadedPlant withLight, dark;
-    withLight.share = dark.share = share;
+    testing_support::TwoSpherePlant withLight, dark;
+    withLight.sunShare = dark.sunShare = share;
     dark.lightIrradiance = 0.0;
     NearField a(withLight, settings), b(dark, settings);
     a.setTimeOfDay(16.0), b.setTimeOfDay(16.0);  // 30 degrees up, behind the point
@@ -112,7 +88,7 @@ double lightPart(const NearFieldSettings& settings, const glm::dvec3& p, double 
     const double e = double(shIrradiance(a.apply(far, p), n).y - shIrradiance(b.apply(far, p), n).y);
     if (asked) {
         a.apply(far, p + glm::dvec3(0.5, 0.0, 0.0));  // another point: the spheres are known
-        *asked = withLight.asked;
+        *asked = withLight.sunAsked;
     }
     return e;
 }
@@ -129,7 +105,8 @@ TEST(PlantShadows, TheNearFieldTakesEachSpheresShareOnceForALight) {
     EXPECT_NEAR(shaded, 0.3 * open, 1e-4 * std::fabs(open) + 1e-6);
     EXPECT_EQ(asked, 2);  // two spheres, two points: asked once each
     // The light moved by more than half a degree: asked again.
-    ShadedPlant scene;
+    testing_support::TwoSpherePlant scene;
+    scene.sunShare = 0.3;
     NearField field(scene, on);
     ShRgb far{};
     far.c[0] = glm::vec3(1.0f);
@@ -137,7 +114,7 @@ TEST(PlantShadows, TheNearFieldTakesEachSpheresShareOnceForALight) {
     field.apply(far, p);
     field.setTimeOfDay(16.5);
     field.apply(far, p + glm::dvec3(0.0, 0.0, 0.5));
-    EXPECT_EQ(scene.asked, 4);
+    EXPECT_EQ(scene.sunAsked, 4);
 }
 
 const World& defaultWorld() {

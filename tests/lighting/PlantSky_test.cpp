@@ -11,6 +11,7 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include "TwoSpherePlant.h"
 #include "world/Conventions.h"
 #include "world/Vegetation.h"
 #include "world/World.h"
@@ -63,28 +64,6 @@ TEST(PlantSky, TheAmbientScalesWithTheShareAndTheLightTermDoesNot) {
               3.99);
 }
 
-// A scene of one plant of two spheres, its sky share given.
-struct SkyPlant final : NearFieldScene {
-    double share = 0.4;
-    mutable int asked = 0;
-    void occludersNear(const glm::dvec3&, double, double, std::vector<SphereOccluder>& out) const override {
-        out.push_back(sphere({5.0, 2.0, 0.0}, 2.0, 1.0));
-        out.push_back(sphere({5.0, 5.0, 0.0}, 1.2, 1.0));
-    }
-    DirectionalLight mainLight(double) const override {
-        DirectionalLight l;
-        l.direction = glm::dvec3(0.0, 1.0, 0.0);
-        l.irradiance = glm::dvec3(0.0);  // no light: the caps show their ambient alone
-        return l;
-    }
-    HemisphereAmbient ambient(double) const override { return {glm::dvec3(0.5), glm::dvec3(0.2)}; }
-    double groundHeight(double, double) const override { return 0.0; }
-    double sphereSkyVisibility(const glm::dvec3&, double) const override {
-        ++asked;
-        return share;
-    }
-};
-
 // With no light, what the caps add through the normal facing them is their ambient: with a share
 // of 0.4 it is 0.4 of what it is with the share off; the scene is asked once a sphere.
 TEST(PlantSky, TheNearFieldTakesEachSpheresShareOnce) {
@@ -96,7 +75,7 @@ TEST(PlantSky, TheNearFieldTakesEachSpheresShareOnce) {
     far.c[0] = glm::vec3(2.0f);
     far.c[2] = glm::vec3(0.8f);  // brighter above
     const glm::vec3 n(1.0f, 0.0f, 0.0f);
-    const auto shown = [&](const NearFieldSettings& s, SkyPlant& scene) {
+    const auto shown = [&](const NearFieldSettings& s, testing_support::TwoSpherePlant& scene) {
         NearField field(scene, s);
         field.setTimeOfDay(12.0);
         const ShRgb out = field.apply(far, p);
@@ -105,13 +84,18 @@ TEST(PlantSky, TheNearFieldTakesEachSpheresShareOnce) {
         // answer with albedo 0 (the share scales the albedo's part only).
         return double(shIrradiance(out, n).y);
     };
-    SkyPlant a, b, dark;
+    testing_support::TwoSpherePlant a, b, dark;
+    for (testing_support::TwoSpherePlant* plant : {&a, &b, &dark}) {
+        plant->albedo = glm::dvec3(0.3, 0.4, 0.2);
+        plant->skyShare = 0.4;
+        plant->lightIrradiance = 0.0;  // the caps show their ambient alone
+    }
     const double withShare = shown(on, a), without = shown(off, b);
-    EXPECT_EQ(a.asked, 2);  // two spheres, two points: asked once each
-    EXPECT_EQ(b.asked, 0);  // off: never asked
+    EXPECT_EQ(a.skyAsked, 2);  // two spheres, two points: asked once each
+    EXPECT_EQ(b.skyAsked, 0);  // off: never asked
     // The part the albedo adds, with and without the share: a plant of the same spheres lit by
     // nothing (share 0) gives the hidden far field alone.
-    dark.share = 0.0;
+    dark.skyShare = 0.0;
     NearFieldSettings darkOn = on;
     const double hidden = shown(darkOn, dark);
     // kMinSkyVisibility keeps a little: compare the parts the albedo adds.

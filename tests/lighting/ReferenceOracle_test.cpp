@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <random>
 #include <string>
 #include <vector>
@@ -309,19 +310,35 @@ struct FreshCaptureMethod final : AmbienceMethod {
     MethodStatistics methodStatistics() const override { return {}; }
 };
 
+// Measuring every frame, for the meters below.
+MeasureSettings everyFrame() {
+    MeasureSettings ms;
+    ms.every = 1;
+    return ms;
+}
+
+// A meter over `coarse` measuring every frame, with `full` as the reference on every frame and
+// `objectTrees` trees a frame among its object witnesses.
+std::unique_ptr<ErrorMeter> referenceMeter(CubeCapture& coarse, CubeCapture& full,
+                                           const ProbeEnvironment& environment,
+                                           int objectTrees = ReferenceSettings{}.objectTrees) {
+    auto meter = std::make_unique<ErrorMeter>(coarse, environment, everyFrame());
+    ReferenceSettings rs;
+    rs.every = 1;
+    rs.objectTrees = objectTrees;
+    meter->attachReference(full, rs, true);
+    return meter;
+}
+
 // Three frames of a FreshCaptureMethod over `coarse` (its gain and surface light as given) on a
 // meter with `full` as the reference and the witnesses on PatchedEnvironment(32, u, v): the
 // drawn budget's summary.
 DrawnBudgetSummary freshBudget(CubeCapture& coarse, CubeCapture& full, double u, double v,
                                float gain, const SurfaceLight* light = nullptr) {
     PatchedEnvironment environment(32.0, u, v);
-    MeasureSettings ms;
-    ms.every = 1;
-    ErrorMeter meter(coarse, environment, ms);
-    ReferenceSettings rs;
-    rs.every = 1;
-    rs.objectTrees = 0;
-    meter.attachReference(full, rs, true);
+    const MeasureSettings ms = everyFrame();
+    const auto meterOwned = referenceMeter(coarse, full, environment, 0);
+    ErrorMeter& meter = *meterOwned;
     FreshCaptureMethod method;
     method.capture = &coarse, method.environment = &environment, method.settings = ms;
     method.gain = gain;
@@ -409,12 +426,9 @@ ObjectFigures objectFigures(float gain, bool mirrorY, double trunkShare = 1.0) {
     testing_support::FakeCubeCapture coarse(8), full(16);
     ObjectEnvironment environment;
     environment.trunkShare = trunkShare;
-    MeasureSettings ms;
-    ms.every = 1;
-    ErrorMeter meter(coarse, environment, ms);
-    ReferenceSettings rs;
-    rs.every = 1;
-    meter.attachReference(full, rs, true);
+    const MeasureSettings ms = everyFrame();
+    const auto meterOwned = referenceMeter(coarse, full, environment);
+    ErrorMeter& meter = *meterOwned;
     FreshCaptureMethod method;
     method.capture = &coarse, method.environment = &environment, method.settings = ms;
     method.gain = gain, method.mirrorY = mirrorY;
@@ -452,12 +466,8 @@ class WalledEnvironment final : public testing_support::FlatProbeEnvironment {
 TEST(ReferenceOracle, ScreenWitnessesInsideThingsAreLeftOut) {
     testing_support::FakeCubeCapture coarse(8), full(16);
     WalledEnvironment environment;
-    MeasureSettings ms;
-    ms.every = 1;
-    ErrorMeter meter(coarse, environment, ms);
-    ReferenceSettings rs;
-    rs.every = 1;
-    meter.attachReference(full, rs, true);
+    const auto meterOwned = referenceMeter(coarse, full, environment);
+    ErrorMeter& meter = *meterOwned;
     std::vector<ScreenWitness> pixels;
     for (int i = 0; i < 6; ++i) {
         ScreenWitness w;
@@ -647,13 +657,9 @@ TEST(DrawnBudget, PatchesLitPerVertexAreGradedAtTheirCellsVertices) {
     const auto run = [&](double range_m) {
         FakeCubeCapture coarse(8), full(16);
         VertexGridEnvironment environment;
-        MeasureSettings ms;
-        ms.every = 1;
-        ErrorMeter meter(coarse, environment, ms);
-        ReferenceSettings rs;
-        rs.every = 1;
-        rs.objectTrees = 0;
-        meter.attachReference(full, rs, true);
+        const MeasureSettings ms = everyFrame();
+        const auto meterOwned = referenceMeter(coarse, full, environment, 0);
+        ErrorMeter& meter = *meterOwned;
         VertexLitMethod method;
         method.capture = &coarse, method.environment = &environment, method.settings = ms;
         method.range_m = range_m;
