@@ -36,6 +36,14 @@ double plantTop_m(PlantKind kind) {
     return tops[static_cast<int>(kind)];
 }
 
+// `world_m` in a plant's mesh frame at scale 1 (the inverse of shaders/object.vert's placing:
+// scaled, turned by its rotation about +Y, moved to its base).
+glm::dvec3 plantFrame(const Plant& plant, const glm::dvec3& world_m) {
+    const glm::dvec3 d = (world_m - plant.position_m) / double(plant.scale);
+    const double c = std::cos(double(plant.rotation_rad)), s = std::sin(double(plant.rotation_rad));
+    return {c * d.x - s * d.z, d.y, s * d.x + c * d.z};
+}
+
 // Object witnesses (see Object witnesses): how far above the terrain a witness must stand (the
 // reference's offset from a surface), and a plant's reach, crown or rock, at the largest scale.
 constexpr double kWitnessClearance_m = 0.25;
@@ -47,6 +55,8 @@ bool WorldProbeEnvironment::inTheOpen(const glm::dvec3& point_m, double clearanc
                                       const glm::dvec3* ownBase_m) const {
     if (!(point_m.y >= world_.height(point_m.x, point_m.z) + clearance_m)) return false;
     for (const Plant& q : world_.vegetation().inDisc(point_m.x, point_m.z, kLargestPlant_m)) {
+        // Among a tree's leaves (its own too): the full crown's bumps reach past its spheres.
+        if (Vegetation::amongLeaves(q.kind, plantFrame(q, point_m))) return false;
         if (ownBase_m && q.position_m == *ownBase_m) continue;
         // Bushes and rocks spread wider near the ground than their spheres: their footprint,
         // up to their top (the rule that hides a terrain witness's ground, DrawnPatch::cover).
@@ -220,8 +230,9 @@ std::vector<ObjectWitness> WorldProbeEnvironment::objectWitnesses(double cameraX
         base.position_m = p.position_m + 0.5 * crown * toward + glm::dvec3(0.0, 1.0, 0.0);
         base.normal = toward;
         // The trunk's mesh is drawn with what its crown leaves of the tree's ambient.
-        base.ambientShare = Vegetation::crownSkyShare(
-            p.kind, (base.position_m - p.position_m) / double(p.scale), base.normal);
+        const glm::dvec3 n = plantFrame(p, p.position_m + base.normal) - plantFrame(p, p.position_m);
+        base.ambientShare =
+            Vegetation::crownSkyShare(p.kind, plantFrame(p, base.position_m), glm::normalize(n));
         ObjectWitness top = base;
         top.kind = ObjectKind::TreeCrown;
         top.ambientShare = 1.0;

@@ -114,10 +114,11 @@ class ProbeEnvironment {
         (void)carHeight_m, (void)measuredIndex;
         return {};
     }
-    // Whether a reference may stand at `point_m`: at least clearance_m above the terrain and
-    // outside every plant (a tree's spheres, world/Vegetation.h; a bush's or rock's footprint up
-    // to its top) but the one standing at ownBase_m, if given (see Object witnesses). Everywhere
-    // by default.
+    // Whether a reference may stand at `point_m`: at least clearance_m above the terrain, not
+    // among any tree's leaves (Vegetation::amongLeaves: the full crowns' bumps reach past their
+    // spheres), and outside every plant (a tree's spheres, world/Vegetation.h; a bush's or
+    // rock's footprint up to its top) but the one standing at ownBase_m, if given (see Object
+    // witnesses). Everywhere by default.
     virtual bool inTheOpen(const glm::dvec3& point_m, double clearance_m,
                            const glm::dvec3* ownBase_m = nullptr) const {
         (void)point_m, (void)clearance_m, (void)ownBase_m;

@@ -559,6 +559,27 @@ double Vegetation::crownSkyShare(PlantKind kind, const glm::dvec3& point_m,
     return double(open) / double(kRings * kAzimuths);
 }
 
+bool Vegetation::amongLeaves(PlantKind kind, const glm::dvec3& point_m) {
+    if (kind != PlantKind::Conifer && kind != PlantKind::Broadleaf) return false;
+    const CrownTriangles& crown = crownTriangles(kind);
+    for (int axis = 0; axis < 6; ++axis) {
+        // Along the axes, tilted a little so that no ray runs along a seam or through a pole.
+        glm::dvec3 d(0.0131, 0.0077, 0.0103);
+        d[axis / 2] = axis % 2 ? -1.0 : 1.0;
+        d = glm::normalize(d);
+        bool met = false;
+        for (std::size_t t = 0; !met && t + 2 < crown.corners.size(); t += 3) {
+            glm::dvec2 bary;
+            double distance = 0.0;
+            met = glm::intersectRayTriangle(point_m, d, crown.corners[t], crown.corners[t + 1],
+                                            crown.corners[t + 2], bary, distance) &&
+                  distance > 0.0;
+        }
+        if (!met) return false;
+    }
+    return true;
+}
+
 double Vegetation::footprintRadius_m(PlantKind kind) {
     switch (kind) {
         case PlantKind::Conifer:

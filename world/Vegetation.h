@@ -85,6 +85,11 @@ class Vegetation {
     // leaves the tree's own crown out (lighting/NearField.h), yet a trunk stands under it.
     static double crownSkyShare(PlantKind kind, const glm::dvec3& point_m,
                                 const glm::dvec3& normal);
+    // Whether `point_m` (scale 1, the kind's frame) lies among the full mesh's leaves: each of
+    // six rays from it, along the axes (tilted a little), meets a crown triangle. A point there sees leaves all
+    // round, which no drawn surface does (the object witnesses keep out of them). False for a
+    // kind without a crown.
+    static bool amongLeaves(PlantKind kind, const glm::dvec3& point_m);
     // Radius of the kind's footprint at scale 1 (crown or rock) [m].
     static double footprintRadius_m(PlantKind kind);
 

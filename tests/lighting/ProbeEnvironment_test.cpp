@@ -163,8 +163,7 @@ TEST(WorldProbeEnvironment, ObjectWitnessesFaceTheCamera) {
 TEST(WorldProbeEnvironment, InTheOpenMeansOutsidePlantsAndAboveTheTerrain) {
     const World& world = defaultWorld();
     const WorldProbeEnvironment env(world);
-    int checked = 0;
-    int small = 0;
+    int checked = 0, small = 0, bumps = 0;
     for (const Plant& p : world.vegetation().inDisc(0.0, 0.0, 400.0)) {
         if (p.kind == PlantKind::Bush || p.kind == PlantKind::Rock) {
             // Within its footprint, low: inside; beside it or high above it: not its doing.
@@ -175,23 +174,47 @@ TEST(WorldProbeEnvironment, InTheOpenMeansOutsidePlantsAndAboveTheTerrain) {
             ++small;
             continue;
         }
+        // A tree: inside its crown's first sphere, among its own leaves too.
         const PlantSphere& first = Vegetation::spheres(p.kind).front();
         const glm::dvec3 inside = p.position_m + double(p.scale) * first.centre_m;
-        if (inside.y < world.height(inside.x, inside.z) + 0.1) continue;  // a sunken rock
         EXPECT_FALSE(env.inTheOpen(inside, 0.0));
-        // Its own plant does not count, but a neighbour's sphere may still hold the point.
+        EXPECT_FALSE(env.inTheOpen(inside, 0.0, &p.position_m));
+        // In its trunk's last sphere, below the leaves: its own plant's spheres do not count, but
+        // a neighbour's sphere or leaves may still hold the point.
+        const glm::dvec3 trunk =
+            p.position_m + double(p.scale) * Vegetation::spheres(p.kind).back().centre_m;
+        if (trunk.y < world.height(trunk.x, trunk.z) + 0.1) continue;
+        EXPECT_FALSE(env.inTheOpen(trunk, 0.0));
         bool neighbour = false;
-        for (const Plant& q : world.vegetation().inDisc(inside.x, inside.z, 8.0)) {
+        for (const Plant& q : world.vegetation().inDisc(trunk.x, trunk.z, 8.0)) {
             if (q.position_m == p.position_m) continue;
             for (const PlantSphere& s : Vegetation::spheres(q.kind))
-                neighbour |= glm::length(inside - (q.position_m + double(q.scale) * s.centre_m)) <
+                neighbour |= glm::length(trunk - (q.position_m + double(q.scale) * s.centre_m)) <
                              double(q.scale) * s.radius_m;
+            const glm::dvec3 d = (trunk - q.position_m) / double(q.scale);
+            const double c = std::cos(double(q.rotation_rad)), sn = std::sin(double(q.rotation_rad));
+            neighbour |= Vegetation::amongLeaves(q.kind, {c * d.x - sn * d.z, d.y, sn * d.x + c * d.z});
         }
-        EXPECT_EQ(env.inTheOpen(inside, 0.0, &p.position_m), !neighbour);
+        EXPECT_EQ(env.inTheOpen(trunk, 0.0, &p.position_m), !neighbour);
+        // Between a broadleaf's sphere and the bumps of its leaves: among them, not in the open.
+        if (p.kind == PlantKind::Broadleaf) {
+            for (int a = 0; a < 32; ++a) {
+                const double phi = 2.0 * kPi * a / 32.0;
+                const glm::dvec3 at = p.position_m + double(p.scale) * glm::dvec3(3.3 * std::cos(phi), 6.0,
+                                                                                  3.3 * std::sin(phi));
+                const glm::dvec3 d = (at - p.position_m) / double(p.scale);
+                const double c = std::cos(double(p.rotation_rad)), sn = std::sin(double(p.rotation_rad));
+                if (!Vegetation::amongLeaves(p.kind, {c * d.x - sn * d.z, d.y, sn * d.x + c * d.z}))
+                    continue;
+                EXPECT_FALSE(env.inTheOpen(at, 0.0, &p.position_m));
+                ++bumps;
+            }
+        }
         if (++checked == 40) break;
     }
     EXPECT_EQ(checked, 40);
     EXPECT_GT(small, 5);
+    EXPECT_GT(bumps, 0);  // the bumps reach past the sphere (3.15 m) at 3.3 m somewhere
     for (double x = -300.0; x <= 300.0; x += 150.0) {
         const double ground = world.height(x, 77.0);
         EXPECT_FALSE(env.inTheOpen({x, ground + 0.2, 77.0}, 0.25));

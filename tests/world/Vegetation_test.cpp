@@ -195,7 +195,7 @@ TEST(Vegetation, MeshBudgetsAndOutwardFaces) {
 // trunk's foot at the broadleaf's ellipsoid (radii a across, b up, centre D above) it hides
 // sin^2 of the tangent cone's half-angle, tan^2 = a^2 / (D^2 - b^2); the crown's bumps (within
 // +-12.5 %) and facets bound it between the ellipsoid shrunk and grown by 12.5 %.
-TEST(Vegetation, TrunksTakeWhatTheirCrownLeavesOfTheAmbient) {
+TEST(Vegetation, TrunksTakeWhatTheirCrownLeavesOfTheAmbient) {  // and what lies among the leaves
     const auto hidden = [](double a, double b, double d) {
         const double t2 = a * a / (d * d - b * b);
         return t2 / (1.0 + t2);
@@ -240,6 +240,12 @@ TEST(Vegetation, TrunksTakeWhatTheirCrownLeavesOfTheAmbient) {
         EXPECT_GT(top, 0.9f) << toString(kind);
     }
     EXPECT_TRUE(Vegetation::mesh(PlantKind::Bush).occlusion.empty());
+    // Among the leaves: inside a crown, not under it, beside it or in a rock.
+    EXPECT_TRUE(Vegetation::amongLeaves(PlantKind::Broadleaf, {0.0, 6.0, 0.0}));
+    EXPECT_TRUE(Vegetation::amongLeaves(PlantKind::Conifer, {0.5, 3.0, 0.0}));
+    EXPECT_FALSE(Vegetation::amongLeaves(PlantKind::Conifer, {0.5, 1.0, 0.0}));
+    EXPECT_FALSE(Vegetation::amongLeaves(PlantKind::Broadleaf, {5.0, 6.0, 0.0}));
+    EXPECT_FALSE(Vegetation::amongLeaves(PlantKind::Rock, {0.0, 0.2, 0.0}));
     EXPECT_TRUE(Vegetation::mesh(PlantKind::Rock).occlusion.empty());
 }
 
