@@ -24,8 +24,9 @@
 //   Each also carries the normal of the surface it stands for as the camera sees it, at which
 //   the error at the drawn normal is taken: a tree's trunk and crown face the camera
 //   (horizontally), the car's roof faces up. A tree whose base or crown witness would stand
-//   inside another plant (inTheOpen) or less than 0.25 m above the terrain is passed over for
-//   the next: such a point shows nothing the camera sees.
+//   inside another plant or among any tree's leaves, its own too (inTheOpen), or less than
+//   0.25 m above the terrain is passed over for the next: such a point shows nothing the
+//   camera sees.
 #pragma once
 
 #include <array>
