@@ -102,7 +102,7 @@ def headline(rows, setting, command):
                     e += " (%s)" % fmt_error(number(r, "error_mean"))
                 cells.append("%s · %s" % (e, fmt_ms(number(r, "ambience_ms_median"))))
         lines.append("| %s | %s |" % (name, " | ".join(cells)))
-    ratios = []
+    ratios, floors = [], []
     for rp in replays:
         ours = cell.get((rp, "volume"))
         ours_e = number(ours, key) if ours and ours.get("status") == "ok" else None
@@ -111,9 +111,16 @@ def headline(rows, setting, command):
                   and number(r, key) is not None]
         if ours_e is None or not others:
             ratios.append("—")
+            floors.append("—")
             continue
         best_e, best_m = min(others)
         ratios.append("**%.2f** (%s)" % (ours_e / best_e, best_m))
+        # What far-field work alone could reach: ours with its far-field term taken out (the
+        # patch, model and truncation terms, the same for every method) over the best other.
+        shared = [number(ours, k) for k in ("drawn_budget_patch", "drawn_budget_model",
+                                            "drawn_budget_truncation")]
+        floors.append("%.2f" % (sum(shared) / best_e) if all(v is not None for v in shared)
+                      else "—")
     lines.append("| ours ÷ best other, mean error | %s |" % " | ".join(ratios))
     # Where our error at the drawn normal comes from (the budget that adds up to it), and what
     # the same method gives evaluated at each witness' own point (an ambient per pixel).
@@ -140,6 +147,9 @@ def headline(rows, setting, command):
                      % " | ".join(budget))
         lines.append("| ours evaluated at each witness' own point (no patch blend) | %s |"
                      % " | ".join(per_point))
+        if any(f != "—" for f in floors):
+            lines.append("| ours ÷ best other with a far field as good as fresh captures (the "
+                         "floor of far-field work alone) | %s |" % " | ".join(floors))
         if any(b != "—" for b in bias):
             lines.append("| ours' signed bias at the drawn normal (the coarse capture scene's "
                          "alone: at the point, where the probe stands) | %s |" % " | ".join(bias))

@@ -531,6 +531,41 @@ TEST(BenchCommand, CollectReportsRunsThatDidNotRun) {
     }
 }
 
+// The drawn budget's floor line: ours with its far-field term taken out, over the best other
+// method's drawn mean, from two run folders whose budgets are known (0.10 - 0.02 over 0.09).
+TEST(BenchCommand, DrawnBudgetStatesTheFarFieldsFloor) {
+    const fs::path dir = scratchDir("bench-floor");
+    const auto writeRun = [&](const std::string& method, double drawn, double farField) {
+        const fs::path run = dir / "runs" / ("highway-drive__" + method + "__default");
+        fs::create_directories(run);
+        std::ofstream(run / "exit-status.txt") << "0 1.0\n";
+        nlohmann::json report;
+        report["measurement"]["reference"]["drawn"]["budget"] = {
+            {"count", 40},       {"drawn", drawn},       {"farField", farField},
+            {"patch", 0.0},      {"model", drawn - farField - 0.01},
+            {"truncation", 0.01}, {"closure", 1.0},      {"perPoint", drawn}};
+        std::ofstream(run / "report.json") << report.dump();
+    };
+    writeRun("volume", 0.10, 0.02);
+    writeRun("grid", 0.09, 0.01);
+    writeRun("reactive", 0.12, 0.04);
+    const auto r = runAmbience("bench --from-runs --replays highway-drive --methods "
+                               "volume,grid,reactive --oracle reference --out " +
+                               dir.string());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const std::string summary = slurp((dir / "summary.md").string());
+    const std::string lead = "ours would read ";
+    const std::size_t at = summary.find(lead);
+    ASSERT_NE(at, std::string::npos) << summary;
+    const double floorValue = std::stod(summary.substr(at + lead.size()));
+    EXPECT_NEAR(floorValue, 0.08, 5e-5);
+    const std::size_t ratioAt = summary.find("**", at);
+    ASSERT_NE(ratioAt, std::string::npos);
+    EXPECT_NEAR(std::stod(summary.substr(ratioAt + 2)), 0.08 / 0.09, 5e-4);
+    EXPECT_NE(summary.find("the best other here (grid, 0.0900)", at), std::string::npos)
+        << summary.substr(at, 300);
+}
+
 // A bench with stderr in a file (not a terminal) writes plain progress lines at the interval
 // set, the run count rising to the total, with no carriage returns.
 TEST(BenchCommand, ProgressLinesWhenStderrIsAFile) {
