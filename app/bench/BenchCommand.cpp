@@ -369,7 +369,8 @@ void addBenchCommand(CLI::App& app) {
                                  "other option (" +
                                      opt->get_name() + ")");
             line += " " + opt->get_name();
-            if (opt->get_type_size() != 0) line += " " + shellQuote(opt->as<std::string>());
+            // A flag (CLI11 gives it one item and no expected count) stands alone.
+            if (opt->get_expected_min() != 0) line += " " + shellQuote(opt->as<std::string>());
         }
         if (!o->collect.empty()) {
             std::string emitted;

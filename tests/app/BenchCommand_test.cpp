@@ -554,6 +554,10 @@ TEST(BenchCommand, DrawnBudgetStatesTheFarFieldsFloor) {
                                dir.string());
     ASSERT_EQ(r.exitCode, 0) << r.err;
     const std::string summary = slurp((dir / "summary.md").string());
+    // The command as given: a flag stands alone (no value after it).
+    EXPECT_NE(summary.find("--oracle reference --out " + dir.string() + " --from-runs`"),
+              std::string::npos)
+        << summary.substr(0, 400);
     const std::string lead = "ours would read ";
     const std::size_t at = summary.find(lead);
     ASSERT_NE(at, std::string::npos) << summary;
