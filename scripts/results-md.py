@@ -153,7 +153,40 @@ def headline(rows, setting, command):
         if any(b != "—" for b in bias):
             lines.append("| ours' signed bias at the drawn normal (the coarse capture scene's "
                          "alone: at the point, where the probe stands) | %s |" % " | ".join(bias))
+    if drawn:
+        lines += where_users_look(replays, methods, cell)
     return "\n".join(lines)
+
+
+def where_users_look(replays, methods, cell):
+    """The same runs where users look: the terrain under crowns, the screen, the objects."""
+    def e(r, key):
+        return fmt_error(number(r, key))
+    lines = [
+        "",
+        "Where users look, the same runs: the terrain witnesses under tree crowns (in the mean "
+        "above) · the screen-weighted error at random pixels of the main view, all of them "
+        "(terrain / road / objects) · the objects at their drawn normal (the car's roof / tree "
+        "trunks / crowns), all against the same reference.",
+        "",
+        "| method | " + " | ".join(replays) + " |",
+        "|---|" + "---|" * len(replays),
+    ]
+    for m in methods:
+        cells = []
+        for rp in replays:
+            r = cell.get((rp, m))
+            if r is None or r.get("status") != "ok":
+                cells.append("—")
+                continue
+            cells.append("%s · %s (%s / %s / %s) · %s / %s / %s" % (
+                e(r, "drawn_under_crown_error_mean"), e(r, "screen_error_mean"),
+                e(r, "screen_terrain_error_mean"), e(r, "screen_road_error_mean"),
+                e(r, "screen_object_error_mean"), e(r, "car_drawn_error_mean"),
+                e(r, "tree_base_drawn_error_mean"), e(r, "tree_crown_drawn_error_mean")))
+        name = "**volume (ours)**" if m == "volume" else m
+        lines.append("| %s | %s |" % (name, " | ".join(cells)))
+    return lines
 
 
 def frames_section(frames_tsv, root_hint):
