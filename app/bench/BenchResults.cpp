@@ -281,12 +281,19 @@ double errorUpTo(const std::string& dir, const Job& j, int lastFrame) {
 // Our run against another of the same replay: the ratio of mean errors over the frames both
 // measured, with its paired bootstrap 95 % interval (BenchStats.h).
 // With `drawn`, the terrain witnesses' errors at the drawn normal (reference runs only).
+// What a ratio compares: the headline witnesses over the sphere of normals, at the drawn
+// normal, or the screen witnesses.
+enum class Measured { Sphere, Drawn, Screen };
+
 RatioInterval ratioAgainst(const std::string& dir, const Job& ours, const Job& other,
-                           bool drawn = false) {
+                           Measured measured = Measured::Sphere) {
     const bool reference =
         stringAt(objectAt(ours.report, "measurement"), "oracle", "") == "reference";
     const auto errors = [&](const Job& j) {
-        return readFrameErrors((fs::path(dir) / j.runDir).string(), reference, drawn);
+        const std::string runDir = (fs::path(dir) / j.runDir).string();
+        return measured == Measured::Screen
+                   ? readScreenErrors(runDir)
+                   : readFrameErrors(runDir, reference, measured == Measured::Drawn);
     };
     return pairedBootstrapRatio(errors(ours), errors(other));
 }
@@ -727,16 +734,27 @@ void writeSummary(const std::vector<Job>& jobs, const std::string& path,
         }
         if (ours && !others.empty()) {
             // The drawn normal's ratio first (the headline) with the reference, then the
-            // sphere's.
-            for (const bool atDrawn : drawn ? std::vector<bool>{true, false}
-                                            : std::vector<bool>{false}) {
-                out << "\nOur mean error" << (atDrawn ? " at the drawn normal" : drawn ? " over the sphere of normals" : "")
+            // sphere's and the screen-weighted one.
+            const std::vector<Measured> measures =
+                drawn ? std::vector<Measured>{Measured::Drawn, Measured::Sphere, Measured::Screen}
+                      : std::vector<Measured>{Measured::Sphere};
+            for (const Measured measured : measures) {
+                const std::string oursDir = (fs::path(dir) / ours->runDir).string();
+                if (measured == Measured::Screen && readScreenErrors(oursDir).byFrame.empty())
+                    continue;
+                out << "\nOur "
+                    << (measured == Measured::Drawn    ? "mean error at the drawn normal"
+                        : measured == Measured::Screen ? "screen-weighted mean error (the "
+                                                         "screen witnesses: terrain, road "
+                                                         "and objects)"
+                        : drawn                        ? "mean error over the sphere of normals"
+                                                       : "mean error")
                     << " / each other method's (default points), over the frames both "
                        "measured, with the paired bootstrap 95 % interval (blocks of "
                        "consecutive measured frames resampled; app/bench/BenchStats.h):";
                 int frames = 0;
                 for (const Job* other : others) {
-                    const RatioInterval r = ratioAgainst(dir, *ours, *other, atDrawn);
+                    const RatioInterval r = ratioAgainst(dir, *ours, *other, measured);
                     frames = std::max(frames, r.frames);
                     out << (other == others.front() ? " " : "; ") << other->method << " **"
                         << formatRatio(r) << "**" << (r.excludesOne() ? "" : " (interval holds 1)");

@@ -22,42 +22,64 @@ double FrameErrors::mean() const {
     return count ? sum / count : std::nan("");
 }
 
-FrameErrors readFrameErrors(const std::string& runDir, bool reference, bool drawn) {
+namespace {
+
+std::vector<std::string> csvCells(const std::string& line) {
+    std::vector<std::string> f;
+    std::stringstream cells(line);
+    for (std::string cell; std::getline(cells, cell, ',');) f.push_back(cell);
+    return f;
+}
+
+// The rows of a run's CSV file (header first) as errors per frame: the frame from column
+// `frameColumn`, the error from the column named `errorName` (or column `errorColumn` when the
+// name is empty), rows whose `filterColumn` cell does not start with `filterPrefix` skipped.
+// A missing or unreadable file, or a header without the column, gives no frames.
+FrameErrors readErrorColumn(const std::string& path, const std::string& errorName,
+                            std::size_t errorColumn, std::size_t filterColumn = 0,
+                            const std::string& filterPrefix = "") {
     FrameErrors out;
     std::string text;
     try {
-        text = readTextFile(runDir + (reference ? "/reference.csv" : "/measure.csv"),
-                            "measurement file", kMaxRunReportBytes * 4, Links::Refuse);
+        text = readTextFile(path, "measurement file", kMaxRunReportBytes * 4, Links::Refuse);
     } catch (const InputError&) {
         return out;
     }
     std::stringstream in(text);
     std::string line;
-    std::getline(in, line);  // the header: the error's column by name
-    std::size_t column = reference ? 5 : 4;
-    {
-        std::stringstream cells(line);
-        std::size_t i = 0;
-        bool found = !drawn;
-        for (std::string cell; std::getline(cells, cell, ','); ++i)
-            if (drawn && cell == "drawn") column = i, found = true;
-        if (!found) return out;
+    std::getline(in, line);
+    if (!errorName.empty()) {
+        const auto header = csvCells(line);
+        const auto at = std::find(header.begin(), header.end(), errorName);
+        if (at == header.end()) return out;
+        errorColumn = std::size_t(at - header.begin());
     }
     while (std::getline(in, line)) {
-        std::vector<std::string> f;
-        std::stringstream cells(line);
-        for (std::string cell; std::getline(cells, cell, ',');) f.push_back(cell);
-        if (f.size() <= column) continue;
-        // reference.csv: frame,witness,x,y,z,total,...; measure.csv: frame,...,error_mean (4).
-        if (reference && f[1].rfind("ring_", 0) != 0) continue;  // objects are not headline
+        const auto f = csvCells(line);
+        if (f.size() <= std::max(errorColumn, filterColumn)) continue;
+        if (!filterPrefix.empty() && f[filterColumn].rfind(filterPrefix, 0) != 0) continue;
         char* end = nullptr;
         const long frame = std::strtol(f[0].c_str(), &end, 10);
         if (end == f[0].c_str() || frame < 0 || frame > 100000000) continue;
         char* numberEnd = nullptr;
-        const double e = std::strtod(f[column].c_str(), &numberEnd);
-        if (numberEnd != f[column].c_str() && std::isfinite(e)) out.add(int(frame), e);
+        const double e = std::strtod(f[errorColumn].c_str(), &numberEnd);
+        if (numberEnd != f[errorColumn].c_str() && std::isfinite(e)) out.add(int(frame), e);
     }
     return out;
+}
+
+}  // namespace
+
+FrameErrors readFrameErrors(const std::string& runDir, bool reference, bool drawn) {
+    // reference.csv: frame,witness,x,y,z,total,...,drawn,...; measure.csv: frame,...,
+    // error_mean (4). Objects are not headline: reference.csv's terrain rows ("ring_*") only.
+    if (!reference) return readErrorColumn(runDir + "/measure.csv", "", 4);
+    return readErrorColumn(runDir + "/reference.csv", drawn ? "drawn" : "", 5, 1, "ring_");
+}
+
+FrameErrors readScreenErrors(const std::string& runDir) {
+    // screen.csv: frame,kind,error,bias,x,y,z,nx,ny,nz.
+    return readErrorColumn(runDir + "/screen.csv", "error", 2);
 }
 
 RatioInterval pairedBootstrapRatio(const FrameErrors& ours, const FrameErrors& other, int resamples,

@@ -36,6 +36,11 @@ struct FrameErrors {
 // normal; witnesses without one are left out).
 FrameErrors readFrameErrors(const std::string& runDir, bool reference, bool drawn = false);
 
+// The screen witnesses of a run folder (screen.csv: random pixels of the main view, terrain,
+// road and objects, each the error of the ambient as drawn there): the "error" column per frame.
+// A run without the file gives no frames.
+FrameErrors readScreenErrors(const std::string& runDir);
+
 struct RatioInterval {
     double ratio = 0.0;         // mean(ours) / mean(other) over the frames both measured
     double lo = 0.0, hi = 0.0;  // 95 % interval

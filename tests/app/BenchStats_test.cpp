@@ -1,7 +1,10 @@
 // BenchStats_test.cpp — the paired bootstrap interval of a ratio of mean errors: exact when the
 // runs differ by a constant factor, centred on the ratio, about 95 % coverage on synthetic
-// series with a known ratio, narrower with more frames, and frames paired by their number.
+// series with a known ratio, narrower with more frames, and frames paired by their number; the
+// run folder's files read as errors per frame (terrain rows, the drawn column, the screen).
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -101,6 +104,43 @@ TEST(BenchStats, TheSameSeedGivesTheSameInterval) {
     const RatioInterval x = pairedBootstrapRatio(a, b), y = pairedBootstrapRatio(a, b);
     EXPECT_EQ(x.lo, y.lo);
     EXPECT_EQ(x.hi, y.hi);
+}
+
+// A run folder's measurement files read back as errors per frame: reference.csv's terrain rows
+// only (objects are not headline), its "total" or "drawn" column found by position or name;
+// screen.csv's "error" by name, every kind; rows that do not parse are skipped, a missing file
+// gives no frames.
+TEST(BenchStats, RunFilesAreReadAsErrorsPerFrame) {
+    namespace fs = std::filesystem;
+    const fs::path dir = fs::temp_directory_path() / "ambience-bench-stats-files";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    std::ofstream(dir / "reference.csv") << "frame,witness,x,y,z,total,drawn\n"
+                                            "0,ring_0,0,0,0,0.2,0.1\n"
+                                            "0,ring_1,0,0,0,0.4,0.3\n"
+                                            "0,car,0,0,0,9.0,9.0\n"
+                                            "6,ring_0,0,0,0,0.6,nan\n"
+                                            "x,ring_0,0,0,0,5.0,5.0\n";
+    std::ofstream(dir / "screen.csv") << "frame,kind,error,bias,x,y,z,nx,ny,nz\n"
+                                         "0,terrain,0.5,0,0,0,0,0,1,0\n"
+                                         "0,object,0.1,0,0,0,0,0,1,0\n"
+                                         "6,road,0.3,0,0,0,0,0,1,0\n";
+    const FrameErrors sphere = readFrameErrors(dir.string(), true);
+    ASSERT_EQ(sphere.byFrame.size(), 2u);
+    EXPECT_NEAR(sphere.byFrame.at(0).first, 0.6, 1e-12);
+    EXPECT_EQ(sphere.byFrame.at(0).second, 2);
+    EXPECT_NEAR(sphere.mean(), 0.4, 1e-12);  // (0.2 + 0.4 + 0.6) / 3
+    const FrameErrors drawn = readFrameErrors(dir.string(), true, true);
+    ASSERT_EQ(drawn.byFrame.size(), 1u);  // frame 6's drawn is not a number
+    EXPECT_NEAR(drawn.mean(), 0.2, 1e-12);
+    const FrameErrors screen = readScreenErrors(dir.string());
+    ASSERT_EQ(screen.byFrame.size(), 2u);
+    EXPECT_NEAR(screen.byFrame.at(0).first, 0.6, 1e-12);
+    EXPECT_NEAR(screen.mean(), 0.3, 1e-12);
+    EXPECT_TRUE(readScreenErrors((dir / "nowhere").string()).byFrame.empty());
+    std::ofstream(dir / "screen.csv") << "frame,kind,bias\n0,terrain,0.5\n";  // no error column
+    EXPECT_TRUE(readScreenErrors(dir.string()).byFrame.empty());
+    fs::remove_all(dir);
 }
 
 }  // namespace
