@@ -26,12 +26,16 @@ void checkBounceSettings(const BounceSettings& s) {
     if (s.maxBounces < 1 || s.maxBounces > 64) throw InputError("bounce passes", "expected 1 to 64");
     if (!(s.epoch_h > 0.0 && s.epoch_h <= 24.0))
         throw InputError("bounce epoch", "expected (0, 24] hours");
+    if (!(s.canopy_m == 0.0 || (s.canopy_m >= 1.0 && s.canopy_m <= 100.0)))
+        throw InputError("--bounce-canopy", "expected 0 (one layer) or 1 to 100 m");
 }
 
 std::string describeBounceSettings(const BounceSettings& s) {
     char text[160];
     std::snprintf(text, sizeof text, "spacing=%g reach=%g face=%d tolerance=%g passes=%d epoch=%g",
                   s.spacing_m, s.reach_m, s.faceSize, s.tolerance, s.maxBounces, s.epoch_h);
+    // One layer keeps the key it always had (caches made before the layers stay valid).
+    if (s.canopy_m > 0.0) return std::string(text) + " canopy=" + std::to_string(s.canopy_m);
     return text;
 }
 
@@ -78,6 +82,13 @@ void BounceField::layOut(const std::vector<glm::dvec2>& path,
         pt.position_m = place(double(i) * s, double(k) * s);
         points_.push_back(pt);
     }
+    layerSize_ = points_.size();
+    if (settings_.canopy_m > 0.0)
+        for (std::size_t n = 0; n < layerSize_; ++n) {
+            Point up = points_[n];
+            up.position_m.y += settings_.canopy_m;
+            points_.push_back(up);
+        }
     fillGrid();
 }
 
@@ -98,7 +109,7 @@ void BounceField::fillGrid() {
     // Multi-source breadth-first fill over the 8-neighbourhood: each empty node takes the
     // point nearest in chessboard distance (the first reached on ties, points in lattice order).
     std::deque<int> queue;
-    for (std::size_t n = 0; n < points_.size(); ++n) {
+    for (std::size_t n = 0; n < layerSize_; ++n) {
         const int cell = int((points_[n].k - k0_) * width_ + (points_[n].i - i0_));
         nearest_[std::size_t(cell)] = int(n);
         queue.push_back(cell);
@@ -119,21 +130,36 @@ void BounceField::fillGrid() {
     }
 }
 
-ShRgb BounceField::shAt(const glm::dvec3& position_m) const {
-    if (nearest_.empty()) return ShRgb{};
+template <typename T, typename Get>
+T BounceField::bilinear(const glm::dvec3& position_m, std::size_t offset, Get get) const {
     const double s = settings_.spacing_m;
     const double u = std::clamp(position_m.x / s - double(i0_), 0.0, double(width_ - 1));
     const double v = std::clamp(position_m.z / s - double(k0_), 0.0, double(height_ - 1));
-    if (!std::isfinite(u) || !std::isfinite(v)) return ShRgb{};
     const int a = std::min(int(u), std::max(width_ - 2, 0));
     const int b = std::min(int(v), std::max(height_ - 2, 0));
     const int a1 = std::min(a + 1, width_ - 1), b1 = std::min(b + 1, height_ - 1);
     const float fu = float(u - a), fv = float(v - b);
-    const auto at = [&](int i, int k) -> const ShRgb& {
-        return points_[std::size_t(nearest_[std::size_t(k * width_ + i)])].sh;
+    const auto at = [&](int i, int k) {
+        return get(points_[offset + std::size_t(nearest_[std::size_t(k * width_ + i)])]);
     };
     return at(a, b) * ((1.0f - fu) * (1.0f - fv)) + at(a1, b) * (fu * (1.0f - fv)) +
            at(a, b1) * ((1.0f - fu) * fv) + at(a1, b1) * (fu * fv);
+}
+
+ShRgb BounceField::shAt(const glm::dvec3& position_m) const {
+    if (nearest_.empty()) return ShRgb{};
+    if (!std::isfinite(position_m.x) || !std::isfinite(position_m.z)) return ShRgb{};
+    const auto sh = [](const Point& p) { return p.sh; };
+    const ShRgb low = bilinear<ShRgb>(position_m, 0, sh);
+    if (points_.size() == layerSize_) return low;
+    const auto height = [](const Point& p) { return float(p.position_m.y); };
+    const double yLow = bilinear<float>(position_m, 0, height);
+    const double yHigh = bilinear<float>(position_m, layerSize_, height);
+    const double t = std::isfinite(position_m.y) && yHigh > yLow
+                         ? std::clamp((position_m.y - yLow) / (yHigh - yLow), 0.0, 1.0)
+                         : 0.0;
+    if (t <= 0.0) return low;
+    return low * float(1.0 - t) + bilinear<ShRgb>(position_m, layerSize_, sh) * float(t);
 }
 
 const BounceSolve& BounceField::solve(CubeCapture& capture, double timeOfDay_h) {

@@ -31,6 +31,16 @@
 //   the nearest captured point (chessboard distance on the lattice, first found on ties), so the
 //   field is defined and continuous everywhere; beyond the lattice's bounding box the box's edge
 //   value holds. Before the first pass the field is zero everywhere.
+// [SECTION] Two layers (canopy_m > 0)
+//   One layer reads, for every surface, the field where a probe stands 2 m above the ground,
+//   out of plant footprints: in a wood, under its neighbours' crowns. A crown's top is lit by
+//   far more sky than that. With canopy_m > 0 each lattice node holds a second point canopy_m
+//   above its first, solved with it (both layers in every pass), and a surface at height y
+//   reads the two layers' bilinear values blended linearly by
+//       t = clamp((y - y_low) / (y_high - y_low), 0, 1)
+//   y_low and y_high the layers' bilinear heights at its x, z: the ground reads the lower layer,
+//   a surface canopy_m above it the upper one. Objects (plants) are read at their largest
+//   sphere's centre (app/render RendererSceneSettings::objectsAtCrown), not at their base.
 // [SECTION] BounceLitCapture
 //   A CubeCapture that lights the surfaces of another (the reference's full-scene capture) with
 //   bounce fields: solved on the first capture that needs one (a reference read from a cache
@@ -60,6 +70,9 @@ struct BounceSettings {
     double tolerance = 0.01;   // stop at the first pass changing the field by less
     int maxBounces = 12;
     double epoch_h = 0.25;     // BounceLitCapture: a field per this much time of day
+    // A second layer of points this far above the first (0: one layer). See "Two layers":
+    // 10 m puts it at 12 m, the top of a full-grown conifer (world/Vegetation.h).
+    double canopy_m = 10.0;
 };
 // Throws InputError(option names) for settings out of range.
 void checkBounceSettings(const BounceSettings& s);
@@ -98,12 +111,16 @@ class BounceField final : public SurfaceLight {
 
     const BounceSettings& settings() const { return settings_; }
     std::size_t points() const { return points_.size(); }
+    // Every point, the lower layer first (the upper one, when there is one, in the same order).
     const glm::dvec3& pointPosition(std::size_t i) const { return points_[i].position_m; }
     const ShRgb& pointSh(std::size_t i) const { return points_[i].sh; }
     const BounceSolve& lastSolve() const { return solve_; }
 
   private:
     void fillGrid();
+    // The bilinear value over one layer (offset 0: the lower; layerSize_: the upper) of `get`.
+    template <typename T, typename Get>
+    T bilinear(const glm::dvec3& position_m, std::size_t offset, Get get) const;
 
     struct Point {
         std::int64_t i = 0, k = 0;
@@ -111,7 +128,8 @@ class BounceField final : public SurfaceLight {
         ShRgb sh;
     };
     BounceSettings settings_;
-    std::vector<Point> points_;
+    std::vector<Point> points_;  // the lower layer, then the upper one (layerSize_ each)
+    std::size_t layerSize_ = 0;
     // The lattice's bounding box [i0, i0 + width) x [k0, k0 + height), every node filled.
     std::int64_t i0_ = 0, k0_ = 0;
     int width_ = 0, height_ = 0;

@@ -200,6 +200,8 @@ BenchManifest parseBenchManifest(const std::string& text, const std::string& whe
         m.bounceSpacing_m = f.integer("bounceSpacing_m", 8, 4096);
         m.bounceReach_m = f.integer("bounceReach_m", 0, 20000);
         m.bounceFace = f.integer("bounceFace", 4, 256);
+        // Manifests from before the two layers have one.
+        if (j.contains("bounceCanopy_m")) m.bounceCanopy_m = f.integer("bounceCanopy_m", 0, 100);
     }
     const json& runs = f.at("runs");
     if (!runs.is_array()) f.fail("runs", "expected a list of run folders");
@@ -237,6 +239,7 @@ nlohmann::json benchManifestJson(const BenchManifest& m) {
             {"bounceSpacing_m", int(std::lround(m.bounceSpacing_m))},
             {"bounceReach_m", int(std::lround(m.bounceReach_m))},
             {"bounceFace", m.bounceFace},
+            {"bounceCanopy_m", int(std::lround(m.bounceCanopy_m))},
             {"runs", m.runs}};
 }
 

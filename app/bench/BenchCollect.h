@@ -73,6 +73,7 @@ struct BenchManifest {
     std::string referenceLight = "hemisphere";
     double bounceSpacing_m = 256.0, bounceReach_m = 500.0;
     int bounceFace = 32;
+    double bounceCanopy_m = 0.0;  // lighting/BounceField.h "Two layers" (0: one layer)
     std::vector<std::string> runs;  // the run folders, relative: runs/<plain name>
 };
 

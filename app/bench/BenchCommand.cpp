@@ -90,6 +90,7 @@ void emitBench(const BenchOptions& o, const std::vector<Job>& jobs, const Runner
     manifest.bounceSpacing_m = o.bounce.spacing_m;
     manifest.bounceReach_m = o.bounce.reach_m;
     manifest.bounceFace = o.bounce.faceSize;
+    manifest.bounceCanopy_m = o.bounce.canopy_m;
     manifest.measureEvery = o.measureEvery;
     manifest.maxFrames = o.maxFrames;
     manifest.stride = o.stride;
@@ -131,6 +132,7 @@ BenchOptions readManifest(const std::string& dir, std::string& commandLine) {
     o.bounce.spacing_m = m.bounceSpacing_m;
     o.bounce.reach_m = m.bounceReach_m;
     o.bounce.faceSize = m.bounceFace;
+    o.bounce.canopy_m = m.bounceCanopy_m;
     o.measureEvery = m.measureEvery;
     o.maxFrames = m.maxFrames;
     o.stride = m.stride;

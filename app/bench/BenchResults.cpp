@@ -607,7 +607,12 @@ std::string referenceLightLine(const std::vector<Job>& jobs, const std::string& 
             out << " (its own bounce field: " << fmt(number(s, {"points"}), "%.0f")
                 << " lattice points " << fmt(number(ref, {"bounce", "spacing_m"}), "%.0f")
                 << " m apart within " << fmt(number(ref, {"bounce", "reach_m"}), "%.0f")
-                << " m of the path, " << fmt(number(s, {"bounces"}), "%.0f") << " bounces to a "
+                << " m of the path"
+                << (number(ref, {"bounce", "canopy_m"}) > 0.0
+                        ? ", in two layers " + fmt(number(ref, {"bounce", "canopy_m"}), "%.0f") +
+                              " m apart (surfaces read them by their height)"
+                        : std::string())
+                << ", " << fmt(number(s, {"bounces"}), "%.0f") << " bounces to a "
                 << "change below 1 % (";
             bool first = true;
             for (const json& c : changes)

@@ -126,6 +126,11 @@ std::vector<std::string> Runner::args(const Job& job) const {
             std::snprintf(reach, sizeof reach, "%g", bounceReach_m);
             a.insert(a.end(), {"--bounce-spacing", spacing, "--bounce-reach", reach,
                                "--bounce-face", std::to_string(bounceFace)});
+            if (bounceCanopy_m > 0.0) {
+                char canopy[32];
+                std::snprintf(canopy, sizeof canopy, "%g", bounceCanopy_m);
+                a.insert(a.end(), {"--bounce-canopy", canopy});
+            }
         }
         if (job.point.facesPerFrame != idealBudget) {
             a.push_back("--no-ideal-volume");
@@ -204,6 +209,7 @@ Runner benchRunner(const BenchOptions& o, const std::vector<Point>& points) {
     runner.bounceSpacing_m = o.bounce.spacing_m;
     runner.bounceReach_m = o.bounce.reach_m;
     runner.bounceFace = o.bounce.faceSize;
+    runner.bounceCanopy_m = o.bounce.canopy_m;
     runner.idealBudget = points.empty() ? 1 : points.front().facesPerFrame;
     for (const Point& p : points) runner.idealBudget = std::min(runner.idealBudget, p.facesPerFrame);
     return runner;

@@ -30,6 +30,9 @@ void addReferenceLightOptions(CLI::App& cmd, std::string& light, BounceSettings&
     cmd.add_option("--bounce-face", bounce.faceSize,
                    "face size of the bounce lattice's captures (default " +
                        std::to_string(bounce.faceSize) + ")");
+    cmd.add_option("--bounce-canopy", bounce.canopy_m,
+                   "a second layer of bounce points this far above the first [m], read by "
+                   "surfaces by their height (0: one layer, the default)");
 }
 
 nlohmann::json bounceJson(const BounceSettings& settings, const std::vector<BounceSolve>& solves) {
@@ -48,6 +51,7 @@ nlohmann::json bounceJson(const BounceSettings& settings, const std::vector<Boun
             {"reach_m", settings.reach_m},
             {"faceSize", settings.faceSize},
             {"tolerance", settings.tolerance},
+            {"canopy_m", settings.canopy_m},
             {"solves", list}};
 }
 

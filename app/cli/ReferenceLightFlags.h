@@ -1,7 +1,8 @@
 // ReferenceLightFlags.h — what lights the reference's surfaces, on the command line of run and
 // compare (and, passed through, bench): `--reference-light bounce|hemisphere` (default bounce:
 // the scene's own bounce field, lighting/BounceField.h) and the field's lattice,
-// `--bounce-spacing`, `--bounce-reach`, `--bounce-face`; and the field's record in a report.
+// `--bounce-spacing`, `--bounce-reach`, `--bounce-face`, `--bounce-canopy`; and the field's
+// record in a report.
 #pragma once
 
 #include <string>

@@ -121,6 +121,7 @@ RendererSceneSettings fullCaptureSceneSettings(int faceSize) {
     s.fullMeshMinPixels = 3.0;
     s.proxyMinPixels = 0.0;
     s.farMinPixels = 0.25;  // leave out plants smaller than a quarter texel
+    s.objectsAtCrown = true;
     return s;
 }
 

@@ -414,6 +414,17 @@ static double drawnBase_m(const TerrainSurface& surface, const Plant& p) {
                       p.position_m.y + kPlantSinkMargin_m);
 }
 
+// The height above its base at which a plant of scale 1 is asked for its ambient with
+// objectsAtCrown: its spheres' centre, weighted by their area (conifer 4.7 m, broadleaf 5.8 m).
+static double ambientHeight_m(PlantKind kind) {
+    double sum = 0.0, weight = 0.0;
+    for (const PlantSphere& s : Vegetation::spheres(kind)) {
+        sum += s.centre_m.y * s.radius_m * s.radius_m;
+        weight += s.radius_m * s.radius_m;
+    }
+    return weight > 0.0 ? sum / weight : 0.0;
+}
+
 void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewProj, bool capture,
                               const AmbientSource& ambient, DrawList& out, std::size_t* drawn,
                               double nearRadius_m, const glm::dvec3* alsoAt,
@@ -489,13 +500,19 @@ void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewP
                 if (lod == 2) {
                     if (tileSet < 0) {
                         const double h = 0.5 * Vegetation::kTile_m;
-                        tileSet = ambient.objectSet({x0 + h, p.position_m.y, z0 + h}, out.ambientSets);
+                        const double lift =
+                            settings_.objectsAtCrown ? p.scale * ambientHeight_m(p.kind) : 0.0;
+                        tileSet = ambient.objectSet({x0 + h, p.position_m.y + lift, z0 + h},
+                                                    out.ambientSets);
                     }
                     set = std::uint32_t(tileSet);
                 } else {
                     // Asked for below, all at once.
                     pendingSlot_.push_back({batch, out.objects[batch].instances.size()});
-                    pendingAt_.push_back(p.position_m);
+                    pendingAt_.push_back(
+                        settings_.objectsAtCrown
+                            ? p.position_m + glm::dvec3(0.0, p.scale * ambientHeight_m(p.kind), 0.0)
+                            : p.position_m);
                 }
                 inst.rotationSet = glm::vec2(p.rotation_rad, float(set));
                 out.objects[batch].instances.push_back(inst);

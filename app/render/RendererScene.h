@@ -39,6 +39,10 @@ struct RendererSceneSettings {
     double captureTerrainRadius_m = 2000.0;
     double captureTreeRange_m = 150.0;  // tree proxies in a capture nearer than this
     double roadLift_m = 0.12;           // road ribbons float this far above the terrain
+    // Ask a plant's ambient at the height of its spheres' area-weighted centre (world/
+    // Vegetation.h spheres) instead of at its base: the full captures, whose surface light may
+    // vary with height (lighting/BounceField.h "Two layers"). The methods' fields do not.
+    bool objectsAtCrown = false;
 };
 
 struct SceneStats {

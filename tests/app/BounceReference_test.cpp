@@ -16,6 +16,7 @@
 #include "lighting/ProbeEnvironment.h"
 #include "lighting/SH.h"
 #include "world/Conventions.h"
+#include "world/Vegetation.h"
 #include "world/World.h"
 
 namespace amb {
@@ -27,7 +28,7 @@ double irradiance(const ShRgb& sh, const glm::vec3& n) {
     return double(luminance(shIrradiance(sh, n)));
 }
 
-// Five lattice points 64 m apart around open ground at noon, faces of 8: the change between
+// Five lattice nodes 64 m apart around open ground at noon (two layers), faces of 8: the change between
 // bounces falls below 1 % within 6 passes, falls from one pass to the next from the second on,
 // and the bounces add light: the converged field's irradiance of a downward surface (the lit
 // ground below) is above pass 1's, and an upward surface's changes by less than a tenth.
@@ -44,7 +45,7 @@ TEST(BounceReference, ConvergesWithinAFewBouncesOnASmallScene) {
     BounceField field(s);
     const double cx = std::round(ground.x / 64.0) * 64.0, cz = std::round(ground.z / 64.0) * 64.0;
     field.layOut({{cx, cz}}, [&](double x, double z) { return env.placeProbe(x, z, 4.0); });
-    ASSERT_EQ(field.points(), 5u);
+    ASSERT_EQ(field.points(), 10u);  // 5 nodes, two layers (the default canopy)
     // Pass 1 alone: surfaces lit by the sun, no ambient.
     BounceSettings one = s;
     one.maxBounces = 1;
@@ -99,6 +100,61 @@ TEST(BounceReference, HemisphereReproducesTodaysReferenceExactly) {
                           {0, -1, 0});
     };
     EXPECT_GT(down(lit), 1.5 * down(today));
+}
+
+// The full-scene capture asks a plant's surface light at its spheres' area-weighted centre (a
+// field with two layers lights a crown by the canopy's layer), the coarse capture at its base.
+TEST(BounceReference, FullCapturesAskPlantsAtTheirCrowns) {
+    AMB_REQUIRE_PLATFORM(platform, Backend::Auto, 16, 16);
+    const World world{WorldSettings{}};
+    struct Recording final : SurfaceLight {
+        mutable std::vector<glm::dvec3> asked;
+        ShRgb shAt(const glm::dvec3& p) const override {
+            asked.push_back(p);
+            return ShRgb{};
+        }
+    } light;
+    // A tree near the probe, from the world's own tiles.
+    const glm::dvec3 ground = test::openGround(world);
+    const Vegetation& veg = world.vegetation();
+    std::vector<Plant> trees;
+    for (std::int64_t k = -4; k <= 4; ++k)
+        for (std::int64_t i = -4; i <= 4; ++i)
+            for (const Plant& p : *veg.tile(Vegetation::tileIndex(ground.x) + i,
+                                            Vegetation::tileIndex(ground.z) + k))
+                if (p.kind == PlantKind::Conifer || p.kind == PlantKind::Broadleaf)
+                    trees.push_back(p);
+    ASSERT_FALSE(trees.empty());
+    const auto centre = [](PlantKind kind) {
+        double sum = 0.0, weight = 0.0;
+        for (const PlantSphere& s : Vegetation::spheres(kind))
+            sum += s.centre_m.y * s.radius_m * s.radius_m, weight += s.radius_m * s.radius_m;
+        return sum / weight;
+    };
+    EXPECT_GT(centre(PlantKind::Conifer), 4.0);  // above the trunk, within the crown
+    EXPECT_GT(centre(PlantKind::Broadleaf), 5.0);
+    // 30 m east of the first tree, 2 m up: the tree stands in the -X face.
+    const double px = trees.front().position_m.x + 30.0, pz = trees.front().position_m.z;
+    const glm::dvec3 probe(px, world.height(px, pz) + 2.0, pz);
+    for (const CaptureScene scene : {CaptureScene::Full, CaptureScene::Coarse}) {
+        SCOPED_TRACE(scene == CaptureScene::Full ? "full" : "coarse");
+        CubeCaptureGl capture(world, 16, scene);
+        capture.setSurfaceLight(&light);
+        light.asked.clear();
+        capture.captureAll(probe, kNoon_h);
+        capture.setSurfaceLight(nullptr);
+        int matched = 0;
+        for (const Plant& t : trees) {
+            const double lift = scene == CaptureScene::Full ? t.scale * centre(t.kind) : 0.0;
+            for (const glm::dvec3& a : light.asked)
+                if (std::fabs(a.x - t.position_m.x) < 1e-9 && std::fabs(a.z - t.position_m.z) < 1e-9) {
+                    EXPECT_NEAR(a.y, t.position_m.y + lift, 1e-6);
+                    ++matched;
+                    break;
+                }
+        }
+        EXPECT_GT(matched, 0) << "no tree's own lookup among " << light.asked.size();
+    }
 }
 
 }  // namespace

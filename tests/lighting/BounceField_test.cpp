@@ -48,6 +48,7 @@ TEST(BounceField, AClosedSceneConvergesToTheGeometricSeries) {
         const double direct = 100.0;
         FurnaceCapture capture(rho, direct);
         BounceSettings s;
+        s.canopy_m = 0.0;  // one layer (the two: TwoLayersAreReadByTheSurfacesHeight)
         s.spacing_m = 100.0;
         s.reach_m = 0.0;
         BounceField field(s);
@@ -76,6 +77,7 @@ TEST(BounceField, AClosedSceneConvergesToTheGeometricSeries) {
 TEST(BounceField, StopsAtMaxBouncesAndSaysItDidNotConverge) {
     FurnaceCapture capture(0.9, 1.0);
     BounceSettings s;
+    s.canopy_m = 0.0;  // one layer (the two: TwoLayersAreReadByTheSurfacesHeight)
     s.reach_m = 0.0;
     s.maxBounces = 5;
     BounceField field(s);
@@ -91,6 +93,7 @@ TEST(BounceField, StopsAtMaxBouncesAndSaysItDidNotConverge) {
 // The lattice: the nodes within reach of the path, on the global lattice, placed by the caller.
 TEST(BounceField, LaysTheNodesWithinReachOfThePath) {
     BounceSettings s;
+    s.canopy_m = 0.0;  // one layer (the two: TwoLayersAreReadByTheSurfacesHeight)
     s.spacing_m = 100.0;
     s.reach_m = 150.0;  // (0,0), 4 edge neighbours at 100 m and 4 diagonal ones at 141 m
     BounceField a(s);
@@ -113,6 +116,7 @@ TEST(BounceField, LaysTheNodesWithinReachOfThePath) {
 // node was captured, the box's edge beyond it, zero before any solve.
 TEST(BounceField, InterpolatesBilinearlyAndHoldsTheNearestValueOutside) {
     BounceSettings s;
+    s.canopy_m = 0.0;  // one layer (the two: TwoLayersAreReadByTheSurfacesHeight)
     s.spacing_m = 100.0;
     s.reach_m = 100.0;
     BounceField field(s);
@@ -136,11 +140,72 @@ TEST(BounceField, InterpolatesBilinearlyAndHoldsTheNearestValueOutside) {
     EXPECT_TRUE(std::isfinite(upIrradiance(field.shAt({std::nan(""), 0.0, 0.0}))));
 }
 
+// A capture whose uniform radiance is its position's height in metres / 10 (a field that grows
+// with height, as the sky a point sees past a canopy does).
+class HeightCapture final : public CubeCapture {
+  public:
+    int faceSize() const override { return 4; }
+    CubeCaptureStats capture(const glm::dvec3& p, double, CubeFaceMask,
+                             std::vector<float>& cube) override {
+        cube.assign(6 * 4 * 4 * 3, float(p.y / 10.0));
+        return {};
+    }
+};
+
+// Two layers: every node gets a second point canopy_m above its first, both solved; a surface
+// reads the lower layer at or below it, the upper at or above it, and in between the linear
+// blend by its height (closed form: the capture's radiance is linear in height, so the blend
+// is exact there). One layer ignores height, and keeps its cache key.
+TEST(BounceField, TwoLayersAreReadByTheSurfacesHeight) {
+    BounceSettings s;
+    s.spacing_m = 100.0;
+    s.reach_m = 100.0;
+    s.canopy_m = 10.0;
+    BounceField field(s);
+    const auto sloped = [](double x, double z) { return glm::dvec3(x, 2.0 + x / 100.0, z); };
+    field.layOut({{0.0, 0.0}}, sloped);
+    ASSERT_EQ(field.points(), 10u);  // 5 nodes, two layers
+    for (std::size_t i = 0; i < 5; ++i) {
+        EXPECT_DOUBLE_EQ(field.pointPosition(i + 5).y, field.pointPosition(i).y + 10.0);
+        EXPECT_DOUBLE_EQ(field.pointPosition(i + 5).x, field.pointPosition(i).x);
+    }
+    HeightCapture capture;
+    const BounceSolve& solve = field.solve(capture, 12.0);
+    EXPECT_EQ(solve.points, 10u);
+    EXPECT_EQ(solve.captures, 20);  // both layers in each of the two passes
+    const auto e = [&](double x, double y) { return upIrradiance(field.shAt({x, y, 0.0})); };
+    // At x = 50 the lower layer stands at 2.5 m (radiance 0.25), the upper at 12.5 m (1.25).
+    const double low = kPi * 0.25, high = kPi * 1.25;
+    EXPECT_NEAR(e(50.0, 0.0), low, 1e-4 * high);    // the ground, below the lower layer
+    EXPECT_NEAR(e(50.0, 2.5), low, 1e-4 * high);
+    EXPECT_NEAR(e(50.0, 6.0), kPi * 0.6, 1e-4 * high);  // 3.5 m of 10 up: 0.25 + 0.35
+    EXPECT_NEAR(e(50.0, 12.5), high, 1e-4 * high);
+    EXPECT_NEAR(e(50.0, 400.0), high, 1e-4 * high);  // above the canopy: the upper layer
+    EXPECT_TRUE(std::isfinite(e(50.0, std::nan(""))));
+    // One layer: height is not a coordinate.
+    BounceSettings one = s;
+    one.canopy_m = 0.0;
+    BounceField flat(one);
+    flat.layOut({{0.0, 0.0}}, sloped);
+    ASSERT_EQ(flat.points(), 5u);
+    flat.solve(capture, 12.0);
+    EXPECT_NEAR(upIrradiance(flat.shAt({50.0, 400.0, 0.0})), low, 1e-4 * high);
+    // The cache key names the second layer only when there is one.
+    EXPECT_EQ(describeBounceSettings(one).find("canopy"), std::string::npos);
+    EXPECT_NE(describeBounceSettings(s).find("canopy=10"), std::string::npos);
+    for (const double bad : {0.5, -1.0, 200.0, std::nan("")}) {
+        BounceSettings b = s;
+        b.canopy_m = bad;
+        EXPECT_THROW(checkBounceSettings(b), InputError) << bad;
+    }
+}
+
 // The reference capture is lit by the field of its epoch: solved on the first capture that needs
 // it (none before), once per epoch, and the reference is left without a surface light after.
 TEST(BounceField, LitCaptureSolvesLazilyOncePerEpoch) {
     FurnaceCapture lattice(0.5, 10.0), reference(0.5, 10.0);
     BounceSettings s;
+    s.canopy_m = 0.0;  // one layer (the two: TwoLayersAreReadByTheSurfacesHeight)
     s.spacing_m = 100.0;
     s.reach_m = 0.0;
     s.epoch_h = 0.25;
