@@ -11,8 +11,8 @@
 // [SECTION] The lattice
 //   Points on the square lattice (i spacing_m, k spacing_m) of the XZ plane whose distance to
 //   some point of the camera path is at most reach_m, each placed by the caller (probes' rule:
-//   2 m above the ground, out of plant footprints). The lattice is global, so two runs of one
-//   replay lay the same points.
+//   2 m above the ground, out of plant footprints), and with two layers a second point canopy_m
+//   above each. The lattice is global, so two runs of one replay lay the same points.
 // [SECTION] The iteration (Jacobi)
 //   Pass 1 lights the surfaces with no ambient at all: its captures hold the sky and the
 //   surfaces lit by the main light (one bounce). Pass k lights them with pass k-1's field
@@ -26,11 +26,12 @@
 //   E_d the passes are the partial sums of the geometric series rho E_d (1 + rho + ... ), whose
 //   change at pass k is rho^(k-1) (1 - rho) / (1 - rho^k) (tested).
 // [SECTION] Reading the field (shAt)
-//   Bilinear over the lattice in x and z (height is not a coordinate: a point reads the field of
-//   the ground below it). Lattice points with no capture (outside the reach) take the value of
-//   the nearest captured point (chessboard distance on the lattice, first found on ties), so the
-//   field is defined and continuous everywhere; beyond the lattice's bounding box the box's edge
-//   value holds. Before the first pass the field is zero everywhere.
+//   Bilinear over the lattice in x and z, layer by layer (with one layer height is not a
+//   coordinate: a point reads the field of the ground below it; with two, see Two layers).
+//   Lattice points with no capture (outside the reach) take the value of the nearest captured
+//   point (chessboard distance on the lattice, first found on ties), so the field is defined
+//   and continuous everywhere; beyond the lattice's bounding box the box's edge value holds.
+//   Before the first pass the field is zero everywhere.
 // [SECTION] Two layers (canopy_m > 0)
 //   One layer reads, for every surface, the field where a probe stands 2 m above the ground,
 //   out of plant footprints: in a wood, under its neighbours' crowns. A crown's top is lit by
