@@ -40,8 +40,8 @@
 //   reads the two layers' bilinear values blended linearly by
 //       t = clamp((y - y_low) / (y_high - y_low), 0, 1)
 //   y_low and y_high the layers' bilinear heights at its x, z: the ground reads the lower layer,
-//   a surface canopy_m above it the upper one. Objects (plants) are read at their largest
-//   sphere's centre (app/render RendererSceneSettings::objectsAtCrown), not at their base.
+//   a surface canopy_m above it the upper one. Objects (plants) are read at their spheres'
+//   area-weighted centre (app/render RendererSceneSettings::objectsAtCrown), not at their base.
 // [SECTION] BounceLitCapture
 //   A CubeCapture that lights the surfaces of another (the reference's full-scene capture) with
 //   bounce fields: solved on the first capture that needs one (a reference read from a cache

@@ -278,13 +278,13 @@ double errorUpTo(const std::string& dir, const Job& j, int lastFrame) {
     return count ? sum / double(count) : std::nan("");
 }
 
-// Our run against another of the same replay: the ratio of mean errors over the frames both
-// measured, with its paired bootstrap 95 % interval (BenchStats.h).
-// With `drawn`, the terrain witnesses' errors at the drawn normal (reference runs only).
-// What a ratio compares: the headline witnesses over the sphere of normals, at the drawn
-// normal, or the screen witnesses.
+// What a ratio compares.
 enum class Measured { Sphere, Drawn, Screen };
 
+// Our run against another of the same replay: the ratio of mean errors over the frames both
+// measured, with its paired bootstrap 95 % interval (BenchStats.h), of what `Measured` names:
+// the headline witnesses over the sphere of normals, the terrain witnesses at the drawn normal
+// (reference runs only), or the screen witnesses.
 RatioInterval ratioAgainst(const std::string& dir, const Job& ours, const Job& other,
                            Measured measured = Measured::Sphere) {
     const bool reference =
@@ -743,10 +743,10 @@ void writeSummary(const std::vector<Job>& jobs, const std::string& path,
             const std::vector<Measured> measures =
                 drawn ? std::vector<Measured>{Measured::Drawn, Measured::Sphere, Measured::Screen}
                       : std::vector<Measured>{Measured::Sphere};
+            const bool screen =
+                !readScreenErrors((fs::path(dir) / ours->runDir).string()).byFrame.empty();
             for (const Measured measured : measures) {
-                const std::string oursDir = (fs::path(dir) / ours->runDir).string();
-                if (measured == Measured::Screen && readScreenErrors(oursDir).byFrame.empty())
-                    continue;
+                if (measured == Measured::Screen && !screen) continue;
                 out << "\nOur "
                     << (measured == Measured::Drawn    ? "mean error at the drawn normal"
                         : measured == Measured::Screen ? "screen-weighted mean error (the "

@@ -126,11 +126,10 @@ std::vector<std::string> Runner::args(const Job& job) const {
             std::snprintf(reach, sizeof reach, "%g", bounceReach_m);
             a.insert(a.end(), {"--bounce-spacing", spacing, "--bounce-reach", reach,
                                "--bounce-face", std::to_string(bounceFace)});
-            if (bounceCanopy_m > 0.0) {
-                char canopy[32];
-                std::snprintf(canopy, sizeof canopy, "%g", bounceCanopy_m);
-                a.insert(a.end(), {"--bounce-canopy", canopy});
-            }
+            // Always given: `run`'s own default is two layers, so 0 must be said.
+            char canopy[32];
+            std::snprintf(canopy, sizeof canopy, "%g", bounceCanopy_m);
+            a.insert(a.end(), {"--bounce-canopy", canopy});
         }
         if (job.point.facesPerFrame != idealBudget) {
             a.push_back("--no-ideal-volume");

@@ -25,7 +25,7 @@ struct Runner {
     std::string referenceLight = "bounce";
     double bounceSpacing_m = 256.0, bounceReach_m = 500.0;
     int bounceFace = 32;
-    double bounceCanopy_m = 0.0;
+    double bounceCanopy_m = 10.0;
     // Runs above this many faces per frame play the first fullLengthBudget / faces of the replay.
     int fullLengthBudget = 64;
 

@@ -32,7 +32,8 @@ void addReferenceLightOptions(CLI::App& cmd, std::string& light, BounceSettings&
                        std::to_string(bounce.faceSize) + ")");
     cmd.add_option("--bounce-canopy", bounce.canopy_m,
                    "a second layer of bounce points this far above the first [m], read by "
-                   "surfaces by their height (0: one layer, the default)");
+                   "surfaces by their height; 0: one layer (default " +
+                       std::to_string(int(bounce.canopy_m)) + ")");
 }
 
 nlohmann::json bounceJson(const BounceSettings& settings, const std::vector<BounceSolve>& solves) {

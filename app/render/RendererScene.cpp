@@ -150,6 +150,14 @@ RendererScene::RendererScene(const World& world, const RendererSceneSettings& se
         for (size_t i = 1; i < full.positions.size(); i += 3)
             top = std::max(top, full.positions[i]);
         plantHeight_m_[k] = top;
+        // objectsAtCrown: the spheres' centre weighted by their area (conifer 4.7 m, broadleaf
+        // 5.8 m).
+        double sum = 0.0, weight = 0.0;
+        for (const PlantSphere& s : Vegetation::spheres(PlantKind(k))) {
+            sum += s.centre_m.y * s.radius_m * s.radius_m;
+            weight += s.radius_m * s.radius_m;
+        }
+        plantAmbientHeight_m_[k] = settings_.objectsAtCrown && weight > 0.0 ? sum / weight : 0.0;
     }
     vehicleLevel_ = makeVehicleMesh();
     vehicleMesh_ = uploadMesh(vehicleLevel_);
@@ -414,17 +422,6 @@ static double drawnBase_m(const TerrainSurface& surface, const Plant& p) {
                       p.position_m.y + kPlantSinkMargin_m);
 }
 
-// The height above its base at which a plant of scale 1 is asked for its ambient with
-// objectsAtCrown: its spheres' centre, weighted by their area (conifer 4.7 m, broadleaf 5.8 m).
-static double ambientHeight_m(PlantKind kind) {
-    double sum = 0.0, weight = 0.0;
-    for (const PlantSphere& s : Vegetation::spheres(kind)) {
-        sum += s.centre_m.y * s.radius_m * s.radius_m;
-        weight += s.radius_m * s.radius_m;
-    }
-    return weight > 0.0 ? sum / weight : 0.0;
-}
-
 void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewProj, bool capture,
                               const AmbientSource& ambient, DrawList& out, std::size_t* drawn,
                               double nearRadius_m, const glm::dvec3* alsoAt,
@@ -475,6 +472,9 @@ void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewP
             std::int64_t tileSet = -1;
             for (const Plant& p : *plants) {
                 const int kind = int(p.kind);
+                // Where the plant's ambient is asked (objectsAtCrown: above its base).
+                const glm::dvec3 askAt =
+                    p.position_m + glm::dvec3(0.0, p.scale * plantAmbientHeight_m_[kind], 0.0);
                 const bool small = p.kind == PlantKind::Bush || p.kind == PlantKind::Rock;
                 if (capture && small) continue;  // the capture scene keeps only trees
                 const double d = glm::length(p.position_m - centre_m);
@@ -500,19 +500,13 @@ void RendererScene::addPlants(const glm::dvec3& centre_m, const glm::mat4* viewP
                 if (lod == 2) {
                     if (tileSet < 0) {
                         const double h = 0.5 * Vegetation::kTile_m;
-                        const double lift =
-                            settings_.objectsAtCrown ? p.scale * ambientHeight_m(p.kind) : 0.0;
-                        tileSet = ambient.objectSet({x0 + h, p.position_m.y + lift, z0 + h},
-                                                    out.ambientSets);
+                        tileSet = ambient.objectSet({x0 + h, askAt.y, z0 + h}, out.ambientSets);
                     }
                     set = std::uint32_t(tileSet);
                 } else {
                     // Asked for below, all at once.
                     pendingSlot_.push_back({batch, out.objects[batch].instances.size()});
-                    pendingAt_.push_back(
-                        settings_.objectsAtCrown
-                            ? p.position_m + glm::dvec3(0.0, p.scale * ambientHeight_m(p.kind), 0.0)
-                            : p.position_m);
+                    pendingAt_.push_back(askAt);
                 }
                 inst.rotationSet = glm::vec2(p.rotation_rad, float(set));
                 out.objects[batch].instances.push_back(inst);

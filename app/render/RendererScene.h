@@ -139,6 +139,8 @@ class RendererScene {
     std::vector<RoadChunk> roads_;
     std::array<GlMesh, 4> plantMeshes_, plantProxies_, plantFar_;
     std::array<float, 4> plantHeight_m_{};
+    // With objectsAtCrown: how far above its base a plant of scale 1 is asked for its ambient.
+    std::array<double, 4> plantAmbientHeight_m_{};
     WorldMesh vehicleLevel_;  // the car's mesh, level; vehicleMesh_ is it pitched
     GlMesh vehicleMesh_;
     double vehicleMeshPitch_rad_ = 0.0;

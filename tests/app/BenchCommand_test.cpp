@@ -570,6 +570,26 @@ TEST(BenchCommand, DrawnBudgetStatesTheFarFieldsFloor) {
         << summary.substr(at, 300);
 }
 
+// The reference's layers reach every run: `run` defaults to two, so one layer is said
+// explicitly, and the emitted manifest keeps the choice for --collect.
+TEST(BenchCommand, BounceCanopyIsPassedToEveryRun) {
+    const fs::path dir = scratchDir("bench-canopy");
+    for (const std::string canopy : {"0", "10"}) {
+        const fs::path emitted = dir / ("e" + canopy);
+        const auto emit = runAmbience(
+            "bench --replays highway-drive --methods constant --oracle reference --max-frames 30 "
+            "--bounce-canopy " + canopy + " --emit " + emitted.string());
+        ASSERT_EQ(emit.exitCode, 0) << emit.err;
+        const std::string commands = slurp((emitted / "commands.txt").string());
+        EXPECT_NE(commands.find("--bounce-canopy " + canopy + " "), std::string::npos) << commands;
+        EXPECT_EQ(readJson(emitted / "bench.json")["bounceCanopy_m"].get<int>(), std::stoi(canopy));
+    }
+    const auto bad = runAmbience("bench --replays highway-drive --oracle reference "
+                                 "--bounce-canopy 0.5 --out " + (dir / "bad").string());
+    EXPECT_EQ(bad.exitCode, 2);
+    EXPECT_NE(bad.err.find("--bounce-canopy"), std::string::npos) << bad.err;
+}
+
 // A bench with stderr in a file (not a terminal) writes plain progress lines at the interval
 // set, the run count rising to the total, with no carriage returns.
 TEST(BenchCommand, ProgressLinesWhenStderrIsAFile) {
