@@ -37,7 +37,8 @@ struct MethodStatistics {
     std::size_t probes = 0;  // coefficient sets held (anchors, grid probes, cache entries)
     std::size_t bytes = 0;   // memory those take, structure included
     int facesThisFrame = 0;  // cube faces captured this frame
-    std::int64_t facesCaptured = 0;
+    std::int64_t facesCaptured = 0;   // the primes' included
+    std::int64_t primeFaces = 0;      // of facesCaptured, those of primes (CaptureCore.h)
     std::int64_t rejectedProbes = 0;  // captures refused (NaN, Inf, negative)
     std::int64_t teleports = 0;
     // The near field (lighting/NearField.h): wall time since the last predictStage, points it

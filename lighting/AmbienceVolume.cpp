@@ -157,7 +157,7 @@ void AmbienceVolume::storeStage() {
     for (const CompletedProbe& c : core_.takeCompleted()) {
         const auto result =
             store_.insert(latticeKey(c.job.key), c.sh, c.job.position_m, lifetime, timeOfDay_h,
-                          c.slope ? &*c.slope : nullptr);
+                          c.slope ? &*c.slope : nullptr, c.job.primed);
         if (result == AnchorStore::InsertResult::Rejected) core_.countRejected();
     }
     if (settings_.relightBySkyLevel) {
@@ -176,6 +176,7 @@ void AmbienceVolume::syncStatistics() {
     const MethodStatistics& m = core_.statistics();
     stats_.facesThisFrame = m.facesThisFrame;
     stats_.facesCaptured = m.facesCaptured;
+    stats_.primeFaces = m.primeFaces;
     stats_.probesCompleted = core_.probesCompleted();
     stats_.rejectedProbes = m.rejectedProbes;
     stats_.abortedProbes = core_.abortedProbes();

@@ -72,6 +72,7 @@ struct AmbienceStatistics {
     AnchorStoreStatistics store;  // anchors held (per level), bytes, inserts, expiries
     int facesThisFrame = 0;
     std::int64_t facesCaptured = 0;    // since construction
+    std::int64_t primeFaces = 0;       // of those, the primes' (CaptureCore.h)
     std::int64_t probesCompleted = 0;  // probes projected (accepted or rejected)
     std::int64_t rejectedProbes = 0;   // probes with NaN/Inf/negative texels or coefficients
     std::int64_t abortedProbes = 0;    // probes dropped on a teleport

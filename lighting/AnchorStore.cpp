@@ -136,7 +136,7 @@ std::optional<ShSlope> AnchorStore::slope(const LatticeKey& key) const {
 AnchorStore::InsertResult AnchorStore::insert(const LatticeKey& key, const ShRgb& sh,
                                               const glm::dvec3& capturedPosition_m,
                                               double lifetime_s, double timeOfDay_h,
-                                              const ShSlope* slope) {
+                                              const ShSlope* slope, bool settled) {
     if (slope && (!finiteSh(slope->dx, kMaxCoefficient) || !finiteSh(slope->dz, kMaxCoefficient) ||
                   !(slope->validity_m >= 0.0f) || !std::isfinite(slope->validity_m)))
         slope = nullptr;
@@ -153,13 +153,13 @@ AnchorStore::InsertResult AnchorStore::insert(const LatticeKey& key, const ShRgb
         return InsertResult::Rejected;
     }
     const LatticeKey c = m.canonical(key);
-    const bool instant = m.settings.blendTime_s <= 0.0;
+    const bool instant = settled || m.settings.blendTime_s <= 0.0;
     const std::int32_t index = m.indexOf(c);
     if (index != kNoAnchor) {
         // Refresh (thesis appendix B: the anchor interpolates slowly to the new coefficients).
         Anchor& a = m.pool[index];
         const float presenceBefore = a.presence;
-        a.presence = Impl::presenceAt(a, m.now, m.settings.blendTime_s);
+        a.presence = settled ? 1.0f : Impl::presenceAt(a, m.now, m.settings.blendTime_s);
         if (instant || a.presence != presenceBefore) m.touchField(c.level);
         m.setFadeDirection(a, false);
         // Blend from what interpolation showed (relight included), so a refresh is no pop.

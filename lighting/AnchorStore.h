@@ -241,9 +241,12 @@ class AnchorStore {
     // above 2^31 - 1) rejects the capture (counted in statistics().rejected).
     // `slope`: the capture's translational gradient (AnchorStoreSettings::gradients), kept when
     // finite and in range; a refresh blends the anchor's slope to it as it blends the value.
+    // `settled`: no blend and no fade, the capture is shown at once (a prime, CaptureCore.h:
+    // where the store had nothing to show but its fallback, before the frame is drawn).
     InsertResult insert(const LatticeKey& key, const ShRgb& sh,
                         const glm::dvec3& capturedPosition_m, double lifetime_s,
-                        double timeOfDay_h = 0.0, const ShSlope* slope = nullptr);
+                        double timeOfDay_h = 0.0, const ShSlope* slope = nullptr,
+                        bool settled = false);
     static constexpr float kMaxCoefficient = 1.0e15f;
     // Sets every anchor's relight factor (finite, > 0; anything else counts as 1): interpolation
     // reads an anchor as current x relight. A refresh bakes the factor into the blend's start.

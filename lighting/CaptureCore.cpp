@@ -165,12 +165,14 @@ FrameEvents CaptureCore::beginFrame(const glm::dvec3& cameraPosition_m,
             if (glm::length(cameraPosition_m - camera_m_) > allowed) {
                 ++stats_.teleports;
                 events.teleport = true;
+                primeDue_ = true;
                 if (job_) {
                     ++abortedProbes_;
                     job_.reset();
                 }
             }
         }
+        if (!haveCamera_) primeDue_ = true;  // the first frame: the method holds nothing yet
         camera_m_ = cameraPosition_m;
         cameraSpeed_mps_ = reported;
         haveCamera_ = true;
@@ -184,7 +186,22 @@ FrameEvents CaptureCore::beginFrame(const glm::dvec3& cameraPosition_m,
 // ---- Jobs ---------------------------------------------------------------------------------------
 
 void CaptureCore::captureFaces(const NextProbe& next) {
-    int budget = settings_.facesPerFrame;
+    // The prime first (the rule in the header): whole probes, each named by the method as the
+    // budget's are, so it picks what it would have captured first anyway.
+    if (primeDue_ && settings_.primeProbes > 0 && !job_) {
+        for (int p = 0; p < settings_.primeProbes; ++p) {
+            const int faces = spendFaces(next, kCubeFaces, true);
+            if (faces > 0) primeDue_ = false;
+            if (faces < kCubeFaces) break;  // the method names nothing more
+        }
+    } else {
+        primeDue_ = false;
+    }
+    spendFaces(next, settings_.facesPerFrame, false);
+}
+
+int CaptureCore::spendFaces(const NextProbe& next, int budget, bool primed) {
+    const int total = budget;
     while (budget > 0) {
         if (!job_) {
             const Clock::time_point t0 = Clock::now();
@@ -213,7 +230,9 @@ void CaptureCore::captureFaces(const NextProbe& next) {
         budget -= r.faces;
         stats_.facesThisFrame += r.faces;
         stats_.facesCaptured += r.faces;
+        if (primed) stats_.primeFaces += r.faces;
         if (job_->facesDone == kCubeFaces) {
+            job_->primed = primed;
             std::optional<ShGroundGradient> gradient;
             if (jobGradients_ && !job_->bad) {
                 const Clock::time_point t0 = Clock::now();
@@ -223,7 +242,9 @@ void CaptureCore::captureFaces(const NextProbe& next) {
             completed_.push_back({*job_, projector_->coefficients(), gradient});
             job_.reset();
         }
+        if (r.faces == 0) break;  // the capture rendered nothing: do not spin
     }
+    return total - budget;
 }
 
 std::vector<CompletedProbe> CaptureCore::takeCompleted() {

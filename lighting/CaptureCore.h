@@ -28,6 +28,13 @@
 //   - rejection: a probe with any texel that is NaN, infinite or negative, or with a coefficient
 //     that is not finite or above AnchorStore::kMaxCoefficient in float, is counted in
 //     rejectedProbes and never handed to the method.
+//   - prime: in the first frame in which the camera is seen, and in the frame of a teleport, the
+//     core first captures up to primeProbes whole probes (six faces each, outside the budget;
+//     counted in primeFaces) before the budget is spent, and hands them over marked `primed`:
+//     the method shows them at once instead of blending them in from the fallback, so the first
+//     frame drawn at a new place shows that place's light, not the sky over flat ground. A
+//     method that names no probe in that frame (the reactive cache, before its first lookups)
+//     is primed in the first frame it names one.
 //   - fallback: the SH of ProbeEnvironment::fallbackCubeMap (sky model over flat ground) at
 //     fallbackFaceSize, recomputed when the time of day has moved by more than fallbackRefresh_h;
 //     a fallback that is not finite keeps the previous value (zero at first).
@@ -74,6 +81,10 @@ struct CaptureSettings {
     double timeJump_h = 0.25;           // a larger change of the time of day in a frame is a jump
     double teleportDistance_m = 100.0;  // a camera step longer than this + 3 x speed x dt [m]
     int fallbackFaceSize = 16;          // cube map size of the fallback SH
+    // Whole probes captured at once where the method has nothing yet (the first frame, a
+    // teleport), before that frame is drawn: a loading step, outside the budget (the rule
+    // "prime" above). 0: none, the first probes blend in from the fallback.
+    int primeProbes = 4;
     double fallbackRefresh_h = 1.0 / 60.0;  // recompute the fallback after this much day time
     // What lights the surfaces the method's captures draw, besides the sun: false, the fixed
     // sky/ground hemisphere (world/SkyGround.h); true, the method's own field (its shAt at the
@@ -119,6 +130,7 @@ struct ProbeJob {
     double startTime_s = 0.0;    // simulation time of its first face
     int facesDone = 0;           // 0..6
     bool bad = false;            // a texel was NaN, infinite or negative
+    bool primed = false;         // captured whole as a prime (the rule above): shown at once
 };
 
 // A probe whose six faces are in, checked: what the method may store.
@@ -162,11 +174,14 @@ class CaptureCore {
         return settings_.ownLight && ownLight_.field ? &ownLight_ : nullptr;
     }
 
-    // Stage 3: spends the face budget. When no probe is in progress, `next(busy)` names the
-    // next one (or nothing: the rest of the budget stays unused); `busy` lists the keys
-    // completed this frame and not yet taken. The time `next` takes counts as predict time.
+    // Stage 3: the prime when one is due (the rule above), then the face budget. When no probe
+    // is in progress, `next(busy)` names the next one (or nothing: the rest of the budget stays
+    // unused); `busy` lists the keys completed this frame and not yet taken. The time `next`
+    // takes counts as predict time.
     using NextProbe = std::function<std::optional<ProbeRequest>(const std::vector<ProbeKey>& busy)>;
     void captureFaces(const NextProbe& next);
+    // True while a prime is due (from the first frame or a teleport until a probe is named).
+    bool primeDue() const { return primeDue_; }
 
     // Stage 4's shared part: the probes completed this frame, bad ones counted in
     // rejectedProbes and left out. Empties the list.
@@ -212,6 +227,8 @@ class CaptureCore {
 
   private:
     void updateFallback(double timeOfDay_h);
+    // Spends `budget` faces (primed: the probes it completes are primes); returns the faces.
+    int spendFaces(const NextProbe& next, int budget, bool primed);
 
     struct OwnLight final : SurfaceLight {
         OwnField field;
@@ -244,6 +261,7 @@ class CaptureCore {
     glm::dvec3 camera_m_{0.0};
     double cameraSpeed_mps_ = 0.0;
     bool haveCamera_ = false;
+    bool primeDue_ = false;
     ShRgb fallback_;
     bool haveFallback_ = false, fallbackChanged_ = false;
     double fallbackTimeOfDay_h_ = 0.0;

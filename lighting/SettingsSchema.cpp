@@ -247,6 +247,11 @@ Keys<CaptureSettings> captureKeys() {
     k.integer(
         "fallbackFaceSize", "texels", 1, 64, "cube map size of the sky fallback",
         [](T& t) -> int& { return t.fallbackFaceSize; }, kCostHigh);
+    k.integer(
+        "primeProbes", "probes", 0, 16,
+        "whole probes captured at once in the first frame and after a teleport, outside the "
+        "budget (0: none, the first probes blend in from the sky fallback)",
+        [](T& t) -> int& { return t.primeProbes; }, kCostHigh);
     k.number(
         "fallbackRefresh_h", "h", 0.0, 24.0, "recompute the fallback after this much day time",
         [](T& t) -> double& { return t.fallbackRefresh_h; }, kCostLowLog);

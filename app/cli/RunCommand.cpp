@@ -459,6 +459,7 @@ void addAmbienceTotals(const RunOptions& o, MethodAmbienceStages& stages, RunRep
         const MethodStatistics st = stages.method().methodStatistics();
         auto& t = report.ambienceTotals;
         t.facesCaptured = st.facesCaptured;
+        t.primeFaces = st.primeFaces;
         t.rejectedProbes = st.rejectedProbes;
         t.teleports = st.teleports;
         t.captureTriangles = stages.cubeCapture().lastTriangles();
@@ -472,6 +473,7 @@ void addAmbienceTotals(const RunOptions& o, MethodAmbienceStages& stages, RunRep
         const AmbienceStatistics& st = volume->statistics();
         auto& t = report.ambienceTotals;
         t.facesCaptured = st.facesCaptured;
+        t.primeFaces = st.primeFaces;
         t.probesCompleted = st.probesCompleted;
         t.rejectedProbes = st.rejectedProbes;
         t.teleports = st.teleports;

@@ -476,6 +476,7 @@ json ambienceJson(const RunReport& report) {
                                   ? double(last.ambience.bytes) / double(last.ambience.anchors)
                                   : 0.0},
         {"facesCaptured", t.facesCaptured},
+        {"primeFaces", t.primeFaces},
         {"probesCompleted", t.probesCompleted},
         {"rejectedProbes", t.rejectedProbes},
         {"teleports", t.teleports},

@@ -124,6 +124,7 @@ struct RunReport {
     // Ambience volume totals (--ambient volume).
     struct AmbienceTotals {
         std::int64_t facesCaptured = 0, probesCompleted = 0, rejectedProbes = 0, teleports = 0;
+        std::int64_t primeFaces = 0;  // of facesCaptured, the primes' (lighting/CaptureCore.h)
         std::size_t captureTriangles = 0;  // triangles per capture face
         std::int64_t inserted = 0, refreshed = 0, expired = 0;
         // Scans of every anchor's coefficients for NaN or infinity (the store must never hold

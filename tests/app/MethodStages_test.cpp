@@ -66,7 +66,8 @@ TEST(MethodAmbient, CornerBatchEqualsSingleLookups) {
 TEST(VolumeRun, CapturesStoresAndReports) {
     const std::string dir = testing::TempDir() + "volume_run";
     const std::string vdb = dir + "/anchors.vdb";
-    // 60 frames at one face per frame: 10 complete probes.
+    // 60 frames at one face per frame: 10 complete probes, and the first frame's prime of four
+    // whole probes (lighting/CaptureCore.h).
     const test::CommandResult r =
         runAmbience("run --replay " + kReplay + " --ambient volume --max-frames 60 --size 160x90"
                     " --frames none --no-video --out " + dir + " --save-anchors " + vdb);
@@ -74,20 +75,23 @@ TEST(VolumeRun, CapturesStoresAndReports) {
     const auto report = readJson(dir + "/report.json");
     EXPECT_EQ(report["ambient"], "volume");
     const auto& a = report["ambience"];
-    EXPECT_EQ(a["facesCaptured"].get<int>(), 60);
-    EXPECT_EQ(a["probesCompleted"].get<int>(), 10);
+    EXPECT_EQ(a["primeFaces"].get<int>(), 24);
+    EXPECT_EQ(a["facesCaptured"].get<int>(), 60 + 24);
+    EXPECT_EQ(a["probesCompleted"].get<int>(), 10 + 4);
     EXPECT_EQ(a["rejectedProbes"].get<int>(), 0);
-    EXPECT_EQ(a["anchorsEnd"].get<int>(), 10);  // nothing expires within 2 s at time rate 1
+    EXPECT_EQ(a["anchorsEnd"].get<int>(), 10 + 4);  // nothing expires within 2 s at time rate 1
     EXPECT_GT(a["bytesEnd"].get<double>(), 0.0);
     EXPECT_GT(a["captureTrianglesPerFace"].get<int>(), 0);
     const double share = a["shareOfFrameTime"].get<double>();
     EXPECT_GT(share, 0.0);
     EXPECT_LT(share, 1.0);
-    // Per frame: one face each, anchors never decrease on this short drive, all finite; the
-    // anchors per level add up to the anchors held.
+    // Per frame: one face each (the first, the prime's 24 besides), anchors never decrease on
+    // this short drive, all finite; the anchors per level add up to the anchors held.
     std::size_t previous = 0;
+    bool first = true;
     for (const auto& row : report["frames"]) {
-        EXPECT_EQ(row["facesCaptured"].get<int>(), 1);
+        EXPECT_EQ(row["facesCaptured"].get<int>(), first ? 25 : 1);
+        first = false;
         const std::size_t anchors = row["anchors"].get<std::size_t>();
         EXPECT_GE(anchors, previous);
         previous = anchors;

@@ -99,8 +99,9 @@ void expectJsonAgrees(const nlohmann::json& keys, const SettingsSchema<S>& schem
             EXPECT_EQ(k.at("min").get<double>(), f.lo) << f.key;
             EXPECT_EQ(k.at("max").get<double>(), f.hi) << f.key;
             EXPECT_EQ(k.at("default").get<double>(), v) << f.key;
-            if (f.kind == SettingSpec::Kind::Integer)
+            if (f.kind == SettingSpec::Kind::Integer) {
                 EXPECT_TRUE(k.at("default").is_number_integer()) << f.key;
+            }
         }
     }
 }
@@ -149,14 +150,16 @@ TEST(SettingsCommand, BadSetsAreOneLineNamingTheKey) {
                      "runs the volume's settings");
 }
 
-// The faces the volume captured in a short run.
+// The faces the volume captured in a short run within its budget (the first frame's prime,
+// lighting/CaptureCore.h, left out).
 int facesCaptured(const fs::path& dir, const std::string& args) {
     const auto r = runAmbience("run --replay " + kReplay + " --max-frames 6 --no-frames --out " +
                                dir.string() + " " + args);
     EXPECT_EQ(r.exitCode, 0) << args << "\n" << r.err;
     std::ifstream in(dir / "report.json");
     if (!in) return -1;
-    return nlohmann::json::parse(in)["ambience"]["facesCaptured"].get<int>();
+    const nlohmann::json a = nlohmann::json::parse(in)["ambience"];
+    return a["facesCaptured"].get<int>() - a["primeFaces"].get<int>();
 }
 
 // A settings file's budget (the tuning panel's Save writes one) is the run's unless the command

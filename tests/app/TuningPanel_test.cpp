@@ -117,6 +117,7 @@ TEST(TuningPanel, EveryKeyOfTheSettingsFileIsInTheTable) {
                           "timeJump_h",
                           "teleportDistance_m",
                           "fallbackFaceSize",
+                          "primeProbes",
                           "fallbackRefresh_h",
                           "ownLight",
                           "nominalFrameTime_s",

@@ -6,6 +6,7 @@
 #include "lighting/AmbienceVolume.h"
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <vector>
 
@@ -30,12 +31,22 @@ using testing_support::Poison;
 
 constexpr double kDt = 1.0 / 60.0;
 
+// The budget alone: no prime (CaptureCore.h), but in the test of the prime itself.
+AmbienceVolumeSettings withoutPrime(AmbienceVolumeSettings s) {
+    s.capture.primeProbes = 0;
+    return s;
+}
+
+bool bitwiseEqualSh(const ShRgb& a, const ShRgb& b) {
+    return std::memcmp(&a, &b, sizeof(ShRgb)) == 0;
+}
+
 struct Rig {
     FakeCubeCapture capture;
     FlatProbeEnvironment environment;
     AmbienceVolume volume;
     explicit Rig(const AmbienceVolumeSettings& s = {}, bool skyModel = false)
-        : capture(16, skyModel), volume(capture, environment, s) {}
+        : capture(16, skyModel), volume(capture, environment, withoutPrime(s)) {}
     void run(int frames, const glm::dvec3& p, double timeOfDay_h = 12.0, double dt = kDt) {
         for (int f = 0; f < frames; ++f) volume.update(p, {0, 0, 0}, timeOfDay_h, dt);
     }
@@ -91,6 +102,7 @@ TEST(AmbienceVolume, OwnLightLightsItsCapturesWithItsOwnField) {
         SCOPED_TRACE(own);
         AmbienceVolumeSettings s;
         s.capture.ownLight = own;
+        s.capture.primeProbes = 0;
         LightRecordingCapture capture;
         FlatProbeEnvironment environment;
         AmbienceVolume volume(capture, environment, s);
@@ -158,6 +170,46 @@ TEST(AmbienceVolume, AnchorsHoldTheProjectionOfTheirOwnCaptures) {
     });
     // The fake's ground colour varies with position: anchors differ.
     EXPECT_GT(spread, 1e-2 * std::fabs(first.c[0].x));
+}
+
+// The prime (lighting/CaptureCore.h): the first frame, and the frame of a teleport, show
+// primeProbes anchors at once, each the projection of its own capture at full presence, so the
+// camera's point reads them, not the sky fallback; without it the first frame shows the
+// fallback and its anchors fade in.
+TEST(AmbienceVolume, APrimeShowsTheFirstFramesProbesAtOnce) {
+    for (const glm::dvec3& start : {glm::dvec3(10.0, 1.7, 20.0), glm::dvec3(-3.0e6, 1.7, 7.0e6)}) {
+        FakeCubeCapture capture(16), plainCapture(16);
+        FlatProbeEnvironment environment;
+        AmbienceVolume primed(capture, environment, AmbienceVolumeSettings{});
+        AmbienceVolume plain(plainCapture, environment, withoutPrime({}));
+        glm::dvec3 p = start;
+        for (int cut = 0; cut < 2; ++cut) {
+            SCOPED_TRACE(cut ? "after a teleport" : "the first frame");
+            const std::size_t before = primed.store().size();
+            primed.update(p, {0, 0, 0}, 12.0, kDt);
+            plain.update(p, {0, 0, 0}, 12.0, kDt);
+            EXPECT_EQ(primed.store().size(), before + 4u);
+            EXPECT_EQ(primed.statistics().primeFaces, 24 * (cut + 1));
+            FakeCubeCapture reference(16, false);
+            int shown = 0;
+            primed.store().forEach([&](const Anchor& a) {
+                if (glm::length(a.capturedPosition_m - p) > 1000.0) return;  // the old place's
+                ++shown;
+                EXPECT_EQ(a.presence, 1.0f);
+                EXPECT_TRUE(bitwiseEqualSh(a.current, a.target));
+                const ShRgb expected = toFloat(
+                    projectCubeMap(16, reference.captureAll(a.capturedPosition_m, 12.0)).sh);
+                EXPECT_LT(maxDiff(a.target, expected), 1e-5 * std::fabs(expected.c[0].x));
+            });
+            EXPECT_EQ(shown, 4);
+            const ShRgb fallback = primed.store().fallback();
+            EXPECT_GT(maxDiff(primed.shAt(p.x, p.z), fallback), 1e-3 * std::fabs(fallback.c[0].x));
+            if (cut == 0) {
+                EXPECT_EQ(maxDiff(plain.shAt(p.x, p.z), plain.store().fallback()), 0.0);
+            }
+            p += glm::dvec3(20000.0, 0.0, -15000.0);
+        }
+    }
 }
 
 TEST(AmbienceVolume, NanInfAndNegativeCapturesNeverEnterTheStore) {

@@ -408,6 +408,33 @@ TEST(AnchorStoreBlending, NewAnchorStartsFromTheInterpolatedValueAndFadesIn) {
     EXPECT_TRUE(bitwiseEqual(store.find({4, 1, 0})->current, before));
 }
 
+// A settled insert (a prime, lighting/CaptureCore.h) is shown at once: no blend from the
+// fallback and no fade, whether the point is new or an anchor still fading in; the next
+// ordinary refresh blends again.
+TEST(AnchorStoreBlending, ASettledInsertIsShownAtOnce) {
+    AnchorStoreSettings s;
+    s.blendTime_s = 2.0;
+    AnchorStore store(s);
+    store.setFallback(makeSh(0.25f));
+    EXPECT_EQ(store.insert({4, 0, 0}, makeSh(1.0f), {0, 2, 0}, 1000.0, 12.0, nullptr, true),
+              AnchorStore::InsertResult::Inserted);
+    const Anchor* a = store.find({4, 0, 0});
+    EXPECT_EQ(a->presence, 1.0f);
+    EXPECT_EQ(a->blendProgress, 1.0f);
+    EXPECT_TRUE(bitwiseEqual(store.interpolate(0.0, 0.0), makeSh(1.0f)));
+    // An anchor fading in (presence 0 at its insert) settled by a later prime.
+    store.insert({4, 9, 0}, makeSh(2.0f), {27, 2, 0}, 1000.0);
+    EXPECT_EQ(store.find({4, 9, 0})->presence, 0.0f);
+    store.insert({4, 9, 0}, makeSh(3.0f), {27, 2, 0}, 1000.0, 12.0, nullptr, true);
+    EXPECT_EQ(store.find({4, 9, 0})->presence, 1.0f);
+    EXPECT_TRUE(bitwiseEqual(store.find({4, 9, 0})->current, makeSh(3.0f)));
+    // An ordinary refresh still blends over the blend time.
+    store.advance(1.0);
+    store.insert({4, 0, 0}, makeSh(3.0f), {0, 2, 0}, 1000.0);
+    store.advance(2.0);
+    expectShEq(store.find({4, 0, 0})->current, makeSh(2.0f), 1e-5f);
+}
+
 TEST(AnchorStoreBlending, ZeroStepAndTenSecondHitch) {
     AnchorStoreSettings s;
     s.blendTime_s = 2.0;

@@ -41,8 +41,10 @@ constexpr double kRelative = 1e-5;
 
 // The layouts these tests state their closed forms for (finer than the defaults, which are tuned
 // for one face per frame on the shipped replays).
+// The budget alone: no prime (CaptureCore.h; Baselines.EveryMethodIsPrimed... tests it).
 BaselineSettings testLayout() {
     BaselineSettings s;
+    s.capture.primeProbes = 0;
     s.gridSpacing_m = 24.0;
     s.cacheSpacing_m = 12.0;
     s.objectSize_m = 32.0;
@@ -530,10 +532,45 @@ struct Lookups {
     }
 };
 
+// Every capturing method is primed alike (lighting/CaptureCore.h): at the first frame it holds
+// four whole probes and the camera's point reads them, not the fallback; the reactive cache,
+// which names probes by the draw's lookups, at the first frame after its first lookups.
+TEST(Baselines, EveryMethodIsPrimedAtItsFirstProbes) {
+    for (const char* name : {"volume", "nearest", "grid", "reactive", "object"}) {
+        SCOPED_TRACE(name);
+        AmbienceVolumeSettings vs;
+        BaselineSettings bs = testLayout();
+        bs.capture.primeProbes = vs.capture.primeProbes = 4;
+        FakeCubeCapture capture(kFace);
+        FlatProbeEnvironment environment;
+        auto method = makeCapturingMethod(name, capture, environment, vs, bs, nullptr);
+        const bool byLookups = std::string(name) == "reactive";
+        const glm::dvec3 camera(-7.0, 1.7, 11.0);
+        for (int f = 0; f < (byLookups ? 2 : 1); ++f) {
+            method->predictStage(camera, {0.0, 0.0, 0.0}, 12.0, kDt);
+            method->captureStage();
+            method->storeStage();
+            const Lookups lookups(camera);
+            method->noteLookups(lookups.x.size(), lookups.x.data(), lookups.z.data());
+        }
+        const MethodStatistics m = method->methodStatistics();
+        EXPECT_EQ(m.primeFaces, 24);
+        EXPECT_GE(m.probes, 4u);
+        // What the camera's point reads is captured light, not the fallback (the sky over flat
+        // ground, which the fake's ground colour differs from).
+        std::vector<float> fallbackCube;
+        environment.fallbackCubeMap(12.0, 16, fallbackCube);
+        const ShRgb fallback = toFloat(projectCubeMap(16, fallbackCube).sh);
+        EXPECT_GT(maxDiff(method->shAt(camera.x, camera.z), fallback),
+                  1e-3 * std::fabs(fallback.c[0].x));
+    }
+}
+
 TEST(Baselines, FaceBudgetAndWholeProbesPerPosition) {
     for (const char* name : kBaselineNames) {
         AmbienceVolumeSettings vs;
         vs.capture.facesPerFrame = 2;
+        vs.capture.primeProbes = 0;
         BaselineSettings bs = testLayout();
         bs.capture.facesPerFrame = 2;
         FakeCubeCapture capture(kFace);

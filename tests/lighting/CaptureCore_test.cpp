@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 
 #include "FakeCubeCapture.h"
+#include "ShChecks.h"
 #include "lighting/AmbienceVolume.h"
 #include "lighting/Baselines.h"
 #include "lighting/CubeMapProjector.h"
@@ -195,7 +196,9 @@ TEST(CaptureCore, BudgetSpreadsAProbeOverFramesOrFillsAFrameWithProbes) {
     FlatProbeEnvironment environment;
     {
         FakeCubeCapture capture(4);
-        CaptureCore core(capture, environment, CaptureSettings{});  // one face per frame
+        CaptureSettings one;  // one face per frame, no prime
+        one.primeProbes = 0;
+        CaptureCore core(capture, environment, one);
         Counter next;
         for (int f = 0; f < 6; ++f) {
             core.beginFrame({0, 2, 0}, {0, 0, 0}, 12.0, kDt);
@@ -215,6 +218,7 @@ TEST(CaptureCore, BudgetSpreadsAProbeOverFramesOrFillsAFrameWithProbes) {
         FakeCubeCapture capture(4);
         CaptureSettings s;
         s.facesPerFrame = 36;
+        s.primeProbes = 0;
         CaptureCore core(capture, environment, s);
         std::vector<std::size_t> busySeen;
         Counter counter;
@@ -245,6 +249,82 @@ TEST(CaptureCore, BudgetSpreadsAProbeOverFramesOrFillsAFrameWithProbes) {
     }
 }
 
+// The prime (CaptureCore.h): in the first frame, primeProbes whole probes, each named as the
+// budget's are and marked primed, then the budget's one face; nothing more until a teleport,
+// which drops the probe in progress and primes again. A method that names nothing in the first
+// frame is primed in the first frame it names a probe.
+TEST(CaptureCore, PrimeCapturesWholeProbesAtTheFirstFrameAndAfterATeleport) {
+    FlatProbeEnvironment environment;
+    FakeCubeCapture capture(4);
+    CaptureSettings s;
+    s.primeProbes = 2;
+    CaptureCore core(capture, environment, s);
+    Counter next;
+    EXPECT_FALSE(core.primeDue());
+    core.beginFrame({0, 2, 0}, {0, 0, 0}, 12.0, kDt);
+    EXPECT_TRUE(core.primeDue());
+    core.captureFaces(std::ref(next));
+    EXPECT_FALSE(core.primeDue());
+    EXPECT_EQ(core.statistics().facesThisFrame, 2 * 6 + 1);
+    EXPECT_EQ(core.statistics().primeFaces, 12);
+    std::vector<CompletedProbe> done = core.takeCompleted();
+    ASSERT_EQ(done.size(), 2u);
+    for (int p = 0; p < 2; ++p) {
+        EXPECT_TRUE(done[p].job.primed);
+        EXPECT_EQ(done[p].job.key, (ProbeKey{0, p, 0}));
+        // Each is the projection of the same capture taken whole.
+        FakeCubeCapture reference(4);
+        const ShRgb whole = toFloat(
+            projectCubeMap(4, reference.captureAll({10.0 * p, 2.0, 0.0}, 12.0)).sh);
+        EXPECT_LT(testing_support::maxDiff(done[p].sh, whole), 1e-5 * std::fabs(whole.c[0].x));
+    }
+    ASSERT_TRUE(core.job());  // the budget's face began the third
+    EXPECT_EQ(core.job()->key, (ProbeKey{0, 2, 0}));
+    // Later frames: the budget only; the probes they complete are not primes.
+    for (int f = 0; f < 5; ++f) {
+        core.beginFrame({0, 2, 0}, {0, 0, 0}, 12.0, kDt);
+        core.captureFaces(std::ref(next));
+        EXPECT_EQ(core.statistics().facesThisFrame, 1);
+    }
+    done = core.takeCompleted();
+    ASSERT_EQ(done.size(), 1u);
+    EXPECT_FALSE(done[0].job.primed);
+    EXPECT_EQ(core.statistics().primeFaces, 12);
+    // A teleport: the probe in progress is dropped, two more primes.
+    core.beginFrame({0, 2, 0}, {0, 0, 0}, 12.0, kDt);
+    core.captureFaces(std::ref(next));  // the fourth probe's first face
+    core.beginFrame({9000, 2, 0}, {0, 0, 0}, 12.0, kDt);
+    EXPECT_EQ(core.abortedProbes(), 1);
+    core.captureFaces(std::ref(next));
+    done = core.takeCompleted();
+    ASSERT_EQ(done.size(), 2u);
+    EXPECT_TRUE(done[0].job.primed && done[1].job.primed);
+    EXPECT_EQ(core.statistics().primeFaces, 24);
+    EXPECT_EQ(core.statistics().facesCaptured, 24 + 1 + 5 + 1 + 1);
+
+    // Nothing named in the first frame: the prime waits for the first probe named.
+    FakeCubeCapture idle(4);
+    CaptureCore waiting(idle, environment, s);
+    waiting.beginFrame({0, 2, 0}, {0, 0, 0}, 12.0, kDt);
+    waiting.captureFaces([](const std::vector<ProbeKey>&) { return std::optional<ProbeRequest>(); });
+    EXPECT_TRUE(waiting.primeDue());
+    EXPECT_EQ(waiting.statistics().facesThisFrame, 0);
+    waiting.beginFrame({0, 2, 0}, {0, 0, 0}, 12.0, kDt);
+    Counter later;
+    waiting.captureFaces(std::ref(later));
+    EXPECT_FALSE(waiting.primeDue());
+    EXPECT_EQ(waiting.statistics().primeFaces, 12);
+    // primeProbes 0: the budget alone, from the first frame.
+    FakeCubeCapture plain(4);
+    s.primeProbes = 0;
+    CaptureCore none(plain, environment, s);
+    none.beginFrame({0, 2, 0}, {0, 0, 0}, 12.0, kDt);
+    Counter third;
+    none.captureFaces(std::ref(third));
+    EXPECT_EQ(none.statistics().facesThisFrame, 1);
+    EXPECT_EQ(none.statistics().primeFaces, 0);
+}
+
 TEST(CaptureCore, PoisonedProbesAreCountedAndNeverHandedOn) {
     for (Poison kind : {Poison::NaN, Poison::Inf, Poison::Negative}) {
         FakeCubeCapture capture(4);
@@ -252,6 +332,7 @@ TEST(CaptureCore, PoisonedProbesAreCountedAndNeverHandedOn) {
         FlatProbeEnvironment environment;
         CaptureSettings s;
         s.facesPerFrame = 6;
+        s.primeProbes = 0;
         CaptureCore core(capture, environment, s);
         Counter next;
         int handedOn = 0;
@@ -320,8 +401,12 @@ TEST(CaptureCore, VolumeAndBaselineCountAlike) {
         p += v * kDt;
     }
     const MethodStatistics a = volume.methodStatistics(), b = grid.methodStatistics();
-    EXPECT_EQ(a.facesCaptured, 240);
-    EXPECT_EQ(b.facesCaptured, 240);
+    // The budget's 2 a frame, and a prime of four whole probes at the first frame and the cut.
+    const int primes = 2 * CaptureSettings{}.primeProbes * 6;
+    EXPECT_EQ(a.primeFaces, primes);
+    EXPECT_EQ(b.primeFaces, primes);
+    EXPECT_EQ(a.facesCaptured, 240 + primes);
+    EXPECT_EQ(b.facesCaptured, 240 + primes);
     EXPECT_EQ(a.teleports, 1);
     EXPECT_EQ(b.teleports, 1);
     EXPECT_EQ(a.rejectedProbes, volumeCapture.poisonedProbes());

@@ -122,7 +122,7 @@ TEST(SettingsSchema, KeysAreUniqueAndTheCaptureKeysAreShared) {
         EXPECT_EQ(v->hi, b.hi) << b.key;
         EXPECT_EQ(v->kind, b.kind) << b.key;
     }
-    EXPECT_EQ(shared, 9 + 22);  // CaptureSettings' nine and the near field's twenty-two
+    EXPECT_EQ(shared, 10 + 22);  // CaptureSettings' ten and the near field's twenty-two
     // The files' defaults lie in their ranges.
     const AmbienceVolumeSettings v;
     for (const auto& f : volumeSettingsSchema().fields()) {
@@ -190,7 +190,7 @@ TEST(SettingsSchema, WhatTheWriterWritesReadsBackEqual) {
     EXPECT_EQ(j.at("nearField").at("radius_m").get<double>(), 20.0);
     EXPECT_EQ(j.at("facesPerFrame").get<int>(), 1);
     EXPECT_TRUE(j.at("relightBySkyLevel").get<bool>());
-    EXPECT_EQ(j.size(), 3u + 9u + 3u);  // three objects, the capture keys, the volume's own
+    EXPECT_EQ(j.size(), 3u + 10u + 3u);  // three objects, the capture keys, the volume's own
 }
 
 // nearField.vertexAmbient_m (terrain patches lit per vertex near the eye): in both files, in
