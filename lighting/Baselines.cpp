@@ -342,6 +342,11 @@ ReactiveCacheMethod::ReactiveCacheMethod(CubeCapture& capture, const ProbeEnviro
 
 void ReactiveCacheMethod::noteLookups(std::size_t count, const double* x_m, const double* z_m) {
     const Clock::time_point t0 = Clock::now();
+    want(count, x_m, z_m);
+    addPendingPredictTime(secondsSince(t0));
+}
+
+void ReactiveCacheMethod::want(std::size_t count, const double* x_m, const double* z_m) {
     const double now = simulationTime_s();
     std::optional<CellKey> previous;
     for (std::size_t p = 0; p < count; ++p) {
@@ -357,7 +362,6 @@ void ReactiveCacheMethod::noteLookups(std::size_t count, const double* x_m, cons
             }
         }
     }
-    addPendingPredictTime(secondsSince(t0));
 }
 
 void ReactiveCacheMethod::updateStructure() {
@@ -370,6 +374,12 @@ void ReactiveCacheMethod::updateStructure() {
         } else {
             ++it;
         }
+    }    // When a prime is due (the first frame, a teleport: lighting/CaptureCore.h) the camera's
+    // own ground point counts as looked up: the draw is about to look there, and the cache
+    // has its probes to name before the draw's first lookups at the new place.
+    if (primeDue()) {
+        const glm::dvec3& c = camera_m();
+        want(1, &c.x, &c.z);
     }
 }
 

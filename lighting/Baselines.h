@@ -144,6 +144,8 @@ class CapturingBaseline : public AmbienceMethod {
     // frame's predict time.
     void addPendingPredictTime(double seconds) { pendingPredict_s_ += seconds; }
     const glm::dvec3& camera_m() const { return core_.camera_m(); }
+    // A prime is due this frame (lighting/CaptureCore.h).
+    bool primeDue() const { return core_.primeDue(); }
     // Squared horizontal distance from the camera [m^2].
     double cameraDistance2(double x_m, double z_m) const;
     const ProbeEnvironment& environment() const { return environment_; }
@@ -216,7 +218,8 @@ class ScrollingGridMethod final : public CapturingBaseline {
 
 // The Lumen / kajiya way: probes exist only where lookups happen. noteLookups marks, for each
 // point, the four corners of its cell of the lattice of spacing cacheSpacing_m (probe (i, k) at
-// (i s, k s)) as wanted now. Missing wanted probes are captured nearest the camera first (ties by
+// (i s, k s)) as wanted now; so is the camera's ground point when a prime is due (the first
+// frame, a teleport: lighting/CaptureCore.h), before the draw has looked anywhere there. Missing wanted probes are captured nearest the camera first (ties by
 // cell), then stale ones, nearest first. A probe (or wish) not looked up for unusedTimeout_s of
 // simulation time is dropped. shAt: bilinear over the four corners of the cell holding (x, z),
 // renormalised over the present probes; none -> fallback.
@@ -244,6 +247,9 @@ class ReactiveCacheMethod final : public CapturingBaseline {
     std::size_t bytesHeld() const override;
 
   private:
+    // Marks the four corners of each point's cell as wanted now.
+    void want(std::size_t count, const double* x_m, const double* z_m);
+
     struct Entry {
         ShRgb value;
         double lastWanted_s = 0.0;

@@ -33,8 +33,8 @@
 //     counted in primeFaces) before the budget is spent, and hands them over marked `primed`:
 //     the method shows them at once instead of blending them in from the fallback, so the first
 //     frame drawn at a new place shows that place's light, not the sky over flat ground. A
-//     method that names no probe in that frame (the reactive cache, before its first lookups)
-//     is primed in the first frame it names one.
+//     method that names no probe in that frame is primed in the first frame it names one (the
+//     reactive cache names the corners of the camera's cell while a prime is due).
 //   - fallback: the SH of ProbeEnvironment::fallbackCubeMap (sky model over flat ground) at
 //     fallbackFaceSize, recomputed when the time of day has moved by more than fallbackRefresh_h;
 //     a fallback that is not finite keeps the previous value (zero at first).
@@ -180,8 +180,9 @@ class CaptureCore {
     // takes counts as predict time.
     using NextProbe = std::function<std::optional<ProbeRequest>(const std::vector<ProbeKey>& busy)>;
     void captureFaces(const NextProbe& next);
-    // True while a prime is due (from the first frame or a teleport until a probe is named).
-    bool primeDue() const { return primeDue_; }
+    // True while a prime is due (from the first frame or a teleport until a probe is named;
+    // never with primeProbes 0).
+    bool primeDue() const { return primeDue_ && settings_.primeProbes > 0; }
 
     // Stage 4's shared part: the probes completed this frame, bad ones counted in
     // rejectedProbes and left out. Empties the list.

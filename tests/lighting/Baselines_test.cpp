@@ -275,15 +275,24 @@ TEST(ScrollingGridMethod, ScrollingKeepsIntegerCellsExactFarFromTheOrigin) {
 
 // ---- ReactiveCacheMethod ------------------------------------------------------------------------
 
-TEST(ReactiveCacheMethod, NoLookupsNoCaptures) {
-    FakeCubeCapture capture(kFace);
-    FlatProbeEnvironment environment;
-    ReactiveCacheMethod cache(capture, environment);
-    for (int f = 0; f < 60; ++f) frame(cache, {3.0, 1.7, 4.0});
-    EXPECT_TRUE(capture.calls().empty());
-    EXPECT_EQ(cache.methodStatistics().facesCaptured, 0);
-    EXPECT_EQ(cache.methodStatistics().probes, 0u);
-    EXPECT_TRUE(identical(cache.shAt(3.0, 4.0), cache.fallback()));
+// Without lookups nothing is wanted and nothing captured, but the prime: in the first frame the
+// camera's own cell counts as looked up (lighting/CaptureCore.h), its four corners captured
+// whole, and nothing after it.
+TEST(ReactiveCacheMethod, NoLookupsNoCapturesButThePrime) {
+    for (const int prime : {0, 4}) {
+        SCOPED_TRACE(prime);
+        FakeCubeCapture capture(kFace);
+        FlatProbeEnvironment environment;
+        BaselineSettings s;
+        s.capture.primeProbes = prime;
+        ReactiveCacheMethod cache(capture, environment, s);
+        for (int f = 0; f < 60; ++f) frame(cache, {3.0, 1.7, 4.0});
+        EXPECT_EQ(capture.calls().size(), std::size_t(prime));
+        EXPECT_EQ(cache.methodStatistics().facesCaptured, 6 * prime);
+        EXPECT_EQ(cache.methodStatistics().primeFaces, 6 * prime);
+        EXPECT_EQ(cache.methodStatistics().probes, std::size_t(prime));
+        EXPECT_EQ(identical(cache.shAt(3.0, 4.0), cache.fallback()), prime == 0);
+    }
 }
 
 TEST(ReactiveCacheMethod, CapturesTheCornersOfLookupsNearestFirst) {
