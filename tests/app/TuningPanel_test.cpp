@@ -294,7 +294,7 @@ TEST_F(TuningPanelWindow, ASettingChangesTheRunningMethod) {
     frame();
     AmbienceVolume* volume = live_->stages().volume();
     ASSERT_NE(volume, nullptr);
-    EXPECT_EQ(last_.ambience.faces, 1);
+    EXPECT_EQ(last_.ambience.faces, 1 + 4 * 6);  // the budget's, and the first frame's prime
     // In place: the same volume captures six faces in the next frame, reads the new scheduler
     // and blend settings, and keeps its anchors.
     ASSERT_TRUE(panel_->set("facesPerFrame", 6)) << panel_->error();
