@@ -374,7 +374,8 @@ void ReactiveCacheMethod::updateStructure() {
         } else {
             ++it;
         }
-    }    // When a prime is due (the first frame, a teleport: lighting/CaptureCore.h) the camera's
+    }
+    // When a prime is due (the first frame, a teleport: lighting/CaptureCore.h) the camera's
     // own ground point counts as looked up: the draw is about to look there, and the cache
     // has its probes to name before the draw's first lookups at the new place.
     if (primeDue()) {

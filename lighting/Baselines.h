@@ -219,8 +219,9 @@ class ScrollingGridMethod final : public CapturingBaseline {
 // The Lumen / kajiya way: probes exist only where lookups happen. noteLookups marks, for each
 // point, the four corners of its cell of the lattice of spacing cacheSpacing_m (probe (i, k) at
 // (i s, k s)) as wanted now; so is the camera's ground point when a prime is due (the first
-// frame, a teleport: lighting/CaptureCore.h), before the draw has looked anywhere there. Missing wanted probes are captured nearest the camera first (ties by
-// cell), then stale ones, nearest first. A probe (or wish) not looked up for unusedTimeout_s of
+// frame, a teleport: lighting/CaptureCore.h), before the draw has looked anywhere there.
+// Missing wanted probes are captured nearest the camera first (ties by cell), then stale ones,
+// nearest first. A probe (or wish) not looked up for unusedTimeout_s of
 // simulation time is dropped. shAt: bilinear over the four corners of the cell holding (x, z),
 // renormalised over the present probes; none -> fallback.
 class ReactiveCacheMethod final : public CapturingBaseline {

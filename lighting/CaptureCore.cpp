@@ -165,14 +165,15 @@ FrameEvents CaptureCore::beginFrame(const glm::dvec3& cameraPosition_m,
             if (glm::length(cameraPosition_m - camera_m_) > allowed) {
                 ++stats_.teleports;
                 events.teleport = true;
-                primeDue_ = true;
+                primeDue_ = settings_.primeProbes > 0;
                 if (job_) {
                     ++abortedProbes_;
                     job_.reset();
                 }
             }
         }
-        if (!haveCamera_) primeDue_ = true;  // the first frame: the method holds nothing yet
+        // The first frame: the method holds nothing yet.
+        if (!haveCamera_) primeDue_ = settings_.primeProbes > 0;
         camera_m_ = cameraPosition_m;
         cameraSpeed_mps_ = reported;
         haveCamera_ = true;
@@ -188,14 +189,12 @@ FrameEvents CaptureCore::beginFrame(const glm::dvec3& cameraPosition_m,
 void CaptureCore::captureFaces(const NextProbe& next) {
     // The prime first (the rule in the header): whole probes, each named by the method as the
     // budget's are, so it picks what it would have captured first anyway.
-    if (primeDue_ && settings_.primeProbes > 0 && !job_) {
+    if (primeDue()) {
         for (int p = 0; p < settings_.primeProbes; ++p) {
             const int faces = spendFaces(next, kCubeFaces, true);
-            if (faces > 0) primeDue_ = false;
-            if (faces < kCubeFaces) break;  // the method names nothing more
+            if (faces > 0) primeDue_ = false;  // begun: it ends with this frame
+            if (faces < kCubeFaces) break;     // the method names nothing more
         }
-    } else {
-        primeDue_ = false;
     }
     spendFaces(next, settings_.facesPerFrame, false);
 }
@@ -242,7 +241,6 @@ int CaptureCore::spendFaces(const NextProbe& next, int budget, bool primed) {
             completed_.push_back({*job_, projector_->coefficients(), gradient});
             job_.reset();
         }
-        if (r.faces == 0) break;  // the capture rendered nothing: do not spin
     }
     return total - budget;
 }
