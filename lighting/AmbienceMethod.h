@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -138,6 +139,13 @@ class AmbienceMethod {
     // captures (lighting/Metrics.h, DrawnBudget) use the same, so its far-field term compares
     // like with like.
     virtual const SurfaceLight* captureSurfaceLight() const { return nullptr; }
+    // A surface light that replaces the method's own in its captures (and so in the budget's
+    // fresh ones), asked at the time of day of each capture; a null function or a null answer
+    // leaves the method's own. A diagnostic: `run --capture-light reference` passes the
+    // reference's bounce field (docs/USAGE.md), which no method has, to measure how much of the
+    // model term is the captures' surface light. Methods that capture nothing ignore it.
+    using CaptureLightOverride = std::function<const SurfaceLight*(double timeOfDay_h)>;
+    virtual void overrideCaptureLight(CaptureLightOverride light) { (void)light; }
 
     // Where the draw looked up ambience this frame (terrain corners, objects). Only methods that
     // place probes by demand use it; called once per frame before the next predictStage.

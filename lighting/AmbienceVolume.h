@@ -27,6 +27,7 @@
 #include <optional>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -132,6 +133,9 @@ class AmbienceVolume final : public AmbienceMethod {
     }
     MethodStatistics methodStatistics() const override;
     const SurfaceLight* captureSurfaceLight() const override { return core_.surfaceLight(); }
+    void overrideCaptureLight(CaptureLightOverride light) override {
+        core_.overrideSurfaceLight(std::move(light));
+    }
 
     const AmbienceStatistics& statistics() const { return stats_; }
     const AnchorStore& store() const { return store_; }

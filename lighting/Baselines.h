@@ -32,6 +32,7 @@
 #include <optional>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -107,6 +108,9 @@ class CapturingBaseline : public AmbienceMethod {
     void storeStage() final;
     MethodStatistics methodStatistics() const final;
     const SurfaceLight* captureSurfaceLight() const final { return core_.surfaceLight(); }
+    void overrideCaptureLight(CaptureLightOverride light) final {
+        core_.overrideSurfaceLight(std::move(light));
+    }
 
     const BaselineSettings& settings() const { return settings_; }
     double simulationTime_s() const { return core_.time_s(); }
@@ -322,6 +326,12 @@ class NearestAnchorMethod final : public AmbienceMethod {
     // The same at many points, in parallel.
     void shAt(std::size_t count, const double* x_m, const double* z_m, ShRgb* out) const override;
     MethodStatistics methodStatistics() const override { return volume_.methodStatistics(); }
+    const SurfaceLight* captureSurfaceLight() const override {
+        return volume_.captureSurfaceLight();
+    }
+    void overrideCaptureLight(CaptureLightOverride light) override {
+        volume_.overrideCaptureLight(std::move(light));
+    }
 
     const AmbienceVolume& volume() const { return volume_; }
 

@@ -46,6 +46,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -169,8 +170,16 @@ class CaptureCore {
     // (the method sets it once, at construction; until then captures use the hemisphere).
     using OwnField = std::function<ShRgb(double x_m, double z_m)>;
     void setOwnField(OwnField field) { ownLight_.field = std::move(field); }
-    // The surface light the method's captures use now: the own field, or null (the hemisphere).
+    // A surface light in place of the method's own (AmbienceMethod::overrideCaptureLight),
+    // asked with the clock's time of day; from the next capture on.
+    void overrideSurfaceLight(AmbienceMethod::CaptureLightOverride light) {
+        lightOverride_ = std::move(light);
+    }
+    // The surface light the method's captures use now: the override's answer when it gives one,
+    // else the own field, or null (the hemisphere).
     const SurfaceLight* surfaceLight() const {
+        if (lightOverride_)
+            if (const SurfaceLight* light = lightOverride_(timeOfDay_h_)) return light;
         return settings_.ownLight && ownLight_.field ? &ownLight_ : nullptr;
     }
 
@@ -269,6 +278,7 @@ class CaptureCore {
     MethodStatistics stats_;
     std::int64_t probesCompleted_ = 0, abortedProbes_ = 0;
     OwnLight ownLight_;
+    AmbienceMethod::CaptureLightOverride lightOverride_;
 };
 
 // Signed difference b - a of two times of day, in (-12, 12] hours (the wrap at 24 h).

@@ -191,6 +191,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <utility>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -753,6 +754,9 @@ class NearFieldMethod final : public AmbienceMethod {
     double farCaptureRadius_m() const override;
     const SurfaceLight* captureSurfaceLight() const override {
         return far_->captureSurfaceLight();
+    }
+    void overrideCaptureLight(CaptureLightOverride light) override {
+        far_->overrideCaptureLight(std::move(light));
     }
     void noteLookups(std::size_t count, const double* x_m, const double* z_m) override {
         far_->noteLookups(count, x_m, z_m);

@@ -203,6 +203,11 @@ BenchManifest parseBenchManifest(const std::string& text, const std::string& whe
         // Manifests from before the two layers have one.
         if (j.contains("bounceCanopy_m")) m.bounceCanopy_m = f.integer("bounceCanopy_m", 0, 100);
     }
+    if (j.contains("captureLight")) {
+        m.captureLight = f.text("captureLight");
+        if (m.captureLight != "own" && m.captureLight != "reference")
+            f.fail("captureLight", "expected own or reference");
+    }
     const json& runs = f.at("runs");
     if (!runs.is_array()) f.fail("runs", "expected a list of run folders");
     for (const json& r : runs) {
@@ -240,6 +245,7 @@ nlohmann::json benchManifestJson(const BenchManifest& m) {
             {"bounceReach_m", int(std::lround(m.bounceReach_m))},
             {"bounceFace", m.bounceFace},
             {"bounceCanopy_m", int(std::lround(m.bounceCanopy_m))},
+            {"captureLight", m.captureLight},
             {"runs", m.runs}};
 }
 

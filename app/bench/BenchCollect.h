@@ -74,6 +74,8 @@ struct BenchManifest {
     double bounceSpacing_m = 256.0, bounceReach_m = 500.0;
     int bounceFace = 32;
     double bounceCanopy_m = 0.0;  // lighting/BounceField.h "Two layers" (0: one layer)
+    // What lit the methods' captures (absent in a bench.json of older code: own).
+    std::string captureLight = "own";
     std::vector<std::string> runs;  // the run folders, relative: runs/<plain name>
 };
 

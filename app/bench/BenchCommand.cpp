@@ -87,6 +87,7 @@ void emitBench(const BenchOptions& o, const std::vector<Job>& jobs, const Runner
     manifest.fullLengthBudget = o.fullLengthBudget;
     manifest.screenWitnesses = runner.screenWitnesses;
     manifest.referenceLight = o.referenceLight;
+    manifest.captureLight = o.captureLight;
     manifest.bounceSpacing_m = o.bounce.spacing_m;
     manifest.bounceReach_m = o.bounce.reach_m;
     manifest.bounceFace = o.bounce.faceSize;
@@ -129,6 +130,7 @@ BenchOptions readManifest(const std::string& dir, std::string& commandLine) {
     o.fullLengthBudget = m.fullLengthBudget;
     o.screenWitnesses = m.screenWitnesses;
     o.referenceLight = m.referenceLight;
+    o.captureLight = m.captureLight;
     o.bounce.spacing_m = m.bounceSpacing_m;
     o.bounce.reach_m = m.bounceReach_m;
     o.bounce.faceSize = m.bounceFace;
@@ -323,6 +325,11 @@ void addBenchCommand(CLI::App& app) {
     // With --oracle reference: what lights the reference's surfaces (as `run`'s options; the
     // bench's lattice is 256 m within 500 m of each run's path, BounceSettings' defaults).
     addReferenceLightOptions(*cmd, o->referenceLight, o->bounce);
+    cmd->add_option("--capture-light", o->captureLight,
+                    "with --oracle reference: what lights the surfaces of the methods' captures, "
+                    "own (default: each method's settings) or reference (the reference's bounce "
+                    "field, which no method has: a diagnostic of how much of the error is that "
+                    "light)");
     cmd->add_option("--jobs", o->jobs, "runs side by side (default: the number of cores)");
     cmd->add_option("--out", o->out, "output folder (default out/bench)");
     cmd->add_option("--measure-every", o->measureEvery,

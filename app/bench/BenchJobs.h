@@ -33,6 +33,9 @@ struct BenchOptions {
     // the bounce field over a lattice of 256 m within 500 m of each run's path by default.
     std::string referenceLight = "bounce";
     BounceSettings bounce;
+    // What lights the surfaces of the methods' captures (`run --capture-light`): own or
+    // reference (the reference's bounce field, a diagnostic).
+    std::string captureLight = "own";
     int jobs = 0;
     int measureEvery = 10;
     int maxFrames = 0;

@@ -630,6 +630,9 @@ std::string referenceLightLine(const std::vector<Job>& jobs, const std::string& 
         } else if (light == "hemisphere") {
             out << " (the fixed sky/ground hemisphere ambient)";
         }
+        if (stringAt(ref, "captureLight", "own") == "reference")
+            out << ". The methods' captures lit by the reference's own field too "
+                   "(--capture-light reference: a diagnostic, not a method)";
         const double terrain = number(ref, {"drawn", "terrainWitnesses"});
         if (std::isfinite(terrain) && terrain > 0) {
             out << ". Terrain witnesses: " << fmt(terrain, "%.0f") << "; under a crown "

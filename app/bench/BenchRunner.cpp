@@ -131,6 +131,7 @@ std::vector<std::string> Runner::args(const Job& job) const {
             std::snprintf(canopy, sizeof canopy, "%g", bounceCanopy_m);
             a.insert(a.end(), {"--bounce-canopy", canopy});
         }
+        if (captureLight != "own") a.insert(a.end(), {"--capture-light", captureLight});
         if (job.point.facesPerFrame != idealBudget) {
             a.push_back("--no-ideal-volume");
         } else if (screenWitnesses > 0) {
@@ -209,6 +210,12 @@ Runner benchRunner(const BenchOptions& o, const std::vector<Point>& points) {
     runner.bounceReach_m = o.bounce.reach_m;
     runner.bounceFace = o.bounce.faceSize;
     runner.bounceCanopy_m = o.bounce.canopy_m;
+    if (o.captureLight != "own" && o.captureLight != "reference")
+        throw InputError("--capture-light", "expected own or reference");
+    if (o.captureLight == "reference" && (!runner.reference || o.referenceLight != "bounce"))
+        throw InputError("--capture-light",
+                         "reference needs --oracle reference with --reference-light bounce");
+    runner.captureLight = o.captureLight;
     runner.idealBudget = points.empty() ? 1 : points.front().facesPerFrame;
     for (const Point& p : points) runner.idealBudget = std::min(runner.idealBudget, p.facesPerFrame);
     return runner;

@@ -26,6 +26,7 @@ struct Runner {
     double bounceSpacing_m = 256.0, bounceReach_m = 500.0;
     int bounceFace = 32;
     double bounceCanopy_m = 10.0;
+    std::string captureLight = "own";  // `run --capture-light`, passed when not own
     // Runs above this many faces per frame play the first fullLengthBudget / faces of the replay.
     int fullLengthBudget = 64;
 

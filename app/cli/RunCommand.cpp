@@ -97,6 +97,9 @@ struct RunOptions {
     // a lattice of spacing_m within reach_m of the path (run's default: 128 m within 600 m).
     std::string referenceLight = "bounce";
     BounceSettings bounce = runBounceSettings();
+    // What lights the surfaces of the method's captures: own (its settings: the hemisphere, or
+    // its field with ownLight) or reference (the reference's bounce field: a diagnostic).
+    std::string captureLight = "own";
 };
 
 // Passes over the replay for --loop, and a bound on the run's length: the report keeps a row
@@ -274,6 +277,13 @@ RunPlan planRun(RunOptions& o) {
     o.referenceSettings.idealVolume = !o.noIdealVolume;
     plan.referenceLight = parseReferenceLight(o.referenceLight, "--reference-light");
     checkBounceSettings(o.bounce);
+    if (o.captureLight != "own" && o.captureLight != "reference")
+        throw InputError("--capture-light", "expected own or reference");
+    if (o.captureLight == "reference" &&
+        (!o.referenceOn || plan.referenceLight != ReferenceLight::Bounce))
+        throw InputError("--capture-light",
+                         "reference needs the reference lit by its bounce field (--oracle-kind "
+                         "reference or --reference, with --reference-light bounce)");
     if (o.referenceSettings.every < 1 || o.referenceSettings.every > 1000000)
         throw InputError("--reference-every", "expected 1 to 1000000");
     if (o.referenceSettings.faceSize < 1 || o.referenceSettings.faceSize > 256)
@@ -440,6 +450,13 @@ RunMeasurement startMeasurement(const RunOptions& o, const RunPlan& plan, const 
                 [&env, maxAside_m](double x, double z) { return env.placeProbe(x, z, maxAside_m); },
                 plan.replay.timeOfDayStart_h);
             referenceCapture = m.bounceLit.get();
+            // --capture-light reference: the method's captures lit by the same field, of the
+            // epoch holding each capture's time of day (solved when first asked).
+            if (o.captureLight == "reference")
+                stages.method().overrideCaptureLight(
+                    [field = m.bounceLit.get()](double timeOfDay_h) -> const SurfaceLight* {
+                        return &field->field(timeOfDay_h);
+                    });
         }
         m.meter->attachReference(*referenceCapture, ref,
                                  plan.oracleKind == OracleKind::Reference);
@@ -494,6 +511,7 @@ void finishMeasurement(const RunOptions& o, RunMeasurement& m, RunReport& report
             // What lit the reference's surfaces, and how its bounce field converged.
             nlohmann::json j = nlohmann::json::parse(report.measurementJson);
             j["reference"]["light"] = m.bounceLit ? "bounce" : "hemisphere";
+            j["reference"]["captureLight"] = o.captureLight;
             if (m.bounceLit) j["reference"]["bounce"] = bounceJson(o.bounce, m.bounceLit->solves());
             report.measurementJson = j.dump();
             if (m.bounceLit)
@@ -762,6 +780,10 @@ void addRunCommand(CLI::App& app) {
                     "on each reference frame, compare the ambient irradiance the draw applies at "
                     "N random pixels of the main view with the reference there (slow; default 0)");
     addReferenceLightOptions(*cmd, o->referenceLight, o->bounce);
+    cmd->add_option("--capture-light", o->captureLight,
+                    "what lights the surfaces of the method's captures besides the sun: own "
+                    "(default: the method's settings) or reference (the reference's bounce field, "
+                    "which no method has: a diagnostic of how much of the error is that light)");
     cmd->add_flag("--no-ideal-volume", o->noIdealVolume,
                   "error budget without the ideal volume (no extra captures; spacing and "
                   "schedule reported as one term)");

@@ -93,6 +93,22 @@ TEST(BenchCollect, ManifestRecordsTheReferenceLight) {
     EXPECT_THROW(parseBenchManifest(j.dump(), "bench.json"), InputError);
 }
 
+// bench.json records what lit the methods' captures (--capture-light); one written before the
+// option has no such key and reads as own, the only light then; any other light is refused.
+TEST(BenchCollect, ManifestRecordsTheCaptureLight) {
+    BenchManifest m = sampleManifest();
+    m.oracle = "reference";
+    m.referenceLight = "bounce";
+    m.captureLight = "reference";
+    nlohmann::json j = benchManifestJson(m);
+    EXPECT_EQ(j["captureLight"], "reference");
+    EXPECT_EQ(parseBenchManifest(j.dump(), "bench.json").captureLight, "reference");
+    j.erase("captureLight");
+    EXPECT_EQ(parseBenchManifest(j.dump(), "bench.json").captureLight, "own");
+    j["captureLight"] = "sun\nrm -rf";
+    EXPECT_THROW(parseBenchManifest(j.dump(), "bench.json"), InputError);
+}
+
 TEST(BenchCollect, ManifestCannotLeadOutsideItsFolder) {
     const auto withChange = [](const std::function<void(nlohmann::json&)>& change) {
         nlohmann::json j = benchManifestJson(sampleManifest());

@@ -130,6 +130,17 @@ TEST(Cli, ReferenceOracleBadOptions) {
                      {"--reference-size"});
     expectInputError("run --replay " + replay + " --no-frames --measure-every 10 --share 0",
                      {"--share"});
+    // --capture-light: own or reference, and reference only with a bounce-lit reference.
+    expectInputError("run --replay " + replay + " --no-frames --capture-light sky",
+                     {"--capture-light", "own or reference"});
+    expectInputError("run --replay " + replay + " --no-frames --capture-light reference",
+                     {"--capture-light", "bounce field"});
+    expectInputError("run --replay " + replay +
+                         " --no-frames --measure-every 10 --oracle-kind reference "
+                         "--reference-light hemisphere --capture-light reference",
+                     {"--capture-light", "bounce field"});
+    expectInputError("bench --capture-light reference --out " + testing::TempDir() + "b",
+                     {"--capture-light", "--oracle reference"});
     expectInputError("probe --at 0,0 --scene detailed --out " + testing::TempDir() + "p.exr",
                      {"--scene", "detailed"});
     expectInputError("bench --oracle perfect --out " + testing::TempDir() + "b", {"--oracle"});

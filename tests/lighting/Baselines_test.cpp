@@ -575,6 +575,75 @@ TEST(Baselines, EveryMethodIsPrimedAtItsFirstProbes) {
     }
 }
 
+// A surface light of uniform radiance: every surface's ambient the same.
+class UniformLight final : public SurfaceLight {
+  public:
+    explicit UniformLight(float radiance) {
+        // L00 = L x integral of Y00 over the sphere = L 4 pi / (2 sqrt(pi)).
+        sh_.c[0] = glm::vec3(radiance * 2.0f * std::sqrt(float(kPi)));
+    }
+    ShRgb shAt(const glm::dvec3&) const override { return sh_; }
+
+  private:
+    ShRgb sh_;
+};
+
+// A capture light override (AmbienceMethod::overrideCaptureLight, what `run --capture-light
+// reference` passes) lights every capture of every capturing method, the prime's too, in place
+// of the method's own light (ownLight on here), and is asked with the frame's time of day; where
+// it answers null the method's own light is back. In the furnace a capture lit by a uniform
+// radiance L holds rho (E_d + pi L) on an upward surface.
+TEST(Baselines, EveryCapturingMethodTakesACaptureLightOverride) {
+    const double rho = 0.5, direct = 100.0;
+    const float radiance = 20.0f;
+    const UniformLight override(radiance);
+    for (const char* name : {"volume", "nearest", "grid", "reactive", "object"}) {
+        SCOPED_TRACE(name);
+        AmbienceVolumeSettings vs;
+        BaselineSettings bs = testLayout();
+        bs.capture.primeProbes = vs.capture.primeProbes = 1;
+        bs.capture.ownLight = vs.capture.ownLight = true;
+        bs.capture.facesPerFrame = vs.capture.facesPerFrame = 6;
+        FurnaceCapture capture(rho, direct);
+        FlatProbeEnvironment environment;
+        auto method = makeCapturingMethod(name, capture, environment, vs, bs, nullptr);
+        std::vector<double> asked;
+        method->overrideCaptureLight([&](double timeOfDay_h) -> const SurfaceLight* {
+            asked.push_back(timeOfDay_h);
+            return timeOfDay_h < 13.0 ? &override : nullptr;
+        });
+        glm::dvec3 camera(-7.0, 1.7, 11.0);
+        const auto step = [&](double timeOfDay_h) {
+            camera.x += 0.4;
+            method->predictStage(camera, {24.0, 0.0, 0.0}, timeOfDay_h, kDt);
+            method->captureStage();
+            method->storeStage();
+            const Lookups lookups(camera);
+            method->noteLookups(lookups.x.size(), lookups.x.data(), lookups.z.data());
+        };
+        for (int f = 0; f < 10; ++f) step(12.0);
+        EXPECT_GT(capture.captures, 0);
+        EXPECT_EQ(capture.litCaptures, capture.captures);
+        EXPECT_NEAR(capture.lastAmbient, kPi * radiance, 1e-4 * kPi * radiance);
+        EXPECT_EQ(method->captureSurfaceLight(), &override);
+        ASSERT_FALSE(asked.empty());
+        for (const double t : asked) EXPECT_EQ(t, 12.0);
+        // What the captures held: the furnace's closed form at the camera.
+        const double up =
+            double(luminance(shIrradiance(method->shAt(camera.x, camera.z), glm::vec3(0, 1, 0))));
+        const double lit = rho * (direct + kPi * radiance);
+        EXPECT_NEAR(up, lit, 1e-3 * lit);
+        // The override answers null from 13 h on: the method's own field lights them again.
+        const int before = capture.captures;
+        for (int f = 0; f < 10; ++f) step(14.0);
+        EXPECT_GT(capture.captures, before);
+        EXPECT_NE(method->captureSurfaceLight(), nullptr);
+        EXPECT_NE(method->captureSurfaceLight(), &override);
+        EXPECT_EQ(asked.back(), 14.0);
+        EXPECT_EQ(capture.light(), nullptr);  // left without a light after each capture
+    }
+}
+
 TEST(Baselines, FaceBudgetAndWholeProbesPerPosition) {
     for (const char* name : kBaselineNames) {
         AmbienceVolumeSettings vs;
