@@ -10,8 +10,9 @@
 //   the scene's own irradiance instead: what the sky, the sun and the surfaces themselves send.
 // [SECTION] The lattice
 //   Points on the square lattice (i spacing_m, k spacing_m) of the XZ plane whose distance to
-//   some point of the camera path is at most reach_m, each placed by the caller (probes' rule:
-//   2 m above the ground, out of plant footprints), and with two layers a second point canopy_m
+//   some point of the camera path is at most reach_m, each placed by the caller (the probes'
+//   rule at kBounceHeight_m: 2 m above the ground, out of plant footprints, whatever height the
+//   methods' probes stand at, so the reference does not move with them), and with two layers a second point canopy_m
 //   above each. The lattice is global, so two runs of one replay lay the same points.
 // [SECTION] The iteration (Jacobi)
 //   Pass 1 lights the surfaces with no ambient at all: its captures hold the sky and the
@@ -63,6 +64,9 @@
 #include "lighting/SH.h"
 
 namespace amb {
+
+// The height above the ground of the lattice's lower layer (see The lattice).
+inline constexpr double kBounceHeight_m = 2.0;
 
 struct BounceSettings {
     double spacing_m = 256.0;  // lattice spacing (bench default; `run` uses 128)

@@ -139,7 +139,10 @@ class ProbeEnvironment {
 };
 
 struct WorldProbeEnvironmentSettings {
-    double probeHeight_m = 2.0;  // above terrain or water
+    // Above terrain or water: the near field's eye height (NearFieldSettings::surfaceHeight_m),
+    // so the far field and the occluders put back at a surface are seen from one height. 2 m
+    // until measured otherwise (docs/HISTORY.md "Probes at the surfaces' eye height").
+    double probeHeight_m = 0.5;
     double clearance_m = 0.5;    // kept from plant footprints and tops
 };
 

@@ -37,6 +37,7 @@
 #include "lighting/Baselines.h"
 #include "lighting/BounceField.h"
 #include "lighting/Metrics.h"
+#include "lighting/ProbeEnvironment.h"
 #include "world/DataPaths.h"
 #include "world/Error.h"
 #include "world/JsonText.h"
@@ -359,6 +360,8 @@ struct RunMeasurement {
     // With --reference-light bounce: the lattice's captures and the reference lit by its field.
     std::unique_ptr<CubeCaptureGl> latticeCapture;
     std::unique_ptr<BounceLitCapture> bounceLit;
+    // Places the lattice's points (lighting/BounceField.h kBounceHeight_m).
+    std::unique_ptr<WorldProbeEnvironment> latticePlacement;
     std::string oracleSignature, referenceSignature;
 };
 
@@ -443,11 +446,15 @@ RunMeasurement startMeasurement(const RunOptions& o, const RunPlan& plan, const 
             // capture (none when the cache holds every reference).
             m.latticeCapture = std::make_unique<CubeCaptureGl>(world, o.bounce.faceSize,
                                                                CaptureScene::Full, plan.shadows);
-            const ProbeEnvironment& env = stages.environment();
+            WorldProbeEnvironmentSettings placement;
+            placement.probeHeight_m = kBounceHeight_m;
+            m.latticePlacement = std::make_unique<WorldProbeEnvironment>(world, placement);
             const double maxAside_m = MeasureSettings{}.maxAside_m;
             m.bounceLit = std::make_unique<BounceLitCapture>(
                 *m.referenceCapture, *m.latticeCapture, o.bounce, runPath(plan.replay, o),
-                [&env, maxAside_m](double x, double z) { return env.placeProbe(x, z, maxAside_m); },
+                [env = m.latticePlacement.get(), maxAside_m](double x, double z) {
+                    return env->placeProbe(x, z, maxAside_m);
+                },
                 plan.replay.timeOfDayStart_h);
             referenceCapture = m.bounceLit.get();
             // --capture-light reference: the method's captures lit by the same field, of the
