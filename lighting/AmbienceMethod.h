@@ -23,9 +23,8 @@ namespace amb {
 
 class SurfaceLight;
 
-// The height above the ground at which terrain corners and objects take their ambience (and
-// the near field searches a point's terrain horizon from); the probes stand lower, at the
-// surfaces' eye height (ProbeEnvironment.h WorldProbeEnvironmentSettings::probeHeight_m).
+// The height above the ground at which terrain corners and objects take their ambience: the
+// height of the probes and of the witnesses that measure them (ProbeEnvironment.h).
 inline constexpr double kShadingHeight_m = 2.0;
 
 // The capture budget's upper end, cube faces per frame (the settings readers and the command
