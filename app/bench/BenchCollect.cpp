@@ -7,6 +7,7 @@
 #include <set>
 
 #include "app/cli/OutputPaths.h"
+#include "app/cli/ReferenceLightFlags.h"
 #include "world/Error.h"
 #include "world/JsonText.h"
 
@@ -205,7 +206,7 @@ BenchManifest parseBenchManifest(const std::string& text, const std::string& whe
     }
     if (j.contains("captureLight")) {
         m.captureLight = f.text("captureLight");
-        if (m.captureLight != "own" && m.captureLight != "reference")
+        if (!isCaptureLight(m.captureLight))
             f.fail("captureLight", "expected own or reference");
     }
     const json& runs = f.at("runs");

@@ -325,11 +325,7 @@ void addBenchCommand(CLI::App& app) {
     // With --oracle reference: what lights the reference's surfaces (as `run`'s options; the
     // bench's lattice is 256 m within 500 m of each run's path, BounceSettings' defaults).
     addReferenceLightOptions(*cmd, o->referenceLight, o->bounce);
-    cmd->add_option("--capture-light", o->captureLight,
-                    "with --oracle reference: what lights the surfaces of the methods' captures, "
-                    "own (default: each method's settings) or reference (the reference's bounce "
-                    "field, which no method has: a diagnostic of how much of the error is that "
-                    "light)");
+    addCaptureLightOption(*cmd, o->captureLight);
     cmd->add_option("--jobs", o->jobs, "runs side by side (default: the number of cores)");
     cmd->add_option("--out", o->out, "output folder (default out/bench)");
     cmd->add_option("--measure-every", o->measureEvery,

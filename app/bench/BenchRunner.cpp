@@ -18,6 +18,7 @@
 #include "app/bench/BenchEmit.h"
 #include "app/bench/BenchRunFolders.h"
 #include "app/bench/BenchRunner.h"
+#include "app/cli/ReferenceLightFlags.h"
 #include "app/cli/RunReport.h"
 #include "app/frame/MethodStages.h"
 #include "lighting/BounceField.h"
@@ -210,7 +211,7 @@ Runner benchRunner(const BenchOptions& o, const std::vector<Point>& points) {
     runner.bounceReach_m = o.bounce.reach_m;
     runner.bounceFace = o.bounce.faceSize;
     runner.bounceCanopy_m = o.bounce.canopy_m;
-    if (o.captureLight != "own" && o.captureLight != "reference")
+    if (!isCaptureLight(o.captureLight))
         throw InputError("--capture-light", "expected own or reference");
     if (o.captureLight == "reference" && (!runner.reference || o.referenceLight != "bounce"))
         throw InputError("--capture-light",

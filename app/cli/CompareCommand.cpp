@@ -41,7 +41,6 @@
 #include "lighting/Baselines.h"
 #include "lighting/Metrics.h"
 #include "lighting/BounceField.h"
-#include "lighting/ProbeEnvironment.h"
 #include "lighting/Metrics.h"
 #include "lighting/ReferenceOracle.h"
 #include "world/Error.h"
@@ -438,23 +437,15 @@ void runCompare(const CompareOptions& o) {
     // The reference's surfaces lit by the bounce field of a lattice around this frame's camera
     // (or by the hemisphere ambient, --reference-light hemisphere).
     std::unique_ptr<CubeCaptureGl> lattice;
-    std::unique_ptr<WorldProbeEnvironment> latticePlacement;  // at kBounceHeight_m
     std::unique_ptr<BounceLitCapture> bounceLit;
     CubeCapture* referenceCapture = &reference;
     if (parseReferenceLight(o.referenceLight, "--reference-light") == ReferenceLight::Bounce) {
         lattice = std::make_unique<CubeCaptureGl>(world, o.bounce.faceSize, CaptureScene::Full,
                                                   rs.shadows);
-        WorldProbeEnvironmentSettings placement;
-        placement.probeHeight_m = kBounceHeight_m;
-        latticePlacement = std::make_unique<WorldProbeEnvironment>(world, placement);
-        const double maxAside_m = MeasureSettings{}.maxAside_m;
         bounceLit = std::make_unique<BounceLitCapture>(
             reference, *lattice, o.bounce,
             std::vector<glm::dvec2>{{frame.camera.position_m.x, frame.camera.position_m.z}},
-            [env = latticePlacement.get(), maxAside_m](double x, double z) {
-                return env->placeProbe(x, z, maxAside_m);
-            },
-            frame.rec.timeOfDay_h);
+            bounceLatticePlacement(world), frame.rec.timeOfDay_h);
         referenceCapture = bounceLit.get();
     }
     const ReferenceGrid grid = sampleReference(o, in.size, world, *referenceCapture, frame, images);

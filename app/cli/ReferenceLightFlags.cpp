@@ -2,9 +2,13 @@
 #include "app/cli/ReferenceLightFlags.h"
 
 #include <cmath>
+#include <memory>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
+
+#include "lighting/Metrics.h"
+#include "lighting/ProbeEnvironment.h"
 
 namespace amb {
 
@@ -35,6 +39,24 @@ void addReferenceLightOptions(CLI::App& cmd, std::string& light, BounceSettings&
                    "surfaces by their height; 0: one layer (default " +
                        std::to_string(int(bounce.canopy_m)) + ")");
 }
+
+std::function<glm::dvec3(double, double)> bounceLatticePlacement(const World& world) {
+    WorldProbeEnvironmentSettings placement;
+    placement.probeHeight_m = kBounceHeight_m;
+    auto env = std::make_shared<const WorldProbeEnvironment>(world, placement);
+    const double maxAside_m = MeasureSettings{}.maxAside_m;
+    return [env, maxAside_m](double x_m, double z_m) { return env->placeProbe(x_m, z_m, maxAside_m); };
+}
+
+void addCaptureLightOption(CLI::App& cmd, std::string& light) {
+    cmd.add_option("--capture-light", light,
+                   "with a bounce-lit reference: what lights the surfaces of the methods' "
+                   "captures besides the sun, own (default: each method's settings) or reference "
+                   "(the reference's bounce field, which no method has: a diagnostic of how much "
+                   "of the error is that light)");
+}
+
+bool isCaptureLight(const std::string& text) { return text == "own" || text == "reference"; }
 
 nlohmann::json bounceJson(const BounceSettings& settings, const std::vector<BounceSolve>& solves) {
     using nlohmann::json;

@@ -37,7 +37,6 @@
 #include "lighting/Baselines.h"
 #include "lighting/BounceField.h"
 #include "lighting/Metrics.h"
-#include "lighting/ProbeEnvironment.h"
 #include "world/DataPaths.h"
 #include "world/Error.h"
 #include "world/JsonText.h"
@@ -278,7 +277,7 @@ RunPlan planRun(RunOptions& o) {
     o.referenceSettings.idealVolume = !o.noIdealVolume;
     plan.referenceLight = parseReferenceLight(o.referenceLight, "--reference-light");
     checkBounceSettings(o.bounce);
-    if (o.captureLight != "own" && o.captureLight != "reference")
+    if (!isCaptureLight(o.captureLight))
         throw InputError("--capture-light", "expected own or reference");
     if (o.captureLight == "reference" &&
         (!o.referenceOn || plan.referenceLight != ReferenceLight::Bounce))
@@ -360,8 +359,6 @@ struct RunMeasurement {
     // With --reference-light bounce: the lattice's captures and the reference lit by its field.
     std::unique_ptr<CubeCaptureGl> latticeCapture;
     std::unique_ptr<BounceLitCapture> bounceLit;
-    // Places the lattice's points (lighting/BounceField.h kBounceHeight_m).
-    std::unique_ptr<WorldProbeEnvironment> latticePlacement;
     std::string oracleSignature, referenceSignature;
 };
 
@@ -446,16 +443,9 @@ RunMeasurement startMeasurement(const RunOptions& o, const RunPlan& plan, const 
             // capture (none when the cache holds every reference).
             m.latticeCapture = std::make_unique<CubeCaptureGl>(world, o.bounce.faceSize,
                                                                CaptureScene::Full, plan.shadows);
-            WorldProbeEnvironmentSettings placement;
-            placement.probeHeight_m = kBounceHeight_m;
-            m.latticePlacement = std::make_unique<WorldProbeEnvironment>(world, placement);
-            const double maxAside_m = MeasureSettings{}.maxAside_m;
             m.bounceLit = std::make_unique<BounceLitCapture>(
                 *m.referenceCapture, *m.latticeCapture, o.bounce, runPath(plan.replay, o),
-                [env = m.latticePlacement.get(), maxAside_m](double x, double z) {
-                    return env->placeProbe(x, z, maxAside_m);
-                },
-                plan.replay.timeOfDayStart_h);
+                bounceLatticePlacement(world), plan.replay.timeOfDayStart_h);
             referenceCapture = m.bounceLit.get();
             // --capture-light reference: the method's captures lit by the same field, of the
             // epoch holding each capture's time of day (solved when first asked).
@@ -787,10 +777,7 @@ void addRunCommand(CLI::App& app) {
                     "on each reference frame, compare the ambient irradiance the draw applies at "
                     "N random pixels of the main view with the reference there (slow; default 0)");
     addReferenceLightOptions(*cmd, o->referenceLight, o->bounce);
-    cmd->add_option("--capture-light", o->captureLight,
-                    "what lights the surfaces of the method's captures besides the sun: own "
-                    "(default: the method's settings) or reference (the reference's bounce field, "
-                    "which no method has: a diagnostic of how much of the error is that light)");
+    addCaptureLightOption(*cmd, o->captureLight);
     cmd->add_flag("--no-ideal-volume", o->noIdealVolume,
                   "error budget without the ideal volume (no extra captures; spacing and "
                   "schedule reported as one term)");
