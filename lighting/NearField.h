@@ -271,6 +271,15 @@ struct NearFieldSettings {
     // corners meanwhile, so a frame's near-field builds stay bounded (docs/ARCHITECTURE.md
     // "Terrain and objects"). 0: no bound, every patch in range at once.
     int vertexPointsPerFrame = 600;
+    // The surfaces of the method's own captures (its own field lighting them, CaptureCore
+    // ownLight) within this range of the camera take the near field too, as the draw's terrain
+    // corners do (see Captures' light): the far field alone lights a forest floor as if no
+    // tree stood within captureRadius_m of it. 0: off, the own field alone.
+    double captureLightRange_m = 400.0;
+    // The lattice on which that near field is taken and blended bilinearly.
+    double captureLightCell_m = 32.0;
+    // At most this many new lattice points a frame, nearest the camera first (0: no bound).
+    int captureLightPointsPerFrame = 32;
 };
 // The near field's weight at distance_m (horizontal) from the camera for a range: 1 out to
 // (1 - kNearFade) range, 0 from range on, smoothstep between (see Range).
@@ -755,9 +764,8 @@ class NearFieldMethod final : public AmbienceMethod {
     const SurfaceLight* captureSurfaceLight() const override {
         return far_->captureSurfaceLight();
     }
-    void overrideCaptureLight(CaptureLightOverride light) override {
-        far_->overrideCaptureLight(std::move(light));
-    }
+    // An empty override gives the captures the light they had (see Captures' light).
+    void overrideCaptureLight(CaptureLightOverride light) override;
     void noteLookups(std::size_t count, const double* x_m, const double* z_m) override {
         far_->noteLookups(count, x_m, z_m);
     }
@@ -783,6 +791,11 @@ class NearFieldMethod final : public AmbienceMethod {
     std::unique_ptr<AmbienceMethod> far_;
     std::unique_ptr<NearFieldScene> scene_;
     std::unique_ptr<NearField> near_;
+    // The captures' light with the near field (captureLightRange_m > 0 and a method lighting
+    // its captures with its own field), installed as the far method's capture-light override.
+    class CaptureLight;
+    std::unique_ptr<CaptureLight> captureLight_;
+    std::uint64_t frame_ = 0;  // predictStage's count
     glm::dvec3 camera_m_{0.0};  // of the latest predictStage
     bool skyDetail_ = false;    // settings: terrain and vertexDetail
     // The near field's weight at (x, z) for a range (objectRange_m, cornerRange_m; see Range).

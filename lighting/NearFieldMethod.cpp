@@ -2,12 +2,167 @@
 // (NearField.h, NearFieldMethod).
 #include "lighting/NearField.h"
 
+#include "lighting/CubeCapture.h"
+
 #include <algorithm>
 #include <cmath>
+#include <mutex>
+#include <utility>
+#include <vector>
 
 #include "world/Error.h"
 
 namespace amb {
+
+// ---- [SECTION] Captures' light ---------------------------------------------------------------
+//
+// A capture lights its surfaces with the hemisphere ambient (or, with ownLight, its method's own
+// far field): a forest floor as if it stood in the open, or as if no tree stood within
+// captureRadius_m of where the field was captured. The draw puts those plants, the terrain's
+// walls and the ground back at each terrain corner; this light does the same for the captures'
+// surfaces, on a lattice of captureLightCell_m within captureLightRange_m of the camera: at
+// each lattice point the near field's change of that light there (the corner path,
+// kShadingHeight_m up, whose transfers the near field caches with the draw's corners), faded
+// out over the range's last quarter and blended bilinearly, is added to the light at the
+// surface. A lattice point's change is made when a capture first needs it in range (at most
+// captureLightPointsPerFrame new points a frame, nearest the camera first: the near field's
+// build of a point costs milliseconds) and remade after kRefreshFrames to 2 kRefreshFrames
+// frames (staggered by its key), so that it follows the light and the method's own field
+// without remaking the whole lattice in one frame.
+class NearFieldMethod::CaptureLight final : public SurfaceLight {
+  public:
+    // own: the far method's own field, or null for the hemisphere ambient.
+    CaptureLight(const NearFieldMethod& method, const SurfaceLight* own)
+        : method_(method), own_(own) {}
+
+    void setTimeOfDay(double timeOfDay_h) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (timeOfDay_h == timeOfDay_h_ || !std::isfinite(timeOfDay_h)) return;
+        timeOfDay_h_ = timeOfDay_h;
+        const HemisphereAmbient a = method_.scene_->ambient(timeOfDay_h);
+        hemisphere_ = ShRgb{};
+        hemisphere_.c[0] = glm::vec3(a.shBand0());
+        hemisphere_.c[1] = glm::vec3(a.shVertical());
+    }
+
+    ShRgb shAt(const glm::dvec3& position_m) const override {
+        std::lock_guard<std::mutex> lock(mutex_);
+        ShRgb out = base(position_m);
+        prepare();
+        if (change_.empty()) return out;
+        const double cell = method_.near_->settings().captureLightCell_m;
+        const double fx = position_m.x / cell, fz = position_m.z / cell;
+        if (!std::isfinite(fx + fz) || std::fabs(fx) > 1e15 || std::fabs(fz) > 1e15) return out;
+        const double i0 = std::floor(fx), k0 = std::floor(fz);
+        const float tx = float(fx - i0), tz = float(fz - k0);
+        for (int corner = 0; corner < 4; ++corner) {
+            const Index q{std::int64_t(i0) + (corner & 1), std::int64_t(k0) + (corner >> 1)};
+            const auto it = change_.find(q);
+            if (it == change_.end()) continue;
+            const float w = ((corner & 1) ? tx : 1.0f - tx) * ((corner >> 1) ? tz : 1.0f - tz);
+            out += it->second.change * (w * it->second.fade);
+        }
+        return out;
+    }
+
+  private:
+    using Index = std::pair<std::int64_t, std::int64_t>;
+    static constexpr std::uint64_t kRefreshFrames = 30;
+
+    ShRgb base(const glm::dvec3& position_m) const {
+        return own_ ? own_->shAt(position_m) : hemisphere_;
+    }
+
+    // The lattice points in range whose change is missing or due, made at once (the near
+    // field builds the new ones on every thread); those out of range dropped.
+    void prepare() const {
+        const std::uint64_t frame = method_.frame_;
+        if (frame == preparedFrame_) return;
+        preparedFrame_ = frame;
+        const NearFieldSettings& s = method_.near_->settings();
+        const double range = s.captureLightRange_m, cell = s.captureLightCell_m;
+        const glm::dvec3 c = method_.camera_m_;
+        if (!(range > 0.0) || !(cell > 0.0) || !std::isfinite(c.x + c.z)) return;
+        const auto lo = [&](double v) { return std::int64_t(std::floor((v - range) / cell)); };
+        const auto hi = [&](double v) { return std::int64_t(std::ceil((v + range) / cell)); };
+        for (auto it = change_.begin(); it != change_.end();) {
+            const double w = rangeWeight(std::hypot(double(it->first.first) * cell - c.x,
+                                                    double(it->first.second) * cell - c.z),
+                                         range);
+            if (!(w > 0.0)) {
+                it = change_.erase(it);
+            } else {
+                it.value().fade = float(w);
+                ++it;
+            }
+        }
+        // Due ones (their transfers cached) all; new ones nearest first, at most
+        // captureLightPointsPerFrame (0: no bound).
+        std::vector<std::pair<double, Index>> fresh;
+        std::vector<Index> keys;
+        for (std::int64_t k = lo(c.z); k <= hi(c.z); ++k)
+            for (std::int64_t i = lo(c.x); i <= hi(c.x); ++i) {
+                const double d = std::hypot(double(i) * cell - c.x, double(k) * cell - c.z);
+                if (!(rangeWeight(d, range) > 0.0)) continue;
+                const auto it = change_.find({i, k});
+                if (it == change_.end())
+                    fresh.push_back({d, {i, k}});
+                else if (frame >= it->second.due)
+                    keys.push_back({i, k});
+            }
+        const std::size_t bound = s.captureLightPointsPerFrame > 0
+                                      ? std::size_t(s.captureLightPointsPerFrame)
+                                      : fresh.size();
+        if (fresh.size() > bound) {
+            std::nth_element(fresh.begin(), fresh.begin() + std::ptrdiff_t(bound), fresh.end());
+            fresh.resize(bound);
+        }
+        for (const auto& f : fresh) keys.push_back(f.second);
+        if (keys.empty()) return;
+        std::vector<double> x, z;
+        std::vector<ShRgb> light;
+        for (const Index& q : keys) {
+            x.push_back(double(q.first) * cell), z.push_back(double(q.second) * cell);
+            light.push_back(base(glm::dvec3(x.back(), 0.0, z.back())));
+        }
+        std::vector<ShRgb> near = light;
+        method_.near_->applyAboveMany(near.size(), near.data(), x.data(), z.data(),
+                                      kShadingHeight_m);
+        for (std::size_t j = 0; j < keys.size(); ++j) {
+            const ShRgb d = near[j] - light[j];
+            bool finite = true;
+            for (const glm::vec3& v : d.c) finite = finite && std::isfinite(v.x + v.y + v.z);
+            const std::uint64_t stagger =
+                std::uint64_t(keys[j].first * 7 + keys[j].second * 13) % kRefreshFrames;
+            const double w = rangeWeight(std::hypot(x[j] - c.x, z[j] - c.z), range);
+            if (finite)
+                change_[keys[j]] = Entry{d, frame + kRefreshFrames + stagger, float(w)};
+            else
+                change_.erase(keys[j]);
+        }
+    }
+
+    struct Entry {
+        ShRgb change;           // the near field's change of the light there, unfaded
+        std::uint64_t due = 0;  // the frame from which it is remade
+        float fade = 1.0f;      // its range weight from this frame's camera
+    };
+    struct IndexHash {
+        std::size_t operator()(const Index& q) const {
+            std::uint64_t h = std::uint64_t(q.first) * 0x9e3779b97f4a7c15ull ^
+                              std::uint64_t(q.second) * 0xc2b2ae3d27d4eb4full;
+            h ^= h >> 29;
+            return std::size_t(h);
+        }
+    };
+    const NearFieldMethod& method_;
+    const SurfaceLight* own_;
+    mutable std::mutex mutex_;
+    double timeOfDay_h_ = std::nan("");
+    ShRgb hemisphere_;
+    mutable std::uint64_t preparedFrame_ = ~std::uint64_t(0);
+    mutable tsl::hopscotch_map<Index, Entry, IndexHash> change_;
+};
 
 // ---- [SECTION] The decorator -------------------------------------------------------------------
 
@@ -19,14 +174,30 @@ NearFieldMethod::NearFieldMethod(std::unique_ptr<AmbienceMethod> far,
       near_(std::make_unique<NearField>(*scene_, settings)),
       skyDetail_(settings.terrain && settings.vertexDetail) {
     AMB_CHECK(far_ && scene_);
+    if (settings.enabled && settings.captureLightRange_m > 0.0) {
+        captureLight_ = std::make_unique<CaptureLight>(*this, far_->captureSurfaceLight());
+        overrideCaptureLight({});
+    }
 }
 
 NearFieldMethod::~NearFieldMethod() = default;
+
+void NearFieldMethod::overrideCaptureLight(CaptureLightOverride light) {
+    if (!light && captureLight_) {
+        CaptureLight* ours = captureLight_.get();
+        light = [ours](double timeOfDay_h) -> const SurfaceLight* {
+            ours->setTimeOfDay(timeOfDay_h);
+            return ours;
+        };
+    }
+    far_->overrideCaptureLight(std::move(light));
+}
 
 void NearFieldMethod::predictStage(const glm::dvec3& cameraPosition_m,
                                    const glm::dvec3& cameraVelocity_mps, double timeOfDay_h,
                                    double dt_s) {
     near_->resetCounters();
+    ++frame_;
     if (std::isfinite(timeOfDay_h)) near_->setTimeOfDay(timeOfDay_h);
     if (std::isfinite(cameraPosition_m.x + cameraPosition_m.z)) {
         camera_m_ = cameraPosition_m;

@@ -342,6 +342,17 @@ Keys<NearFieldSettings> nearFieldKeys() {
         "new terrain vertices lit per vertex a frame, nearest patches first; the others blend "
         "their corners until their turn (0: no bound)",
         [](T& t) -> int& { return t.vertexPointsPerFrame; }, costHigh);
+    k.number(
+        "captureLightRange_m", "m", 0.0, 2000.0,
+        "the own captures' surfaces this close to the camera take the near field too (0: off)",
+        [](T& t) -> double& { return t.captureLightRange_m; }, costHigh);
+    k.number(
+        "captureLightCell_m", "m", 2.0, 256.0, "the lattice of the captures' near field",
+        [](T& t) -> double& { return t.captureLightCell_m; }, costHigh);
+    k.integer(
+        "captureLightPointsPerFrame", "points", 0, 1 << 20,
+        "new lattice points of the captures' near field a frame, nearest first (0: no bound)",
+        [](T& t) -> int& { return t.captureLightPointsPerFrame; }, costHigh);
     return k;
 }
 

@@ -144,7 +144,10 @@ TEST(TuningPanel, EveryKeyOfTheSettingsFileIsInTheTable) {
                           "nearField.patchSamples",
                           "nearField.vertexDetail",
                           "nearField.vertexAmbient_m",
-                          "nearField.vertexPointsPerFrame"};
+                          "nearField.vertexPointsPerFrame",
+                          "nearField.captureLightRange_m",
+                          "nearField.captureLightCell_m",
+                          "nearField.captureLightPointsPerFrame"};
     EXPECT_EQ(tunableSettings().size(), std::size(keys));
     for (const char* key : keys) EXPECT_NE(findSetting(key), nullptr) << key;
     // The saved file nests them as the reader expects.

@@ -122,7 +122,7 @@ TEST(SettingsSchema, KeysAreUniqueAndTheCaptureKeysAreShared) {
         EXPECT_EQ(v->hi, b.hi) << b.key;
         EXPECT_EQ(v->kind, b.kind) << b.key;
     }
-    EXPECT_EQ(shared, 10 + 22);  // CaptureSettings' ten and the near field's twenty-two
+    EXPECT_EQ(shared, 10 + 25);  // CaptureSettings' ten and the near field's twenty-five
     // The files' defaults lie in their ranges.
     const AmbienceVolumeSettings v;
     for (const auto& f : volumeSettingsSchema().fields()) {
