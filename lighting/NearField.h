@@ -271,10 +271,11 @@ struct NearFieldSettings {
     // corners meanwhile, so a frame's near-field builds stay bounded (docs/ARCHITECTURE.md
     // "Terrain and objects"). 0: no bound, every patch in range at once.
     int vertexPointsPerFrame = 600;
-    // The surfaces of the method's own captures (its own field lighting them, CaptureCore
-    // ownLight) within this range of the camera take the near field too, as the draw's terrain
-    // corners do (see Captures' light): the far field alone lights a forest floor as if no
-    // tree stood within captureRadius_m of it. 0: off, the own field alone.
+    // The surfaces the method's captures draw (lit by the hemisphere, or with ownLight by the
+    // method's own field) within this range of the camera take the near field's change of that
+    // light, as the draw's terrain corners do (NearFieldMethod.cpp "Captures' light"): without
+    // it a forest floor under its canopy is lit as if it stood in the open. 0: off. (why these
+    // values: docs/TUNING.md "Near field")
     double captureLightRange_m = 400.0;
     // The lattice on which that near field is taken and blended bilinearly.
     double captureLightCell_m = 32.0;
@@ -744,7 +745,8 @@ class NearFieldMethod final : public AmbienceMethod {
     std::string methodName() const override { return far_->methodName(); }
     void predictStage(const glm::dvec3& cameraPosition_m, const glm::dvec3& cameraVelocity_mps,
                       double timeOfDay_h, double dt_s) override;
-    void captureStage() override { far_->captureStage(); }
+    // The captures' light's lattice for this frame (see Captures' light), then the far method's.
+    void captureStage() override;
     void storeStage() override { far_->storeStage(); }
     ShRgb shAt(double x_m, double z_m) const override;
     // A frame's objects at once: one lock and one timing for the lot.
@@ -795,7 +797,8 @@ class NearFieldMethod final : public AmbienceMethod {
     // its captures with its own field), installed as the far method's capture-light override.
     class CaptureLight;
     std::unique_ptr<CaptureLight> captureLight_;
-    std::uint64_t frame_ = 0;  // predictStage's count
+    std::uint64_t frame_ = 0;      // predictStage's count
+    double timeOfDay_h_ = 12.0;    // of the latest predictStage
     glm::dvec3 camera_m_{0.0};  // of the latest predictStage
     bool skyDetail_ = false;    // settings: terrain and vertexDetail
     // The near field's weight at (x, z) for a range (objectRange_m, cornerRange_m; see Range).

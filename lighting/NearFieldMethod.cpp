@@ -24,7 +24,7 @@ namespace amb {
 // each lattice point the near field's change of that light there (the corner path,
 // kShadingHeight_m up, whose transfers the near field caches with the draw's corners), faded
 // out over the range's last quarter and blended bilinearly, is added to the light at the
-// surface. A lattice point's change is made when a capture first needs it in range (at most
+// surface. A lattice point's change is made once it is in range (at most
 // captureLightPointsPerFrame new points a frame, nearest the camera first: the near field's
 // build of a point costs milliseconds) and remade after kRefreshFrames to 2 kRefreshFrames
 // frames (staggered by its key), so that it follows the light and the method's own field
@@ -48,7 +48,6 @@ class NearFieldMethod::CaptureLight final : public SurfaceLight {
     ShRgb shAt(const glm::dvec3& position_m) const override {
         std::lock_guard<std::mutex> lock(mutex_);
         ShRgb out = base(position_m);
-        prepare();
         if (change_.empty()) return out;
         const double cell = method_.near_->settings().captureLightCell_m;
         const double fx = position_m.x / cell, fz = position_m.z / cell;
@@ -65,20 +64,17 @@ class NearFieldMethod::CaptureLight final : public SurfaceLight {
         return out;
     }
 
-  private:
     using Index = std::pair<std::int64_t, std::int64_t>;
     static constexpr std::uint64_t kRefreshFrames = 30;
 
-    ShRgb base(const glm::dvec3& position_m) const {
-        return own_ ? own_->shAt(position_m) : hemisphere_;
-    }
-
-    // The lattice points in range whose change is missing or due, made at once (the near
-    // field builds the new ones on every thread); those out of range dropped.
-    void prepare() const {
+    // Once a frame, before the frame's captures (NearFieldMethod::captureStage): the lattice
+    // points in range whose change is missing or due, made at once (the near field builds the
+    // new ones on every thread); those out of range dropped. Made in the method's own stage,
+    // not by whoever asks first, so that what the light holds does not depend on who reads it
+    // (the error budget's fresh captures, which a cached reference skips).
+    void prepare() {
+        std::lock_guard<std::mutex> lock(mutex_);
         const std::uint64_t frame = method_.frame_;
-        if (frame == preparedFrame_) return;
-        preparedFrame_ = frame;
         const NearFieldSettings& s = method_.near_->settings();
         const double range = s.captureLightRange_m, cell = s.captureLightCell_m;
         const glm::dvec3 c = method_.camera_m_;
@@ -142,6 +138,11 @@ class NearFieldMethod::CaptureLight final : public SurfaceLight {
         }
     }
 
+  private:
+    ShRgb base(const glm::dvec3& position_m) const {
+        return own_ ? own_->shAt(position_m) : hemisphere_;
+    }
+
     struct Entry {
         ShRgb change;           // the near field's change of the light there, unfaded
         std::uint64_t due = 0;  // the frame from which it is remade
@@ -160,8 +161,7 @@ class NearFieldMethod::CaptureLight final : public SurfaceLight {
     mutable std::mutex mutex_;
     double timeOfDay_h_ = std::nan("");
     ShRgb hemisphere_;
-    mutable std::uint64_t preparedFrame_ = ~std::uint64_t(0);
-    mutable tsl::hopscotch_map<Index, Entry, IndexHash> change_;
+    tsl::hopscotch_map<Index, Entry, IndexHash> change_;
 };
 
 // ---- [SECTION] The decorator -------------------------------------------------------------------
@@ -182,6 +182,14 @@ NearFieldMethod::NearFieldMethod(std::unique_ptr<AmbienceMethod> far,
 
 NearFieldMethod::~NearFieldMethod() = default;
 
+void NearFieldMethod::captureStage() {
+    if (captureLight_) {
+        captureLight_->setTimeOfDay(timeOfDay_h_);
+        captureLight_->prepare();
+    }
+    far_->captureStage();
+}
+
 void NearFieldMethod::overrideCaptureLight(CaptureLightOverride light) {
     if (!light && captureLight_) {
         CaptureLight* ours = captureLight_.get();
@@ -198,7 +206,7 @@ void NearFieldMethod::predictStage(const glm::dvec3& cameraPosition_m,
                                    double dt_s) {
     near_->resetCounters();
     ++frame_;
-    if (std::isfinite(timeOfDay_h)) near_->setTimeOfDay(timeOfDay_h);
+    if (std::isfinite(timeOfDay_h)) near_->setTimeOfDay(timeOfDay_h), timeOfDay_h_ = timeOfDay_h;
     if (std::isfinite(cameraPosition_m.x + cameraPosition_m.z)) {
         camera_m_ = cameraPosition_m;
         near_->setViewer(cameraPosition_m);

@@ -344,7 +344,7 @@ Keys<NearFieldSettings> nearFieldKeys() {
         [](T& t) -> int& { return t.vertexPointsPerFrame; }, costHigh);
     k.number(
         "captureLightRange_m", "m", 0.0, 2000.0,
-        "the own captures' surfaces this close to the camera take the near field too (0: off)",
+        "the captures' surfaces this close to the camera take the near field too (0: off)",
         [](T& t) -> double& { return t.captureLightRange_m; }, costHigh);
     k.number(
         "captureLightCell_m", "m", 2.0, 256.0, "the lattice of the captures' near field",

@@ -80,13 +80,21 @@ class FieldAmbient final : public AmbientSource {
     }
     std::uint32_t objectSet(const glm::dvec3& position_m,
                             std::vector<AmbientSet>& sets) const override {
-        const ShIrradianceMatrices m = shIrradianceMatrices(light_->shAt(position_m));
+        // Plants whose light is the same as the last one's share its set (a light that varies
+        // only near the camera gives most of a capture's plants one value).
+        const ShRgb sh = light_->shAt(position_m);
+        if (&sets == lastSets_ && lastSet_ < sets.size() && sh.c == lastSh_.c) return lastSet_;
+        const ShIrradianceMatrices m = shIrradianceMatrices(sh);
         sets.push_back(AmbientSet{m.r, m.g, m.b});
-        return std::uint32_t(sets.size() - 1);
+        lastSets_ = &sets, lastSet_ = std::uint32_t(sets.size() - 1), lastSh_ = sh;
+        return lastSet_;
     }
 
   private:
     const SurfaceLight* light_;
+    mutable const std::vector<AmbientSet>* lastSets_ = nullptr;
+    mutable std::uint32_t lastSet_ = 0;
+    mutable ShRgb lastSh_;
 };
 
 glm::mat4 CubeCaptureGl::faceViewProj(int face, float near_m) {
