@@ -13,7 +13,8 @@
 //   some point of the camera path is at most reach_m, each placed by the caller (the probes'
 //   rule at kBounceHeight_m: 2 m above the ground, out of plant footprints, whatever height
 //   the methods' probes stand at, so the reference does not move with them), and with two
-//   layers a second point canopy_m above each. The lattice is global, so two runs of one replay lay the same points.
+//   layers a second point canopy_m above each. The lattice is global, so two runs of one
+//   replay lay the same points.
 // [SECTION] The iteration (Jacobi)
 //   Pass 1 lights the surfaces with no ambient at all: its captures hold the sky and the
 //   surfaces lit by the main light (one bounce). Pass k lights them with pass k-1's field

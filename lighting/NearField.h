@@ -793,12 +793,11 @@ class NearFieldMethod final : public AmbienceMethod {
     std::unique_ptr<AmbienceMethod> far_;
     std::unique_ptr<NearFieldScene> scene_;
     std::unique_ptr<NearField> near_;
-    // The captures' light with the near field (captureLightRange_m > 0 and a method lighting
-    // its captures with its own field), installed as the far method's capture-light override.
+    // The captures' light with the near field (when captureLightRange_m > 0), installed as the
+    // far method's capture-light override (see Captures' light).
     class CaptureLight;
     std::unique_ptr<CaptureLight> captureLight_;
-    std::uint64_t frame_ = 0;      // predictStage's count
-    double timeOfDay_h_ = 12.0;    // of the latest predictStage
+    double timeOfDay_h_ = 12.0;  // of the latest predictStage
     glm::dvec3 camera_m_{0.0};  // of the latest predictStage
     bool skyDetail_ = false;    // settings: terrain and vertexDetail
     // The near field's weight at (x, z) for a range (objectRange_m, cornerRange_m; see Range).

@@ -2,14 +2,13 @@
 // (NearField.h, NearFieldMethod).
 #include "lighting/NearField.h"
 
-#include "lighting/CubeCapture.h"
-
 #include <algorithm>
 #include <cmath>
 #include <mutex>
 #include <utility>
 #include <vector>
 
+#include "lighting/CubeCapture.h"
 #include "world/Error.h"
 
 namespace amb {
@@ -35,16 +34,6 @@ class NearFieldMethod::CaptureLight final : public SurfaceLight {
     CaptureLight(const NearFieldMethod& method, const SurfaceLight* own)
         : method_(method), own_(own) {}
 
-    void setTimeOfDay(double timeOfDay_h) {
-        std::lock_guard<std::mutex> lock(mutex_);
-        if (timeOfDay_h == timeOfDay_h_ || !std::isfinite(timeOfDay_h)) return;
-        timeOfDay_h_ = timeOfDay_h;
-        const HemisphereAmbient a = method_.scene_->ambient(timeOfDay_h);
-        hemisphere_ = ShRgb{};
-        hemisphere_.c[0] = glm::vec3(a.shBand0());
-        hemisphere_.c[1] = glm::vec3(a.shVertical());
-    }
-
     ShRgb shAt(const glm::dvec3& position_m) const override {
         std::lock_guard<std::mutex> lock(mutex_);
         ShRgb out = base(position_m);
@@ -67,14 +56,17 @@ class NearFieldMethod::CaptureLight final : public SurfaceLight {
     using Index = std::pair<std::int64_t, std::int64_t>;
     static constexpr std::uint64_t kRefreshFrames = 30;
 
-    // Once a frame, before the frame's captures (NearFieldMethod::captureStage): the lattice
-    // points in range whose change is missing or due, made at once (the near field builds the
-    // new ones on every thread); those out of range dropped. Made in the method's own stage,
-    // not by whoever asks first, so that what the light holds does not depend on who reads it
-    // (the error budget's fresh captures, which a cached reference skips).
-    void prepare() {
+    // Once a frame, before the frame's captures (NearFieldMethod::captureStage), with the
+    // frame's time of day and camera: the lattice points in range whose change is missing or
+    // due, made at once (the near field builds the new ones on every thread); those out of
+    // range dropped. Made in the method's own stage, not by whoever asks first, so that what
+    // the light holds does not depend on who reads it (the error budget's fresh captures, which
+    // a cached reference skips).
+    void prepare(double timeOfDay_h) {
         std::lock_guard<std::mutex> lock(mutex_);
-        const std::uint64_t frame = method_.frame_;
+        const std::uint64_t frame = ++frame_;
+        if (std::isfinite(timeOfDay_h))
+            hemisphere_ = hemisphereSh(method_.scene_->ambient(timeOfDay_h));
         const NearFieldSettings& s = method_.near_->settings();
         const double range = s.captureLightRange_m, cell = s.captureLightCell_m;
         const glm::dvec3 c = method_.camera_m_;
@@ -159,7 +151,7 @@ class NearFieldMethod::CaptureLight final : public SurfaceLight {
     const NearFieldMethod& method_;
     const SurfaceLight* own_;
     mutable std::mutex mutex_;
-    double timeOfDay_h_ = std::nan("");
+    std::uint64_t frame_ = 0;  // prepare's count
     ShRgb hemisphere_;
     tsl::hopscotch_map<Index, Entry, IndexHash> change_;
 };
@@ -183,20 +175,14 @@ NearFieldMethod::NearFieldMethod(std::unique_ptr<AmbienceMethod> far,
 NearFieldMethod::~NearFieldMethod() = default;
 
 void NearFieldMethod::captureStage() {
-    if (captureLight_) {
-        captureLight_->setTimeOfDay(timeOfDay_h_);
-        captureLight_->prepare();
-    }
+    if (captureLight_) captureLight_->prepare(timeOfDay_h_);
     far_->captureStage();
 }
 
 void NearFieldMethod::overrideCaptureLight(CaptureLightOverride light) {
     if (!light && captureLight_) {
-        CaptureLight* ours = captureLight_.get();
-        light = [ours](double timeOfDay_h) -> const SurfaceLight* {
-            ours->setTimeOfDay(timeOfDay_h);
-            return ours;
-        };
+        const CaptureLight* ours = captureLight_.get();
+        light = [ours](double) -> const SurfaceLight* { return ours; };
     }
     far_->overrideCaptureLight(std::move(light));
 }
@@ -205,7 +191,6 @@ void NearFieldMethod::predictStage(const glm::dvec3& cameraPosition_m,
                                    const glm::dvec3& cameraVelocity_mps, double timeOfDay_h,
                                    double dt_s) {
     near_->resetCounters();
-    ++frame_;
     if (std::isfinite(timeOfDay_h)) near_->setTimeOfDay(timeOfDay_h), timeOfDay_h_ = timeOfDay_h;
     if (std::isfinite(cameraPosition_m.x + cameraPosition_m.z)) {
         camera_m_ = cameraPosition_m;

@@ -16,6 +16,7 @@
 #include <glm/mat3x3.hpp>
 
 #include "world/Error.h"
+#include "world/SkyGround.h"
 
 namespace amb {
 
@@ -44,6 +45,13 @@ ShRgb lerp(const ShRgb& a, const ShRgb& b, float t) {
     ShRgb r;
     for (int k = 0; k < kShCoefficients; ++k) r.c[k] = a.c[k] + t * (b.c[k] - a.c[k]);
     return r;
+}
+
+ShRgb hemisphereSh(const HemisphereAmbient& ambient) {
+    ShRgb sh;
+    sh.c[0] = glm::vec3(ambient.shBand0());
+    sh.c[1] = glm::vec3(ambient.shVertical());
+    return sh;
 }
 
 ShRgbD& ShRgbD::operator+=(const ShRgbD& o) {

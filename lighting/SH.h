@@ -41,6 +41,10 @@ ShRgb operator*(ShRgb a, float s);
 // (1 - t) a + t b, per coefficient (the thesis' per-coefficient linear interpolation, 9.3).
 ShRgb lerp(const ShRgb& a, const ShRgb& b, float t);
 
+struct HemisphereAmbient;
+// The SH of a hemisphere ambient (world/SkyGround.h): its sky over y > 0, its ground below.
+ShRgb hemisphereSh(const HemisphereAmbient& ambient);
+
 // The same in double: what projection produces and what analysis (windows, minima) works on.
 struct ShRgbD {
     std::array<glm::dvec3, kShCoefficients> c{};

@@ -64,24 +64,13 @@ const char* toString(AmbientMode mode) {
     return mode == AmbientMode::Constant ? "constant" : "hemisphere";
 }
 
-namespace {
-
-// SH of a radiance that is `sky` over the upper hemisphere (y > 0) and `ground` below
-// (world/SkyGround.h HemisphereAmbient).
-ShRgb hemisphereSh(const glm::vec3& sky, const glm::vec3& ground) {
-    const HemisphereAmbient h{glm::dvec3(sky), glm::dvec3(ground)};
-    ShRgb sh;
-    sh.c[0] = glm::vec3(h.shBand0());
-    sh.c[1] = glm::vec3(h.shVertical());
-    return sh;
-}
-
-}  // namespace
-
 FixedAmbient::FixedAmbient(AmbientMode mode, const SkyLighting& sky) {
-    const glm::vec3 mean = 0.5f * (sky.skyMean + sky.groundMean);
-    sh_ = mode == AmbientMode::Constant ? hemisphereSh(mean, mean)
-                                        : hemisphereSh(sky.skyMean, sky.groundMean);
+    // The sky's mean over the upper hemisphere (y > 0) and the ground's below, or their mean
+    // everywhere.
+    const glm::dvec3 mean = 0.5 * glm::dvec3(sky.skyMean + sky.groundMean);
+    sh_ = mode == AmbientMode::Constant
+              ? hemisphereSh(HemisphereAmbient{mean, mean})
+              : hemisphereSh(HemisphereAmbient{glm::dvec3(sky.skyMean), glm::dvec3(sky.groundMean)});
     const ShIrradianceMatrices m = shIrradianceMatrices(sh_);
     set_ = {m.r, m.g, m.b};
 }

@@ -12,6 +12,7 @@
 #include "lighting/CubeCapture.h"
 #include "lighting/NearField.h"
 #include "FakeCubeCapture.h"
+#include "FixedLightScene.h"
 
 namespace amb {
 namespace {
@@ -21,32 +22,14 @@ using testing_support::FlatProbeEnvironment;
 using testing_support::FurnaceCapture;
 
 // Flat ground at 0 under one light and a hemisphere ambient, with two trees near x = 40.
-struct TwoTrees final : NearFieldScene {
+struct TwoTrees final : testing_support::FixedLightScene {
     void occludersNear(const glm::dvec3& p, double radius_m, double,
                        std::vector<SphereOccluder>& out) const override {
         for (const glm::dvec3 c : {glm::dvec3(40.0, 6.0, 2.0), glm::dvec3(46.0, 5.0, -5.0)})
             if (std::hypot(c.x - p.x, c.z - p.z) < radius_m)
                 out.push_back({c, 3.5, glm::dvec3(0.15, 0.3, 0.1)});
     }
-    DirectionalLight mainLight(double) const override {
-        DirectionalLight l;
-        l.direction = glm::normalize(glm::dvec3(0.3, 0.8, 0.2));
-        l.irradiance = glm::dvec3(3.0);
-        return l;
-    }
-    HemisphereAmbient ambient(double) const override {
-        return {glm::dvec3(0.8, 0.9, 1.1), glm::dvec3(0.25, 0.22, 0.2)};
-    }
-    double groundHeight(double, double) const override { return 0.0; }
 };
-
-ShRgb hemisphereSh(const NearFieldScene& scene, double timeOfDay_h) {
-    const HemisphereAmbient a = scene.ambient(timeOfDay_h);
-    ShRgb sh;
-    sh.c[0] = glm::vec3(a.shBand0());
-    sh.c[1] = glm::vec3(a.shVertical());
-    return sh;
-}
 
 void expectShNear(const ShRgb& got, const ShRgb& want, const char* where) {
     for (int k = 0; k < kShCoefficients; ++k)
@@ -96,7 +79,7 @@ TEST(NearFieldCaptureLight, ALatticePointTakesTheNearFieldOfTheAmbientAndCellsBl
     NearField near(scene, settings);
     near.setTimeOfDay(kNoon);
     near.setViewer(camera);
-    const ShRgb hemisphere = hemisphereSh(scene, kNoon);
+    const ShRgb hemisphere = hemisphereSh(scene.ambient(kNoon));
     const auto corner = [&](double x, double z) {
         return near.applyAbove(hemisphere, x, z, kShadingHeight_m);
     };
@@ -131,7 +114,7 @@ TEST(NearFieldCaptureLight, TheRangeFollowsTheCameraAndTheLatticeIsBuiltNearestF
     const auto method = makeCapturingMethod("volume", capture, environment, vs, bs, nullptr,
                                             [] { return std::make_unique<TwoTrees>(); });
     const TwoTrees scene;
-    const ShRgb hemisphere = hemisphereSh(scene, kNoon);
+    const ShRgb hemisphere = hemisphereSh(scene.ambient(kNoon));
     method->predictStage({-20.0, 2.0, 0.0}, {0.0, 0.0, 0.0}, kNoon, kDt);
     method->captureStage();
     const SurfaceLight* light = method->captureSurfaceLight();

@@ -14,6 +14,7 @@
 
 #include "lighting/CubeMapProjector.h"
 #include "lighting/Metrics.h"
+#include "FixedLightScene.h"
 #include "world/Conventions.h"
 
 namespace amb {
@@ -293,19 +294,7 @@ TEST(NearField, ThroughOneNormalEqualsTheShPathAndStaysNonNegative) {
     EXPECT_GT(guarded, 50);
 }
 
-// A scene under one fixed light over flat ground at height 0; the cache tests add their plants.
-struct FixedLightScene : NearFieldScene {
-    DirectionalLight mainLight(double) const override {
-        DirectionalLight l;
-        l.direction = glm::normalize(glm::dvec3(0.3, 0.8, 0.2));
-        l.irradiance = glm::dvec3(3.0);
-        return l;
-    }
-    HemisphereAmbient ambient(double) const override {
-        return {glm::dvec3(0.8, 0.9, 1.0), glm::dvec3(0.25)};
-    }
-    double groundHeight(double, double) const override { return 0.0; }
-};
+using testing_support::FixedLightScene;  // the cache tests add their plants
 
 TEST(NearField, CachedBatchesEqualUncachedWhateverTheOrder) {
     // A scene of a few plants; the same points asked as batches in changing orders (points
