@@ -9,10 +9,15 @@
 //   put back at that point.
 // [SECTION] Radii
 //   A probe leaves out the plants within captureRadius_m of it; a point puts back those within
-//   radius_m of it. The point reads probes up to a cell away, so a plant 12-20 m from the point
-//   may be missing from a nearby probe's capture: putting back a little more than the probes
-//   leave out measures best (bench, reference oracle: 12 / 20 m against 16 / 16 m lowers the mean
-//   error on the highway, the mountain road and the low flight by 3-24 %). Bushes and rocks are
+//   radius_m of it. The point reads probes up to a cell away, so a plant a little farther than
+//   captureRadius_m from the point may be missing from a nearby probe's capture: putting back
+//   about half as much again as the probes leave out measures best. A plant put back is seen
+//   from the surface's own height, a plant left in a capture from the probe's 2 m, where a crown
+//   stands lower in the sky and hides less of it: so the more of the wood is put back, the less
+//   of the probes' brightness is left. 40 / 60 m against the earlier 12 / 20 m: the error at the
+//   drawn normal on the highway, the mountain road and the low flight 13, 10 and 3 % lower, for
+//   about a fifth more frame time (each point's caps grow with the square of radius_m; 60 / 90 m
+//   gains 19, 16 and 4 % for a third more; docs/TUNING.md "Near field"). Bushes and rocks are
 //   never in a capture, so they are near out to smallRadius_m. A plant's weight fades from 1 to 0
 //   over the last kNearFade of its radius (smoothstep), so a moving point (the car) gains and
 //   loses plants without a step.
@@ -211,9 +216,9 @@ inline constexpr double kNearFade = 0.25;  // see Radii
 
 struct NearFieldSettings {
     bool enabled = true;     // apply the near field at shading points (a method's switch)
-    double radius_m = 20.0;  // r_near: occluders this close (horizontally) to a point are near
+    double radius_m = 60.0;  // r_near: occluders this close (horizontally) to a point are near
     // Probes leave out the plants this close to them (see Radii).
-    double captureRadius_m = 12.0;
+    double captureRadius_m = 40.0;
     bool plants = true;      // trees, bushes and rocks as spheres
     // Their spheres lit by the light only where other plants and the terrain leave it (see
     // Plants' shadows); off, as if nothing shaded them.

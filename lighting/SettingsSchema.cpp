@@ -271,7 +271,7 @@ Keys<NearFieldSettings> nearFieldKeys() {
     k.boolean(
         "enabled", "the two-scale ambience", [](T& t) -> bool& { return t.enabled; }, costHigh);
     k.number(
-        "radius_m", "m", 0.0, 60.0, "occluders this close to a shading point are put back there",
+        "radius_m", "m", 0.0, 150.0, "occluders this close to a shading point are put back there",
         [](T& t) -> double& { return t.radius_m; }, costHigh);
     k.number(
         "captureRadius_m", "m", 0.0, 200.0, "probes leave out the plants this close to them",

@@ -153,7 +153,7 @@ TEST(TuningPanel, EveryKeyOfTheSettingsFileIsInTheTable) {
     // The saved file nests them as the reader expects.
     const nlohmann::json j = nlohmann::json::parse(settingsToJson(AmbienceVolumeSettings{}));
     EXPECT_EQ(j.at("store").at("blendTime_s").get<double>(), 1.0);
-    EXPECT_EQ(j.at("nearField").at("radius_m").get<double>(), 20.0);
+    EXPECT_EQ(j.at("nearField").at("radius_m").get<double>(), NearFieldSettings{}.radius_m);
     EXPECT_EQ(j.at("facesPerFrame").get<int>(), 1);
 }
 

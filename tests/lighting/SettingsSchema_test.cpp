@@ -187,7 +187,7 @@ TEST(SettingsSchema, WhatTheWriterWritesReadsBackEqual) {
     const nlohmann::json j = nlohmann::json::parse(volumeSettingsSchema().write({}));
     EXPECT_EQ(j.at("store").at("blendTime_s").get<double>(), 1.0);
     EXPECT_EQ(j.at("scheduler").at("maxLevel").get<int>(), 2);
-    EXPECT_EQ(j.at("nearField").at("radius_m").get<double>(), 20.0);
+    EXPECT_EQ(j.at("nearField").at("radius_m").get<double>(), NearFieldSettings{}.radius_m);
     EXPECT_EQ(j.at("facesPerFrame").get<int>(), 1);
     EXPECT_TRUE(j.at("relightBySkyLevel").get<bool>());
     EXPECT_EQ(j.size(), 3u + 10u + 3u);  // three objects, the capture keys, the volume's own
