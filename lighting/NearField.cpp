@@ -142,9 +142,12 @@ void NearField::fillShares(ShareCache& cache, std::uint32_t epoch,
         }
     }
     if (missing.empty()) return;
+    // Rounded as the cache keeps it: a sphere's share is then the same whether this point took
+    // it or found it taken by another (points are built on several threads, and which comes
+    // first must not show in the result).
     for (std::size_t i : missing) {
         const double v = compute(spheres[i].centre_m, spheres[i].radius_m);
-        spheres[i].*share = std::isfinite(v) ? std::clamp(v, 0.0, 1.0) : 1.0;
+        spheres[i].*share = double(float(std::isfinite(v) ? std::clamp(v, 0.0, 1.0) : 1.0));
     }
     std::lock_guard<std::mutex> lock(cache.mutex);
     if (cache.epoch != epoch) return;  // the light moved on while these were taken
